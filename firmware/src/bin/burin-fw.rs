@@ -1,0 +1,7 @@
+//! The RTIC app (built only for thumbv7em-none-eabihf).
+#![cfg_attr(target_os = "none", no_std, no_main)]
+
+#[cfg(not(target_os = "none"))]
+fn main() {
+    eprintln!("burin-fw is firmware: build it with `cargo xtask build`");
+}

@@ -1,0 +1,26 @@
+//! burin's motion core: everything that decides where the tool goes and when a
+//! step happens, with no HAL, no RTIC and no heap.
+//!
+//! The RTIC binary (`src/bin/burin-fw.rs`) and `host-sim` both drive this same
+//! code; they differ only in how bytes and pins reach the outside world, which
+//! is why the hardware appears here only as the small traits in [`seams`].
+//!
+//! Pipeline, one module per stage:
+//! `gcode` (lexer/parser) -> `interp` (modal state) -> [`command`] ->
+//! `arc` (segmenter) -> `planner` (look-ahead) -> `stepper` (segments, pulses).
+#![cfg_attr(not(test), no_std)]
+#![deny(unsafe_code)]
+#![warn(missing_debug_implementations)]
+
+pub mod command;
+pub mod seams;
+pub mod settings;
+
+/// Number of axes the core drives: X, Y, Z and A.
+pub const AXES: usize = 4;
+
+/// Axis letters in the order used by every per-axis array in the core.
+pub const AXIS_NAMES: [char; AXES] = ['X', 'Y', 'Z', 'A'];
+
+/// Firmware version reported by `$I`, M115 and the protocol handshake.
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");

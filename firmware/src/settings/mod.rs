@@ -1,0 +1,153 @@
+//! Machine settings, numbered as GRBL 1.1 numbers them (`$0`–`$132`) so that
+//! senders' settings dialogs work, plus burin's own from `$200` up.
+//!
+//! Values live in one plain struct the planner and stepper read directly;
+//! the numbered table is only the text/wire view of it.
+
+use crate::AXES;
+
+/// How rapids (G0) move.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RapidMode {
+    /// All axes start and stop together along a straight line (GRBL's way).
+    Coordinated,
+    /// Each axis runs at its own maximum rate (dog-leg path), as many
+    /// industrial controls do; the move ends when the slowest axis arrives.
+    Independent,
+}
+
+/// Velocity profile shape.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Profile {
+    /// Constant acceleration ramps (GRBL).
+    Trapezoid,
+    /// Jerk-limited ramps: acceleration itself ramps at `jerk` mm/s³.
+    SCurve,
+}
+
+/// Per-axis limits, GRBL `$100`–`$132`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AxisSettings {
+    /// `$100+n`
+    pub steps_per_mm: f32,
+    /// `$110+n`, mm/min
+    pub max_rate: f32,
+    /// `$120+n`, mm/s² (GRBL's unit)
+    pub max_accel: f32,
+    /// `$130+n`, mm: the machine envelope is `[-travel, 0]` after homing to
+    /// the positive end, or `[0, travel]` after homing to the negative end.
+    pub max_travel: f32,
+}
+
+/// Every setting the core reads.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    /// `$0` step pulse width, µs.
+    pub step_pulse_us: f32,
+    /// `$1` idle delay before drivers are disabled, ms (255 = keep enabled).
+    pub idle_delay_ms: u16,
+    /// `$2` step pin invert mask.
+    pub step_invert: u8,
+    /// `$3` direction pin invert mask.
+    pub dir_invert: u8,
+    /// `$4` invert the stepper-enable pin.
+    pub enable_invert: bool,
+    /// `$5` limit pins invert mask.
+    pub limit_invert: u8,
+    /// `$6` probe pin invert.
+    pub probe_invert: bool,
+    /// `$10` status report mask (bit 0: MPos instead of WPos, bit 1: buffer).
+    pub status_mask: u8,
+    /// `$11` junction deviation, mm.
+    pub junction_deviation: f32,
+    /// `$12` arc (and spline) chord tolerance, mm.
+    pub arc_tolerance: f32,
+    /// `$13` report in inches.
+    pub report_inches: bool,
+    /// `$20` soft limits.
+    pub soft_limits: bool,
+    /// `$21` hard limits.
+    pub hard_limits: bool,
+    /// `$22` homing cycle enabled.
+    pub homing_enable: bool,
+    /// `$23` homing direction invert mask (set: home towards negative).
+    pub homing_dir_invert: u8,
+    /// `$24` homing locate feed, mm/min.
+    pub homing_feed: f32,
+    /// `$25` homing seek rate, mm/min.
+    pub homing_seek: f32,
+    /// `$26` homing switch debounce, ms.
+    pub homing_debounce_ms: u16,
+    /// `$27` homing pull-off, mm.
+    pub homing_pulloff: f32,
+    /// `$30` maximum spindle speed, rpm.
+    pub spindle_max: f32,
+    /// `$31` minimum spindle speed, rpm.
+    pub spindle_min: f32,
+    /// `$32` laser mode.
+    pub laser_mode: bool,
+    pub axes: [AxisSettings; AXES],
+    /// `$200` direction setup time before a step, µs.
+    pub dir_setup_us: f32,
+    /// `$201` step-rate ceiling per axis, Hz; a move needing more is refused.
+    pub max_step_rate_hz: f32,
+    /// `$202` profile: 0 trapezoid, 1 S-curve.
+    pub profile: Profile,
+    /// `$203` jerk for the S-curve profile, mm/s³.
+    pub jerk: f32,
+    /// `$204` rapid mode: 0 coordinated, 1 independent axes.
+    pub rapid_mode: RapidMode,
+    /// `$205` G27 verify-home tolerance, mm.
+    pub verify_home_tolerance: f32,
+    /// `$206` homing order: up to four cycles, a nibble of axes each, first
+    /// cycle in the low nibble. Default: Z alone, then X and Y together.
+    pub homing_order: u16,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        let axis = |steps: f32, rate: f32, accel: f32, travel: f32| AxisSettings {
+            steps_per_mm: steps,
+            max_rate: rate,
+            max_accel: accel,
+            max_travel: travel,
+        };
+        Settings {
+            step_pulse_us: 2.0,
+            idle_delay_ms: 25,
+            step_invert: 0,
+            dir_invert: 0,
+            enable_invert: false,
+            limit_invert: 0,
+            probe_invert: false,
+            status_mask: 1,
+            junction_deviation: 0.01,
+            arc_tolerance: 0.002,
+            report_inches: false,
+            soft_limits: false,
+            hard_limits: false,
+            homing_enable: false,
+            homing_dir_invert: 0,
+            homing_feed: 25.0,
+            homing_seek: 500.0,
+            homing_debounce_ms: 250,
+            homing_pulloff: 1.0,
+            spindle_max: 1000.0,
+            spindle_min: 0.0,
+            laser_mode: false,
+            axes: [
+                axis(80.0, 5000.0, 500.0, 300.0),
+                axis(80.0, 5000.0, 500.0, 300.0),
+                axis(400.0, 1000.0, 100.0, 100.0),
+                axis(10.0, 3600.0, 300.0, 0.0),
+            ],
+            dir_setup_us: 1.0,
+            max_step_rate_hz: 200_000.0,
+            profile: Profile::Trapezoid,
+            jerk: 5000.0,
+            rapid_mode: RapidMode::Coordinated,
+            verify_home_tolerance: 0.05,
+            homing_order: 0x34,
+        }
+    }
+}

@@ -1,0 +1,1 @@
+//! host-sim: the firmware's motion core on the host, in virtual time.
