@@ -1,1 +1,7 @@
 //! host-sim: the firmware's motion core on the host, in virtual time.
+//!
+//! Nothing here decides where the tool goes or when a step happens: that is
+//! the firmware library's job. host-sim supplies a virtual clock, recording
+//! pins, simulated switches and files.
+
+pub mod record;

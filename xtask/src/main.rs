@@ -1,1 +1,50 @@
-fn main() {}
+//! `cargo xtask …`: the project's one entry point for checks, images,
+//! flashing, simulation and streaming.
+
+mod ci;
+mod flash;
+mod image;
+mod sim;
+mod stream;
+mod util;
+
+use clap::{Parser, Subcommand};
+
+#[derive(Parser)]
+#[command(name = "cargo xtask", about = "burin build, test, flash, sim and stream tasks")]
+struct Cli {
+    #[command(subcommand)]
+    cmd: Cmd,
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// Every check CI runs: fmt, clippy, tests, firmware images, size budget, corpus.
+    Ci,
+    /// Build the release firmware image and print its flash and RAM use.
+    Build(image::BuildArgs),
+    /// Build and flash the firmware (probe-rs, or DFU with --dfu).
+    Flash(flash::FlashArgs),
+    /// Run a G-code job on the host simulator (no file: the bundled demo).
+    Sim(sim::SimArgs),
+    /// Stream a job to a board (or to `sim --pty`).
+    Stream(stream::StreamArgs),
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let result = match cli.cmd {
+        Cmd::Ci => ci::run(),
+        Cmd::Build(a) => image::run(&a),
+        Cmd::Flash(a) => flash::run(&a),
+        Cmd::Sim(a) => sim::run(a),
+        Cmd::Stream(a) => stream::run(a),
+    };
+    match result {
+        Ok(code) => std::process::exit(code),
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            std::process::exit(1);
+        }
+    }
+}
