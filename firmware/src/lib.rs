@@ -12,9 +12,18 @@
 #![deny(unsafe_code)]
 #![warn(missing_debug_implementations)]
 
+pub mod arc;
 pub mod command;
+pub mod machine;
+pub mod planner;
+pub mod realtime;
+pub mod gcode;
+pub mod interp;
+pub mod link;
 pub mod seams;
 pub mod settings;
+pub mod stepper;
+pub mod usb_ids;
 
 /// Number of axes the core drives: X, Y, Z and A.
 pub const AXES: usize = 4;

@@ -4,4 +4,11 @@
 //! the firmware library's job. host-sim supplies a virtual clock, recording
 //! pins, simulated switches and files.
 
+pub mod config;
+pub mod engine;
+pub mod plot;
 pub mod record;
+pub mod report;
+pub mod trace;
+pub mod vcd;
+pub mod check;

@@ -1,5 +1,91 @@
 //! burin's native wire format, shared by the firmware and host tools.
+//!
+//! # Two protocols on one port
+//!
+//! The board's USB-CDC port speaks GRBL 1.1 text *and* burin's framed
+//! protocol. A session picks its mode with one byte:
+//!
+//! * Every session starts in **text mode** (power-on, soft reset does *not*
+//!   change the mode, but the port being closed/reopened does: the glue calls
+//!   the link's `reset` when DTR drops or USB resets, and a pty sim does so
+//!   when the client disconnects).
+//! * In text mode a **0x00 byte switches to framed mode**. GRBL senders never
+//!   send NUL; our client sends `0x00` before its first frame. Any partial text
+//!   line received before the 0x00 is discarded without a reply (it was noise).
+//! * In framed mode every byte belongs to a COBS frame ending in 0x00, and
+//!   realtime commands are [`HostMsg::Realtime`] frames (the device's receive
+//!   interrupt recognises these short frames and acts on them at once, so they
+//!   still bypass the job queue).
+//! * Framed mode ends with a [`HostMsg::Bye`] frame or when the port is
+//!   closed; the session is then back in text mode.
+//!
+//! # Frames
+//!
+//! `COBS( postcard(msg) ++ crc16_le(postcard(msg)) ) ++ 0x00`, see [`frame`].
+//! The CRC is CRC-16/CCITT-FALSE (poly 0x1021, init 0xFFFF): two bytes is
+//! plenty for frames under [`frame::MAX_FRAME`] bytes (it catches every 1-,
+//! 2- and 3-bit error and every burst up to 16 bits), and the COBS layer
+//! already resynchronises on the next 0x00 after noise. Frames longer than
+//! [`frame::MAX_FRAME`] encoded bytes are rejected with
+//! [`FrameError::TooLong`], never truncated.
+//!
+//! # Job lines, sequence numbers and credits
+//!
+//! * Each job line travels as [`HostMsg::Line`] with a `u32` sequence number.
+//!   The device owns the numbering origin: [`DeviceInfo::next_seq`] in the
+//!   handshake says which number it expects next (1 on a fresh boot). Numbers
+//!   then increase by one with wrapping arithmetic (`u32::MAX` is followed by
+//!   0). They are compared as serial numbers (RFC 1982): `seq` is *older* than
+//!   `next` when `next.wrapping_sub(seq)` is in `1..=2^31`.
+//! * The device executes a line only when `seq == next` and it has a free line
+//!   slot; it then answers [`DeviceMsg::Ack`]. An older `seq` (a resend of a
+//!   line already acknowledged) is acknowledged again but not executed. A newer
+//!   `seq` (a gap: something was lost) or a line without a free slot gets
+//!   [`DeviceMsg::Nak`] carrying the expected number and the reason; the host
+//!   resends from there (go-back-N). A corrupt frame gets the same `Nak`.
+//! * Credits: every `Ack` carries `next` and `credits` (free line slots at that
+//!   moment). The host may have sent lines up to `next + credits - 1` and no
+//!   further. When slots free up while the host is starved, the device sends
+//!   a fresh `Ack` for `next - 1` (a credit refresh).
+//! * Soft reset empties the device's queue but keeps `next`, so stale resends
+//!   are recognised as duplicates. "Acknowledged" means "queued for
+//!   execution": only an operator abort (reset, alarm) drops queued lines.
+//!
+//! # Realtime
+//!
+//! [`Rt`] lists the realtime commands with their GRBL byte values; both
+//! protocols share them.
 #![cfg_attr(not(feature = "std"), no_std)]
+#![deny(unsafe_code)]
+#![warn(missing_debug_implementations)]
+
+pub mod codes;
+pub mod frame;
+pub mod msg;
+pub mod rt;
+pub mod session;
+
+#[cfg(feature = "std")]
+pub mod client;
+
+pub use codes::Code;
+pub use frame::{FrameDecoder, FrameError};
+pub use msg::{
+    DeviceInfo, DeviceMsg, HostMsg, LineText, MachineState, Overrides, ShortText, Status,
+};
+pub use rt::Rt;
+pub use session::{LineVerdict, Session};
 
 /// Protocol version exchanged in the handshake.
 pub const PROTOCOL_VERSION: u16 = 1;
+
+/// Axes carried in positions on the wire (X, Y, Z, A). Devices with fewer axes
+/// say so in [`DeviceInfo::axes`] and leave the rest zero.
+pub const WIRE_AXES: usize = 4;
+
+/// Longest job line, in bytes without the terminator, in either protocol.
+pub const MAX_LINE: usize = 256;
+
+/// Bytes of unprocessed input the device can always hold. GRBL senders that
+/// count characters keep at most this many bytes unacknowledged.
+pub const RX_WINDOW: usize = 128;

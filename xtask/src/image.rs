@@ -1,13 +1,424 @@
-//! Firmware images: build per board, size report, ELF sanity checks.
-use anyhow::Result;
+//! Firmware images: build per board, size report against the budget, and the
+//! ELF checks `ci` and `flash` rely on (vector table, RTIC handlers, raw
+//! image). Everything after the build is pure functions over bytes, so it is
+//! unit-tested without a cross toolchain.
+use crate::util;
+use anyhow::{bail, Context, Result};
+use object::elf::{PT_LOAD, SHF_ALLOC};
+use object::read::elf::{ElfFile32, FileHeader, ProgramHeader, SectionHeader};
+use object::{Object, ObjectSection, ObjectSymbol};
+use std::path::{Path, PathBuf};
+
+pub const FLASH_BASE: u32 = 0x0800_0000;
+pub const RAM_BASE: u32 = 0x2000_0000;
+const KIB: u32 = 1024;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Board {
+    /// WeAct Black Pill STM32F411CEU6 (default).
+    F411,
+    /// WeAct Black Pill STM32F401CCU6.
+    F401,
+}
+
+impl Board {
+    pub const ALL: [Board; 2] = [Board::F411, Board::F401];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Board::F411 => "f411",
+            Board::F401 => "f401",
+        }
+    }
+    /// Cargo arguments selecting this board for the firmware package.
+    pub fn cargo_features(self) -> &'static [&'static str] {
+        match self {
+            Board::F411 => &[],
+            Board::F401 => &["--no-default-features", "--features", "board-f401"],
+        }
+    }
+    /// probe-rs' name for the chip.
+    pub fn chip(self) -> &'static str {
+        match self {
+            Board::F411 => "STM32F411CEUx",
+            Board::F401 => "STM32F401CCUx",
+        }
+    }
+    pub fn flash_bytes(self) -> u32 {
+        match self {
+            Board::F411 => 512 * KIB,
+            Board::F401 => 256 * KIB,
+        }
+    }
+    pub fn ram_bytes(self) -> u32 {
+        match self {
+            Board::F411 => 128 * KIB,
+            Board::F401 => 64 * KIB,
+        }
+    }
+    /// The project's budget (issue 2): flash 128 KiB on both; static RAM
+    /// 64 KiB on the F411 and 48 KiB on the F401, which leaves it 16 KiB of stack.
+    pub fn budget(self) -> Sizes {
+        let ram = match self {
+            Board::F411 => 64 * KIB,
+            Board::F401 => 48 * KIB,
+        };
+        Sizes { flash: 128 * KIB, ram, ..Sizes::default() }
+    }
+}
+
+impl std::fmt::Display for Board {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
 
 #[derive(clap::Args)]
 pub struct BuildArgs {
     /// Board to build for.
-    #[arg(long, default_value = "f411")]
-    pub board: String,
+    #[arg(long, value_enum, default_value_t = Board::F411)]
+    pub board: Board,
+    /// Build every supported board instead.
+    #[arg(long, conflicts_with = "board")]
+    pub all: bool,
 }
 
-pub fn run(_a: &BuildArgs) -> Result<i32> {
-    anyhow::bail!("not yet")
+pub fn run(a: &BuildArgs) -> Result<i32> {
+    let boards: &[Board] = if a.all { &Board::ALL } else { std::slice::from_ref(&a.board) };
+    for &board in boards {
+        build_and_check(board)?;
+    }
+    Ok(0)
+}
+
+/// The `cargo xtask ci` step for one board: see [`build_and_check`].
+pub fn ci_check(board: Board) -> Result<()> {
+    build_and_check(board).map(drop)
+}
+
+/// Build, print the figures, and fail on unbound RTIC vectors or an image
+/// over budget: the whole of `cargo xtask build` for one board.
+pub fn build_and_check(board: Board) -> Result<Sizes> {
+    let elf = build_board(board)?;
+    let sizes = size_report(&elf)?;
+    print_sizes(board, &elf, &sizes);
+    check_vectors(&elf)?;
+    check_budget(board, &sizes)?;
+    Ok(sizes)
+}
+
+/// Builds the release image for `board` and returns the ELF, copied to
+/// `<target>/thumbv7em-none-eabihf/release/burin-fw-<board>.elf` so that the
+/// two boards' images (same cargo output path) can sit side by side.
+pub fn build_board(board: Board) -> Result<PathBuf> {
+    util::ensure_target()?;
+    let mut cmd = util::cargo();
+    cmd.args(["build", "--package", "firmware", "--bin", "burin-fw", "--release"]);
+    cmd.args(["--target", util::TARGET]);
+    cmd.args(board.cargo_features());
+    util::run(&mut cmd)?;
+    let out = util::target_dir().join(util::TARGET).join("release");
+    let built = out.join("burin-fw");
+    let elf = out.join(format!("burin-fw-{}.elf", board.name()));
+    std::fs::copy(&built, &elf).with_context(|| format!("copying {}", built.display()))?;
+    Ok(elf)
+}
+
+/// Bytes per region, plus the sections behind them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Sizes {
+    /// Everything programmed into flash: PT_LOAD file bytes at flash addresses
+    /// (vector table, .text, .rodata and the .data initialisers).
+    pub flash: u32,
+    /// Static RAM: allocated sections in RAM (.data, .bss, .uninit). The
+    /// stack gets the rest of the chip's RAM.
+    pub ram: u32,
+    pub vector_table: u32,
+    pub text: u32,
+    pub rodata: u32,
+    pub data: u32,
+    pub bss: u32,
+    pub uninit: u32,
+}
+
+fn read(elf: &Path) -> Result<Vec<u8>> {
+    std::fs::read(elf).with_context(|| format!("reading {}", elf.display()))
+}
+
+fn parse(bytes: &[u8]) -> Result<ElfFile32<'_>> {
+    ElfFile32::parse(bytes).context("not a 32-bit ELF")
+}
+
+pub fn size_report(elf: &Path) -> Result<Sizes> {
+    let bytes = read(elf)?;
+    sizes_of(&parse(&bytes)?)
+}
+
+fn sizes_of(file: &ElfFile32<'_>) -> Result<Sizes> {
+    let endian = file.endian();
+    let mut s = Sizes { flash: image_len(&load_segments(file)?)?, ..Sizes::default() };
+    for section in file.elf_section_table().iter() {
+        if section.sh_flags(endian) & SHF_ALLOC == 0 {
+            continue;
+        }
+        let name = file.elf_section_table().section_name(endian, section).unwrap_or_default();
+        let (addr, size) = (section.sh_addr(endian), section.sh_size(endian));
+        match name {
+            b".vector_table" => s.vector_table += size,
+            b".text" => s.text += size,
+            b".rodata" => s.rodata += size,
+            b".data" => s.data += size,
+            b".bss" => s.bss += size,
+            b".uninit" => s.uninit += size,
+            _ => {}
+        }
+        if (RAM_BASE..RAM_BASE + 0x1000_0000).contains(&addr) {
+            s.ram += size;
+        }
+    }
+    Ok(s)
+}
+
+fn kib(b: u32) -> String {
+    format!("{:.1} KiB", f64::from(b) / 1024.0)
+}
+
+fn pct(part: u32, whole: u32) -> f64 {
+    100.0 * f64::from(part) / f64::from(whole.max(1))
+}
+
+pub fn print_sizes(board: Board, elf: &Path, s: &Sizes) {
+    let b = board.budget();
+    println!("burin-fw for {} ({}): {}", board.name(), board.chip(), elf.display());
+    println!(
+        "  flash {:>7} B = {:>9}  ({:4.1}% of the {} budget, chip {})",
+        s.flash,
+        kib(s.flash),
+        pct(s.flash, b.flash),
+        kib(b.flash),
+        kib(board.flash_bytes())
+    );
+    println!(
+        "        vector table {} + .text {} + .rodata {} + .data load image {}",
+        s.vector_table, s.text, s.rodata, s.data
+    );
+    println!(
+        "  RAM   {:>7} B = {:>9}  ({:4.1}% of the {} budget, chip {})",
+        s.ram,
+        kib(s.ram),
+        pct(s.ram, b.ram),
+        kib(b.ram),
+        kib(board.ram_bytes())
+    );
+    println!(
+        "        .data {} + .bss {} + .uninit {}; the stack gets the other {}",
+        s.data,
+        s.bss,
+        s.uninit,
+        kib(board.ram_bytes().saturating_sub(s.ram))
+    );
+}
+
+/// Fails when the image is over the board's budget (or over the chip).
+pub fn check_budget(board: Board, s: &Sizes) -> Result<()> {
+    let b = board.budget();
+    if s.flash > b.flash {
+        bail!("{}: flash {} B is over the {} budget", board.name(), s.flash, kib(b.flash));
+    }
+    if s.ram > b.ram {
+        bail!("{}: static RAM {} B is over the {} budget", board.name(), s.ram, kib(b.ram));
+    }
+    Ok(())
+}
+
+/// Interrupts that must reach RTIC tasks, with their STM32F4 IRQ numbers.
+pub const RTIC_IRQS: [(&str, u32); 2] = [("TIM5", 50), ("OTG_FS", 67)];
+
+/// Checks that the vector table sends [`RTIC_IRQS`] to their RTIC handlers,
+/// not to cortex-m-rt's `DefaultHandler` (what an unbound interrupt gets).
+pub fn check_vectors(elf: &Path) -> Result<()> {
+    let bytes = read(elf)?;
+    let file = parse(&bytes)?;
+    let default = symbol(&file, "DefaultHandler")?;
+    let table = file.section_by_name(".vector_table").context("no .vector_table section")?;
+    let data = table.data().context("reading .vector_table")?;
+    for (name, irq) in RTIC_IRQS {
+        let at = 4 * (16 + irq as usize);
+        let entry = word(data, at).with_context(|| format!("vector table too short for IRQ {irq}"))?;
+        if entry & !1 == default & !1 {
+            bail!("IRQ {irq} ({name}) points at DefaultHandler: the RTIC task is not bound");
+        }
+        let handler = symbol(&file, name)?;
+        if entry & !1 != handler & !1 {
+            bail!("IRQ {irq} ({name}) points at {entry:#010x}, not at the `{name}` handler");
+        }
+        println!("  vector IRQ {irq:>2} {name:<6} -> {entry:#010x} (RTIC task), DefaultHandler {default:#010x}");
+    }
+    Ok(())
+}
+
+fn symbol(file: &ElfFile32<'_>, name: &str) -> Result<u32> {
+    let sym = file.symbol_by_name(name).with_context(|| format!("no symbol `{name}` in the ELF"))?;
+    u32::try_from(sym.address()).context("symbol address beyond 32 bits")
+}
+
+fn word(data: &[u8], at: usize) -> Option<u32> {
+    let b = data.get(at..at + 4)?;
+    Some(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+}
+
+/// A PT_LOAD segment's file bytes at its physical (load) address.
+pub struct Segment<'a> {
+    pub paddr: u32,
+    pub data: &'a [u8],
+}
+
+pub fn load_segments<'a>(file: &ElfFile32<'a>) -> Result<Vec<Segment<'a>>> {
+    let endian = file.endian();
+    let mut out = Vec::new();
+    for ph in file.elf_header().program_headers(endian, file.data())? {
+        if ph.p_type(endian) != PT_LOAD || ph.p_filesz(endian) == 0 {
+            continue;
+        }
+        let data = ph.data(endian, file.data()).ok().context("PT_LOAD segment outside the file")?;
+        out.push(Segment { paddr: ph.p_paddr(endian), data });
+    }
+    Ok(out)
+}
+
+/// Bytes from FLASH_BASE to the end of the last loaded byte.
+fn image_len(segments: &[Segment<'_>]) -> Result<u32> {
+    let mut end = FLASH_BASE;
+    for s in segments {
+        if s.paddr < FLASH_BASE || s.paddr >= RAM_BASE {
+            bail!("segment loads at {:#010x}, outside flash", s.paddr);
+        }
+        let len = u32::try_from(s.data.len()).context("segment too large")?;
+        end = end.max(s.paddr.checked_add(len).context("segment wraps the address space")?);
+    }
+    Ok(end - FLASH_BASE)
+}
+
+/// The raw flash image from FLASH_BASE, gaps filled with 0xFF (erased
+/// flash), which is what dfu-util writes at 0x0800_0000.
+pub fn raw_image(segments: &[Segment<'_>], flash_bytes: u32) -> Result<Vec<u8>> {
+    let len = image_len(segments)?;
+    if len > flash_bytes {
+        bail!("image is {len} B but the chip has {flash_bytes} B of flash");
+    }
+    let mut bin = vec![0xFF; len as usize];
+    for s in segments {
+        let at = (s.paddr - FLASH_BASE) as usize;
+        bin[at..at + s.data.len()].copy_from_slice(s.data);
+    }
+    Ok(bin)
+}
+
+/// What the dry run checks, from the raw image the board boots from.
+#[derive(Debug, PartialEq, Eq)]
+pub struct BootInfo {
+    pub initial_sp: u32,
+    pub reset: u32,
+    pub len: u32,
+}
+
+/// The chip boots from the vector table at FLASH_BASE: word 0 is the initial
+/// stack pointer, word 1 the reset handler. Both must make sense.
+pub fn check_boot(bin: &[u8], board: Board) -> Result<BootInfo> {
+    let (Some(initial_sp), Some(reset)) = (word(bin, 0), word(bin, 4)) else {
+        bail!("image shorter than a vector table");
+    };
+    let len = u32::try_from(bin.len()).context("image too large")?;
+    let ram_end = RAM_BASE + board.ram_bytes();
+    if !(RAM_BASE < initial_sp && initial_sp <= ram_end) {
+        bail!("initial SP {initial_sp:#010x} is outside RAM {RAM_BASE:#010x}..={ram_end:#010x}");
+    }
+    if initial_sp % 8 != 0 {
+        bail!("initial SP {initial_sp:#010x} is not 8-byte aligned (AAPCS)");
+    }
+    if reset & 1 == 0 {
+        bail!("reset vector {reset:#010x} is even: not a Thumb address");
+    }
+    if !(FLASH_BASE + 8..FLASH_BASE + len).contains(&(reset & !1)) {
+        bail!("reset vector {reset:#010x} is outside the image");
+    }
+    if len > board.flash_bytes() {
+        bail!("image is {len} B; the {} has {} B of flash", board.chip(), board.flash_bytes());
+    }
+    Ok(BootInfo { initial_sp, reset, len })
+}
+
+/// Builds the raw image of `elf` and checks it boots on `board`; also checks
+/// that the ELF's vector table section sits at FLASH_BASE.
+pub fn boot_image(elf: &Path, board: Board) -> Result<(Vec<u8>, BootInfo)> {
+    let bytes = read(elf)?;
+    let file = parse(&bytes)?;
+    let table = file.section_by_name(".vector_table").context("no .vector_table section")?;
+    if table.address() != u64::from(FLASH_BASE) {
+        bail!("vector table at {:#010x}, not at {FLASH_BASE:#010x}", table.address());
+    }
+    let bin = raw_image(&load_segments(&file)?, board.flash_bytes())?;
+    let info = check_boot(&bin, board)?;
+    Ok((bin, info))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn vectors(sp: u32, reset: u32) -> Vec<u8> {
+        let mut v = sp.to_le_bytes().to_vec();
+        v.extend(reset.to_le_bytes());
+        v.resize(0x200, 0);
+        v
+    }
+
+    #[test]
+    fn raw_image_pads_gaps_with_erased_flash() {
+        let a = [1u8, 2, 3, 4];
+        let b = [9u8, 8];
+        let segs = [
+            Segment { paddr: FLASH_BASE, data: &a },
+            Segment { paddr: FLASH_BASE + 8, data: &b },
+        ];
+        let bin = raw_image(&segs, 512 * KIB).unwrap();
+        assert_eq!(bin, [1, 2, 3, 4, 0xFF, 0xFF, 0xFF, 0xFF, 9, 8]);
+    }
+
+    #[test]
+    fn raw_image_rejects_ram_segments_and_oversize() {
+        let a = [0u8; 16];
+        let in_ram = [Segment { paddr: RAM_BASE, data: &a }];
+        assert!(raw_image(&in_ram, 512 * KIB).is_err());
+        let far = [Segment { paddr: FLASH_BASE + 256 * KIB, data: &a }];
+        assert!(raw_image(&far, 256 * KIB).is_err());
+        assert!(raw_image(&far, 512 * KIB).is_ok());
+    }
+
+    #[test]
+    fn boot_checks_accept_a_sane_table() {
+        let bin = vectors(0x2002_0000, 0x0800_0199);
+        let info = check_boot(&bin, Board::F411).unwrap();
+        assert_eq!(info.initial_sp, 0x2002_0000);
+        // The F401 has 64 KiB: the F411's stack top is outside its RAM.
+        assert!(check_boot(&bin, Board::F401).is_err());
+    }
+
+    #[test]
+    fn boot_checks_reject_bad_sp_and_reset() {
+        assert!(check_boot(&vectors(0x2002_0004, 0x0800_0199), Board::F411).is_err());
+        assert!(check_boot(&vectors(0x1000_0000, 0x0800_0199), Board::F411).is_err());
+        assert!(check_boot(&vectors(0x2002_0000, 0x0800_0198), Board::F411).is_err());
+        assert!(check_boot(&vectors(0x2002_0000, 0x0810_0001), Board::F411).is_err());
+        assert!(check_boot(&[0; 6], Board::F411).is_err());
+    }
+
+    #[test]
+    fn budgets_fail_when_exceeded() {
+        let ok = Sizes { flash: 128 * KIB, ram: 64 * KIB, ..Sizes::default() };
+        assert!(check_budget(Board::F411, &ok).is_ok());
+        assert!(check_budget(Board::F401, &ok).is_err());
+        let big = Sizes { flash: 128 * KIB + 1, ..ok };
+        assert!(check_budget(Board::F411, &big).is_err());
+    }
 }

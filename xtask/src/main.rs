@@ -34,7 +34,7 @@ enum Cmd {
 fn main() {
     let cli = Cli::parse();
     let result = match cli.cmd {
-        Cmd::Ci => ci::run(),
+        Cmd::Ci => ci::run_all(),
         Cmd::Build(a) => image::run(&a),
         Cmd::Flash(a) => flash::run(&a),
         Cmd::Sim(a) => sim::run(a),

@@ -6,6 +6,8 @@
 
 use crate::AXES;
 
+pub mod table;
+
 /// How rapids (G0) move.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RapidMode {

@@ -1,0 +1,256 @@
+//! Segmenter: arcs and splines become straight chords for the planner.
+//!
+//! Both are lazy iterators (no buffer): the executor pulls chords only while
+//! the planner ring has room. Every point is computed from its parameter
+//! directly (no incremental rotation), so errors do not accumulate over
+//! multi-turn arcs, and the last chord ends exactly at the commanded end.
+
+use core::f32::consts::PI;
+
+use crate::command::{Arc, ArcDir, Pos, Spline};
+use crate::machine::MachineError;
+use crate::AXES;
+
+/// More chords than this in one arc or spline is refused rather than run for hours.
+pub const MAX_CHORDS: u32 = 1 << 24;
+
+/// Largest chord angle whose sagitta stays within `tol` on radius `r`.
+///
+/// Sagitta of a chord spanning angle φ: `r (1 - cos(φ/2)) = 2 r sin²(φ/4)`.
+/// Solving for φ with asin keeps precision in f32 when `tol/r` is tiny
+/// (`acos(1 - x)` near 1 loses it).
+pub fn max_chord_angle(r: f32, tol: f32) -> f32 {
+    if r <= tol {
+        return PI / 2.0;
+    }
+    let x = libm::sqrtf(tol / (2.0 * r)).min(1.0);
+    (4.0 * libm::asinf(x)).min(PI / 2.0)
+}
+
+/// `x` wrapped into `[0, 2π)`.
+fn wrap(x: f32) -> f32 {
+    x - libm::floorf(x / (2.0 * PI)) * 2.0 * PI
+}
+
+/// Chords of a circular, helical or spiral (start and end radius differ
+/// slightly; the radius is blended linearly) arc.
+#[derive(Clone, Debug)]
+pub struct ArcChords {
+    start: Pos,
+    end: Pos,
+    center: [f32; 2],
+    plane: (usize, usize, usize),
+    r0: f32,
+    r1: f32,
+    theta0: f32,
+    sweep: f32,
+    n: u32,
+    i: u32,
+}
+
+impl ArcChords {
+    pub fn new(start: &Pos, arc: &Arc, tol: f32) -> Result<Self, MachineError> {
+        let plane = arc.plane.axes();
+        let (a, b, _) = plane;
+        let [ca, cb] = arc.center;
+        let finite = start.iter().chain(arc.end.iter()).all(|v| v.is_finite())
+            && ca.is_finite()
+            && cb.is_finite()
+            && tol.is_finite()
+            && tol > 0.0;
+        if !finite {
+            return Err(MachineError::InvalidNumber);
+        }
+        let (sa, sb) = (start[a] - ca, start[b] - cb);
+        let (ea, eb) = (arc.end[a] - ca, arc.end[b] - cb);
+        let r0 = libm::hypotf(sa, sb);
+        let r1 = libm::hypotf(ea, eb);
+        if r0 < 1e-6 || r1 < 1e-6 {
+            return Err(MachineError::InvalidArc);
+        }
+        let theta0 = libm::atan2f(sb, sa);
+        let theta1 = libm::atan2f(eb, ea);
+        let mut sweep = theta1 - theta0;
+        // Same start and end angle means a full circle (RS274NGC).
+        const EPS: f32 = 1e-6;
+        match arc.dir {
+            ArcDir::Ccw => {
+                if sweep <= EPS {
+                    sweep += 2.0 * PI;
+                }
+                sweep += 2.0 * PI * arc.turns as f32;
+            }
+            ArcDir::Cw => {
+                if sweep >= -EPS {
+                    sweep -= 2.0 * PI;
+                }
+                sweep -= 2.0 * PI * arc.turns as f32;
+            }
+        }
+        let phi = max_chord_angle(r0.max(r1), tol);
+        let n = libm::ceilf(libm::fabsf(sweep) / phi).max(1.0);
+        if n > MAX_CHORDS as f32 {
+            return Err(MachineError::TooManySegments);
+        }
+        Ok(ArcChords {
+            start: *start,
+            end: arc.end,
+            center: arc.center,
+            plane,
+            r0,
+            r1,
+            theta0,
+            sweep,
+            n: n as u32,
+            i: 0,
+        })
+    }
+
+    /// Number of chords.
+    pub fn chords(&self) -> u32 {
+        self.n
+    }
+
+    /// Axis-aligned bounds of the whole arc (for soft limits before any step).
+    pub fn bounds(&self) -> (Pos, Pos) {
+        let mut lo = self.start;
+        let mut hi = self.start;
+        for i in 0..AXES {
+            lo[i] = lo[i].min(self.end[i]);
+            hi[i] = hi[i].max(self.end[i]);
+        }
+        let (a, b, _) = self.plane;
+        let r = self.r0.max(self.r1);
+        // Cardinal directions the sweep passes through extend the box.
+        for k in 0..4 {
+            let ang = k as f32 * PI / 2.0;
+            let rel = if self.sweep >= 0.0 {
+                wrap(ang - self.theta0)
+            } else {
+                wrap(self.theta0 - ang)
+            };
+            if rel <= libm::fabsf(self.sweep) {
+                let pa = self.center[0] + r * libm::cosf(ang);
+                let pb = self.center[1] + r * libm::sinf(ang);
+                lo[a] = lo[a].min(pa);
+                hi[a] = hi[a].max(pa);
+                lo[b] = lo[b].min(pb);
+                hi[b] = hi[b].max(pb);
+            }
+        }
+        (lo, hi)
+    }
+}
+
+impl Iterator for ArcChords {
+    type Item = Pos;
+    fn next(&mut self) -> Option<Pos> {
+        if self.i >= self.n {
+            return None;
+        }
+        self.i += 1;
+        if self.i == self.n {
+            return Some(self.end);
+        }
+        let t = self.i as f32 / self.n as f32;
+        let th = self.theta0 + self.sweep * t;
+        let r = self.r0 + (self.r1 - self.r0) * t;
+        let (a, b, _) = self.plane;
+        let mut p = [0.0; AXES];
+        for (k, v) in p.iter_mut().enumerate() {
+            *v = self.start[k] + (self.end[k] - self.start[k]) * t;
+        }
+        p[a] = self.center[0] + r * libm::cosf(th);
+        p[b] = self.center[1] + r * libm::sinf(th);
+        Some(p)
+    }
+}
+
+/// Chords of a cubic Bezier in X/Y (other axes linear in the parameter).
+///
+/// Uniform parameter steps: the chord error over a parameter span h is at
+/// most `h²/8 · max|B''|`, and `|B''| ≤ 6·max(|P0-2P1+P2|, |P1-2P2+P3|)`, so
+/// `n = ceil(sqrt(0.75·L/tol))` chords keep every chord within `tol`.
+#[derive(Clone, Debug)]
+pub struct SplineChords {
+    start: Pos,
+    end: Pos,
+    p1: [f32; 2],
+    p2: [f32; 2],
+    n: u32,
+    i: u32,
+}
+
+impl SplineChords {
+    pub fn new(start: &Pos, s: &Spline, tol: f32) -> Result<Self, MachineError> {
+        let all = start
+            .iter()
+            .chain(s.end.iter())
+            .chain(s.p1.iter())
+            .chain(s.p2.iter());
+        if !all.clone().all(|v| v.is_finite()) || !(tol > 0.0 && tol.is_finite()) {
+            return Err(MachineError::InvalidNumber);
+        }
+        let d = |p0: [f32; 2], p1: [f32; 2], p2: [f32; 2]| {
+            libm::hypotf(p0[0] - 2.0 * p1[0] + p2[0], p0[1] - 2.0 * p1[1] + p2[1])
+        };
+        let p0 = [start[0], start[1]];
+        let p3 = [s.end[0], s.end[1]];
+        let l = d(p0, s.p1, s.p2).max(d(s.p1, s.p2, p3));
+        let n = libm::ceilf(libm::sqrtf(0.75 * l / tol)).max(1.0);
+        if n > MAX_CHORDS as f32 {
+            return Err(MachineError::TooManySegments);
+        }
+        Ok(SplineChords { start: *start, end: s.end, p1: s.p1, p2: s.p2, n: n as u32, i: 0 })
+    }
+
+    pub fn chords(&self) -> u32 {
+        self.n
+    }
+
+    /// Bounds of the convex hull of the control points: the curve lies inside
+    /// it, so checking it against soft limits is safe (if conservative).
+    pub fn bounds(&self) -> (Pos, Pos) {
+        let mut lo = self.start;
+        let mut hi = self.start;
+        for i in 0..AXES {
+            lo[i] = lo[i].min(self.end[i]);
+            hi[i] = hi[i].max(self.end[i]);
+        }
+        for p in [self.p1, self.p2] {
+            for k in 0..2 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        (lo, hi)
+    }
+
+    /// Point at parameter `t` (0..1).
+    pub fn point(&self, t: f32) -> Pos {
+        let u = 1.0 - t;
+        let (b0, b1, b2, b3) = (u * u * u, 3.0 * u * u * t, 3.0 * u * t * t, t * t * t);
+        let mut p = [0.0; AXES];
+        for (k, v) in p.iter_mut().enumerate() {
+            *v = self.start[k] + (self.end[k] - self.start[k]) * t;
+        }
+        for k in 0..2 {
+            p[k] = b0 * self.start[k] + b1 * self.p1[k] + b2 * self.p2[k] + b3 * self.end[k];
+        }
+        p
+    }
+}
+
+impl Iterator for SplineChords {
+    type Item = Pos;
+    fn next(&mut self) -> Option<Pos> {
+        if self.i >= self.n {
+            return None;
+        }
+        self.i += 1;
+        if self.i == self.n {
+            return Some(self.end);
+        }
+        Some(self.point(self.i as f32 / self.n as f32))
+    }
+}

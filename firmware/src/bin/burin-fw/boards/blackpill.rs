@@ -1,0 +1,158 @@
+//! Pin map of the WeAct Black Pill (STM32F411CEU6 and STM32F401CCU6 share
+//! the 48-pin package and the board), which the README's wiring table mirrors.
+//!
+//! | function | pin | why there |
+//! |---|---|---|
+//! | X/Y/Z/A step | PB12/PB13/PB14/PB15 | all motion outputs on port B: one BSRR write per event; these four sit together on one header |
+//! | X/Y/Z/A dir | PB4/PB5/PB6/PB7 | port B, also side by side |
+//! | stepper enable (all) | PB8 | port B, so enable also goes through the step port; active low |
+//! | spindle PWM | PA8 | TIM1_CH1, an advanced timer free of the step timer |
+//! | spindle enable / dir | PB0 / PB1 | plain outputs |
+//! | flood / mist coolant | PB9 / PB10 | plain outputs |
+//! | cycle start | PA0 | the on-board KEY button is wired to it: the board has a start button for free |
+//! | feed hold | PA1 | |
+//! | reset / e-stop | PA2 | |
+//! | probe | PA3 | |
+//! | X/Y/Z limit | PA4/PA5/PA6 | |
+//!
+//! Inputs have pull-ups; a switch closes to GND (active low; `$5`/`$6`
+//! invert). PA0–PA6 are EXTI lines 0–6, all distinct, and cycle start, feed
+//! hold, e-stop, probe and X limit get dedicated vectors (EXTI0–EXTI4).
+//!
+//! Left alone on purpose: PA11/PA12 (USB), PA13/PA14 (SWD), PC13 (LED),
+//! PC14/PC15 (32 kHz crystal), PB2 (BOOT1), PA9/PA10 (USART1, which the ROM
+//! bootloader also probes; PA10 needs to stay low for USB DFU), PB3/PA15
+//! (JTAG pins with reset pull-ups, spare). PB11 does not exist on this package.
+use super::super::step::{PortPins, StepPort};
+use burin::seams::StepPins;
+use stm32f4xx_hal::{
+    gpio::{gpioa, gpiob, gpioc, Input, Output, Speed, PA0, PA1, PA11, PA12, PA2, PA3, PA4, PA5, PA6, PB0, PB1, PB10, PB9, PC13},
+    pac,
+    prelude::*,
+    rcc::Rcc,
+    timer::PwmChannel,
+};
+
+/// Step, direction and enable pin numbers on port B.
+pub const PORT_PINS: PortPins = PortPins { step: [12, 13, 14, 15], dir: [4, 5, 6, 7], enable: 8 };
+
+/// Spindle PWM carrier; the duty cycle carries the speed.
+const SPINDLE_PWM_HZ: u32 = 1_000;
+
+/// Switch inputs (raw pins; polarity is applied by the caller).
+pub struct Inputs {
+    pub limit_x: PA4<Input>,
+    pub limit_y: PA5<Input>,
+    pub limit_z: PA6<Input>,
+    pub probe: PA3<Input>,
+    pub feed_hold: PA1<Input>,
+    pub cycle_start: PA0<Input>,
+    pub estop: PA2<Input>,
+}
+
+impl Inputs {
+    /// Which inputs are pulled low (closed to GND): bit 0-2 X/Y/Z limit,
+    /// 3 probe, 4 feed hold, 5 cycle start, 6 reset/e-stop.
+    pub fn closed(&self) -> u8 {
+        [
+            self.limit_x.is_low(),
+            self.limit_y.is_low(),
+            self.limit_z.is_low(),
+            self.probe.is_low(),
+            self.feed_hold.is_low(),
+            self.cycle_start.is_low(),
+            self.estop.is_low(),
+        ]
+        .iter()
+        .enumerate()
+        .fold(0, |acc, (i, &low)| acc | (u8::from(low) << i))
+    }
+}
+
+/// Spindle and coolant outputs.
+pub struct Aux {
+    pub spindle_pwm: PwmChannel<pac::TIM1, 0>,
+    pub spindle_enable: PB0<Output>,
+    pub spindle_dir: PB1<Output>,
+    pub flood: PB9<Output>,
+    pub mist: PB10<Output>,
+}
+
+impl Aux {
+    /// Spindle stopped, coolant off: the state after reset and after an alarm.
+    pub fn all_off(&mut self) {
+        self.spindle_pwm.set_duty(0);
+        self.spindle_enable.set_low();
+        self.spindle_dir.set_low();
+        self.flood.set_low();
+        self.mist.set_low();
+    }
+}
+
+pub struct Board {
+    pub steppers: StepPort,
+    pub inputs: Inputs,
+    pub aux: Aux,
+    pub led: PC13<Output>,
+    pub usb_pins: (PA11, PA12),
+}
+
+/// Configures every pin of the map and hands them out grouped by user.
+pub fn split(
+    gpioa: gpioa::Parts,
+    gpiob: gpiob::Parts,
+    gpioc: gpioc::Parts,
+    tim1: pac::TIM1,
+    rcc: &mut Rcc,
+) -> Board {
+    // Motion outputs: configured here, then driven only through StepPort's
+    // BSRR writes. The typed pins are dropped on purpose: nothing else can
+    // obtain them again, so StepPort has the port bits to itself.
+    let _ = (
+        gpiob.pb12.into_push_pull_output().speed(Speed::Medium),
+        gpiob.pb13.into_push_pull_output().speed(Speed::Medium),
+        gpiob.pb14.into_push_pull_output().speed(Speed::Medium),
+        gpiob.pb15.into_push_pull_output().speed(Speed::Medium),
+        gpiob.pb4.into_push_pull_output().speed(Speed::Medium),
+        gpiob.pb5.into_push_pull_output().speed(Speed::Medium),
+        gpiob.pb6.into_push_pull_output().speed(Speed::Medium),
+        gpiob.pb7.into_push_pull_output().speed(Speed::Medium),
+        gpiob.pb8.into_push_pull_output(),
+    );
+    // SAFETY: only forms the address of GPIOB's BSRR from the PAC's fixed
+    // base pointer; no register is accessed here.
+    let bsrr = unsafe { (*pac::GPIOB::ptr()).bsrr().as_ptr() };
+    let mut steppers = StepPort::new(bsrr, PORT_PINS);
+    steppers.set_enabled(false);
+
+    let inputs = Inputs {
+        limit_x: gpioa.pa4.into_pull_up_input(),
+        limit_y: gpioa.pa5.into_pull_up_input(),
+        limit_z: gpioa.pa6.into_pull_up_input(),
+        probe: gpioa.pa3.into_pull_up_input(),
+        feed_hold: gpioa.pa1.into_pull_up_input(),
+        cycle_start: gpioa.pa0.into_pull_up_input(),
+        estop: gpioa.pa2.into_pull_up_input(),
+    };
+
+    let (_, (ch1, ..)) = tim1.pwm_hz(SPINDLE_PWM_HZ.Hz(), rcc);
+    let mut spindle_pwm = ch1.with(gpioa.pa8);
+    spindle_pwm.set_duty(0);
+    spindle_pwm.enable();
+    let mut aux = Aux {
+        spindle_pwm,
+        spindle_enable: gpiob.pb0.into_push_pull_output(),
+        spindle_dir: gpiob.pb1.into_push_pull_output(),
+        flood: gpiob.pb9.into_push_pull_output(),
+        mist: gpiob.pb10.into_push_pull_output(),
+    };
+    aux.all_off();
+
+    Board {
+        steppers,
+        inputs,
+        aux,
+        led: gpioc.pc13.into_push_pull_output(),
+        usb_pins: (gpioa.pa11, gpioa.pa12),
+    }
+}

@@ -1,0 +1,15 @@
+//! WeAct Black Pill V1.3/V3 with an STM32F401CCU6. Same package and board
+//! as the F411 one, so it shares the Black Pill pin map; only the clock
+//! tree and the memory sizes differ.
+use stm32f4xx_hal::{prelude::*, rcc::Config};
+
+pub use super::blackpill::{split, Inputs};
+
+/// Human-readable board name for the startup log and `$I`.
+pub const NAME: &str = "WeAct Black Pill STM32F401CCU6";
+
+/// 25 MHz crystal -> PLL: VCO 336 MHz, /4 = 84 MHz core (the chip's
+/// maximum), /7 = 48 MHz USB. APB1 runs at 42 MHz, so TIM5 ticks at 84 MHz.
+pub fn clocks() -> Config {
+    Config::hse(25.MHz()).sysclk(84.MHz()).require_pll48clk()
+}

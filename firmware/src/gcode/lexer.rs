@@ -1,0 +1,289 @@
+//! One line of G-code into words, without allocating.
+//!
+//! The lexer walks the line once. Comments are dropped (except `(MSG,…)`),
+//! `N` numbers and RepRap `*nn` checksums are checked and consumed, and
+//! parameter assignments `#n=…` are executed on the spot (BeagleG semantics),
+//! so the caller only ever sees [`Token::Word`]s with final values and
+//! operator messages.
+//!
+//! Choices, documented because other dialects differ:
+//! - spaces and tabs may stand anywhere outside comments, even inside a
+//!   number (`X1 0` is X10), as LinuxCNC strips them before parsing;
+//! - a `/` first on the line marks it for block delete; whether it is
+//!   skipped is the interpreter's switch (on by default, as in LinuxCNC);
+//! - `%` alone on a line (comments allowed) is a program delimiter;
+//! - `N` must come first, be an integer 0-99999999, and is otherwise ignored;
+//! - `*nn` is only a checksum at top level (inside `[ ]` it multiplies) and
+//!   must end the line; its XOR covers every byte before the `*`.
+
+use super::error::{ErrorKind, GcodeError, Unsupported};
+use super::params::ParamStore;
+use super::{Word, MAX_LINE};
+
+pub(crate) type LexResult<T> = Result<T, GcodeError>;
+
+/// A byte cursor that skips blanks when peeking.
+#[derive(Debug)]
+pub(crate) struct Cursor<'a> {
+    pub(crate) line: &'a [u8],
+    pub(crate) pos: usize,
+}
+
+fn blank(b: u8) -> bool {
+    b == b' ' || b == b'\t' || b == b'\r'
+}
+
+impl<'a> Cursor<'a> {
+    /// Next non-blank byte (the cursor moves past the blanks).
+    pub(crate) fn peek(&mut self) -> Option<u8> {
+        while let Some(&b) = self.line.get(self.pos) {
+            if !blank(b) {
+                return Some(b);
+            }
+            self.pos += 1;
+        }
+        None
+    }
+    /// The byte at the cursor, blank or not.
+    pub(crate) fn peek_raw(&self) -> Option<u8> {
+        self.line.get(self.pos).copied()
+    }
+    /// The non-blank byte after the one [`Cursor::peek`] returns.
+    pub(crate) fn peek2(&mut self) -> Option<u8> {
+        self.peek()?;
+        self.line.get(self.pos + 1..)?.iter().copied().find(|&b| !blank(b))
+    }
+    pub(crate) fn bump(&mut self) {
+        self.pos += 1;
+    }
+    pub(crate) fn err(&self, k: ErrorKind) -> GcodeError {
+        self.err_at(k, self.pos)
+    }
+    pub(crate) fn err_at(&self, k: ErrorKind, pos: usize) -> GcodeError {
+        GcodeError::new(k, (pos + 1).min(u16::MAX as usize) as u16)
+    }
+}
+
+/// What the lexer hands to the interpreter.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Token<'a> {
+    Word(Word),
+    /// `(MSG, text)`: the text after the comma, leading blanks removed.
+    Message { text: &'a [u8], col: u16 },
+}
+
+/// Lexer over one line (without its line terminator).
+#[derive(Debug)]
+pub struct Lexer<'a> {
+    cur: Cursor<'a>,
+    /// The line starts with `/`.
+    pub block_delete: bool,
+    /// The line is a `%` program delimiter.
+    pub percent: bool,
+    /// The `N` number, when present.
+    pub line_number: Option<u32>,
+    done: bool,
+    seen_word: bool,
+}
+
+const KEYWORDS: [&[u8]; 16] = [
+    b"if", b"else", b"elseif", b"endif", b"while", b"endwhile", b"do", b"repeat",
+    b"endrepeat", b"sub", b"endsub", b"call", b"return", b"break", b"continue", b"end",
+];
+
+impl<'a> Lexer<'a> {
+    /// Checks the length and reads the `/` and `%` markers.
+    pub fn new(line: &'a [u8]) -> LexResult<Self> {
+        let mut end = line.len();
+        while end > 0 && matches!(line.get(end - 1), Some(b'\n' | b'\r')) {
+            end -= 1;
+        }
+        let line = line.get(..end).unwrap_or(&[]);
+        let mut cur = Cursor { line, pos: 0 };
+        if line.len() > MAX_LINE {
+            return Err(cur.err_at(ErrorKind::LineTooLong, MAX_LINE));
+        }
+        let mut lx = Lexer { cur: Cursor { line, pos: 0 }, block_delete: false, percent: false, line_number: None, done: false, seen_word: false };
+        match cur.peek() {
+            Some(b'/') => {
+                cur.bump();
+                lx.block_delete = true;
+            }
+            Some(b'%') => {
+                cur.bump();
+                lx.percent = true;
+            }
+            _ => {}
+        }
+        lx.cur.pos = cur.pos;
+        Ok(lx)
+    }
+
+    /// The next word or message; `None` at the end of the line.
+    pub fn next_token(&mut self, p: &mut dyn ParamStore) -> LexResult<Option<Token<'a>>> {
+        loop {
+            if self.done {
+                return Ok(None);
+            }
+            let Some(b) = self.cur.peek() else {
+                self.done = true;
+                return Ok(None);
+            };
+            let col = self.cur.pos;
+            match b {
+                b'(' => {
+                    if let Some(t) = self.comment()? {
+                        return Ok(Some(t));
+                    }
+                }
+                b';' => self.done = true,
+                b'*' => self.checksum()?,
+                _ if self.percent => return Err(self.cur.err(ErrorKind::ExpectedLetter(b'%'))),
+                b'#' => {
+                    self.cur.bump();
+                    self.assignment(p, col)?;
+                    self.seen_word = true;
+                }
+                _ if b.is_ascii_alphabetic() => {
+                    let l = b.to_ascii_uppercase();
+                    self.cur.bump();
+                    if l == b'O' {
+                        return Err(self.cur.err_at(ErrorKind::Unsupported(Unsupported::OWord), col));
+                    }
+                    if self.keyword_at(col) {
+                        return Err(self.cur.err_at(ErrorKind::Unsupported(Unsupported::ControlFlow), col));
+                    }
+                    let value = self.cur.real(p, 0)?;
+                    if !value.is_finite() {
+                        return Err(self.cur.err_at(ErrorKind::NotFinite, col));
+                    }
+                    let col16 = (col + 1) as u16;
+                    if l == b'N' {
+                        if self.seen_word || self.line_number.is_some() {
+                            return Err(self.cur.err_at(ErrorKind::LineNumberMisplaced, col));
+                        }
+                        if value < 0.0 || value > 99_999_999.0 || libm::floorf(value) != value {
+                            return Err(self.cur.err_at(ErrorKind::InvalidLineNumber, col));
+                        }
+                        self.line_number = Some(value as u32);
+                        continue;
+                    }
+                    self.seen_word = true;
+                    return Ok(Some(Token::Word(Word { letter: l, value, col: col16 })));
+                }
+                _ if !b.is_ascii() => return Err(self.cur.err(ErrorKind::NonAscii)),
+                _ => return Err(self.cur.err(ErrorKind::ExpectedLetter(b))),
+            }
+        }
+    }
+
+    /// A letter run starting at `col` that spells a control-flow keyword.
+    fn keyword_at(&self, col: usize) -> bool {
+        let rest = self.cur.line.get(col..).unwrap_or(&[]);
+        let n = rest.iter().take_while(|b| b.is_ascii_alphabetic()).count();
+        n >= 2 && rest.get(..n).is_some_and(|w| KEYWORDS.iter().any(|k| k.eq_ignore_ascii_case(w)))
+    }
+
+    fn assignment(&mut self, p: &mut dyn ParamStore, col: usize) -> LexResult<()> {
+        let r = self.cur.param_ref(p, 1)?;
+        match self.cur.peek() {
+            Some(b'=') => self.cur.bump(),
+            Some(b'+' | b'-' | b'*' | b'/') if self.cur.peek2() == Some(b'=') => {
+                return Err(self.cur.err(ErrorKind::Unsupported(Unsupported::ControlFlow)));
+            }
+            _ => return Err(self.cur.err(ErrorKind::BadNumber)),
+        }
+        let v = self.cur.real(p, 0)?;
+        let res = match r {
+            super::expr::ParamRef::Num(n) => p.set(n, v),
+            super::expr::ParamRef::Named(name) => p.set_named(&name, v),
+        };
+        res.map_err(|k| self.cur.err_at(k, col))
+    }
+
+    /// At `(`: skips the comment, or returns it as a message.
+    fn comment(&mut self) -> LexResult<Option<Token<'a>>> {
+        let start = self.cur.pos;
+        let body_start = start + 1;
+        let line = self.cur.line;
+        let mut i = body_start;
+        loop {
+            match line.get(i) {
+                None => return Err(self.cur.err_at(ErrorKind::UnclosedComment, start)),
+                Some(b')') => break,
+                Some(b'(') => return Err(self.cur.err_at(ErrorKind::NestedComment, i)),
+                Some(_) => i += 1,
+            }
+        }
+        self.cur.pos = i + 1;
+        let body = line.get(body_start..i).unwrap_or(&[]);
+        let t = trim_start(body);
+        if t.len() >= 3 && t.get(..3).is_some_and(|m| m.eq_ignore_ascii_case(b"msg")) {
+            let after = trim_start(t.get(3..).unwrap_or(&[]));
+            if let Some(text) = after.strip_prefix(b",") {
+                return Ok(Some(Token::Message { text: trim_end(trim_start(text)), col: (start + 1) as u16 }));
+            }
+        }
+        Ok(None)
+    }
+
+    /// At a top-level `*`: the RepRap checksum, which must end the line.
+    fn checksum(&mut self) -> LexResult<()> {
+        let star = self.cur.pos;
+        self.cur.bump();
+        let computed = self.cur.line.get(..star).unwrap_or(&[]).iter().fold(0u8, |a, &b| a ^ b);
+        let mut v: u32 = 0;
+        let mut digits = 0;
+        while let Some(b) = self.cur.peek() {
+            if !b.is_ascii_digit() || digits == 3 {
+                break;
+            }
+            v = v * 10 + u32::from(b - b'0');
+            digits += 1;
+            self.cur.bump();
+        }
+        if digits == 0 || v > 255 || self.cur.peek().is_some() {
+            return Err(self.cur.err_at(ErrorKind::BadChecksum, star));
+        }
+        if v as u8 != computed {
+            return Err(self.cur.err_at(ErrorKind::ChecksumMismatch { expected: v as u8, computed }, star));
+        }
+        self.done = true;
+        Ok(())
+    }
+
+    /// The rest of the line as free text (M117), minus a trailing checksum,
+    /// which is verified. Ends the line.
+    pub fn rest_text(&mut self) -> LexResult<&'a [u8]> {
+        self.cur.peek();
+        let line = self.cur.line;
+        let start = self.cur.pos;
+        let mut end = line.len();
+        while end > start && line.get(end - 1).is_some_and(|&b| blank(b)) {
+            end -= 1;
+        }
+        let digits = line.get(start..end).unwrap_or(&[]).iter().rev().take_while(|b| b.is_ascii_digit()).count();
+        if digits > 0 && end - digits > start && line.get(end - digits - 1) == Some(&b'*') {
+            self.cur.pos = end - digits - 1;
+            self.checksum()?;
+            end -= digits + 1;
+        }
+        self.done = true;
+        let text = line.get(start..end).unwrap_or(&[]);
+        let mut n = text.len();
+        while n > 0 && text.get(n - 1).is_some_and(|&b| blank(b)) {
+            n -= 1;
+        }
+        Ok(text.get(..n).unwrap_or(&[]))
+    }
+}
+
+fn trim_start(s: &[u8]) -> &[u8] {
+    let n = s.iter().take_while(|&&b| blank(b)).count();
+    s.get(n..).unwrap_or(&[])
+}
+
+fn trim_end(s: &[u8]) -> &[u8] {
+    let n = s.iter().rev().take_while(|&&b| blank(b)).count();
+    s.get(..s.len() - n).unwrap_or(&[])
+}

@@ -1,0 +1,42 @@
+//! The G-code language: one line in, words out.
+//!
+//! [`Lexer`] turns a line into [`Word`]s, evaluating parameters and
+//! `[expressions]` as it goes, so nothing downstream ever sees text. It
+//! allocates nothing: all state is on the stack or in [`Params`].
+//! The interpreter (`crate::interp`) gives the words meaning.
+
+pub mod error;
+mod expr;
+pub mod lexer;
+pub mod params;
+
+pub use error::{ErrorKind, GcodeError, Unsupported};
+pub use expr::MAX_DEPTH;
+pub use lexer::{Lexer, Token};
+pub use params::{Name, ParamStore, Params};
+
+/// Longest accepted line in bytes, not counting the line terminator. Longer
+/// lines are an error, never truncated: a cut-off `X1000` would be `X10`.
+pub const MAX_LINE: usize = 256;
+
+/// One word: an upper-case letter and its evaluated value.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Word {
+    pub letter: u8,
+    pub value: f32,
+    /// 1-based column of the letter.
+    pub col: u16,
+}
+
+impl Word {
+    /// The number in tenths (G59.1 -> 591) when it has at most one decimal,
+    /// as G and M numbers must.
+    pub fn tenths(&self) -> Option<u16> {
+        let t = libm::roundf(self.value * 10.0);
+        if (0.0..=65535.0).contains(&t) && (self.value * 10.0 - t).abs() < 1e-3 {
+            Some(t as u16)
+        } else {
+            None
+        }
+    }
+}

@@ -1,0 +1,208 @@
+//! Collecting one command's words and checking RS274NGC's modal groups.
+//!
+//! A line may hold several commands (BeagleG): a motion G word (G0-G3, G5,
+//! G38.x, G80) that arrives after axis words starts a new block, so
+//! `G1 X10 Y100 G1 X0 Y0` is two moves. Any other second word of one group
+//! is a modal group violation, as RS274NGC says.
+
+use crate::gcode::{ErrorKind, GcodeError, Unsupported, Word};
+
+/// G-word modal groups (index into [`Block::g`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum GGroup {
+    NonModal = 0,
+    Motion,
+    Plane,
+    Distance,
+    ArcDistance,
+    FeedMode,
+    Units,
+    Cutter,
+    ToolLength,
+    Wcs,
+    Path,
+}
+const G_GROUPS: usize = 11;
+
+/// M-word groups (index into [`Block::m`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum MGroup {
+    Stop = 0,
+    Spindle,
+    Coolant,
+    Misc,
+}
+const M_GROUPS: usize = 4;
+
+fn g_group(tenths: u16) -> Option<GGroup> {
+    use GGroup::*;
+    Some(match tenths {
+        80 | 40 | 100 | 270 | 280 | 281 | 300 | 301 | 530 | 920..=923 => NonModal,
+        0 | 10 | 20 | 30 | 50 | 51 | 382..=385 | 800 => Motion,
+        170 | 180 | 190 => Plane,
+        900 | 910 => Distance,
+        901 | 911 => ArcDistance,
+        930 | 940 => FeedMode,
+        200 | 210 | 700 | 710 => Units,
+        400 => Cutter,
+        490 => ToolLength,
+        540 | 550 | 560 | 570 | 580 | 590..=593 => Wcs,
+        610 | 611 | 640 => Path,
+        _ => return None,
+    })
+}
+
+fn m_group(n: u16) -> Option<MGroup> {
+    use MGroup::*;
+    Some(match n {
+        0 | 1 | 2 | 30 => Stop,
+        3..=5 => Spindle,
+        7..=9 => Coolant,
+        17 | 18 | 84 | 42 | 62..=65 | 106 | 107 | 114 | 115 | 117 | 119 | 220 | 400 | 500
+        | 501 | 999 => Misc,
+        _ => return None,
+    })
+}
+
+/// Letters that carry values (not G, M, N).
+pub(crate) const AXIS_LETTERS: [u8; 4] = [b'X', b'Y', b'Z', b'A'];
+
+/// What [`Block::add`] decided.
+#[derive(Debug, PartialEq, Eq)]
+pub(crate) enum Added {
+    Ok,
+    /// The word begins the next command on the line; it was not consumed.
+    Split,
+}
+
+/// The words of one command.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Block<'a> {
+    /// Per group: the G number in tenths and its column.
+    pub g: [Option<(u16, u16)>; G_GROUPS],
+    /// Per group: the M number and its column. Coolant keeps M7+M8 as a mask in `coolant`.
+    pub m: [Option<(u16, u16)>; M_GROUPS],
+    /// Bit 0: M7 seen, bit 1: M8 seen, bit 2: M9 seen.
+    pub coolant: u8,
+    /// Value words by letter (A=0 .. Z=25); `present` says which are set.
+    pub val: [f32; 26],
+    pub col: [u16; 26],
+    pub present: u32,
+    /// `(MSG, …)` text, and M117's text.
+    pub msg: Option<(&'a [u8], u16)>,
+    pub text: Option<&'a [u8]>,
+    /// Column of the first word, for faults of the block as a whole.
+    pub first_col: u16,
+}
+
+pub(crate) fn bit(letter: u8) -> u32 {
+    1u32 << (letter.wrapping_sub(b'A') % 26)
+}
+
+impl<'a> Block<'a> {
+    pub fn is_empty(&self) -> bool {
+        self.present == 0
+            && self.g.iter().all(Option::is_none)
+            && self.m.iter().all(Option::is_none)
+            && self.msg.is_none()
+    }
+
+    pub fn has(&self, letter: u8) -> bool {
+        self.present & bit(letter) != 0
+    }
+
+    pub fn get(&self, letter: u8) -> Option<f32> {
+        if self.has(letter) {
+            self.val.get(usize::from(letter.wrapping_sub(b'A'))).copied()
+        } else {
+            None
+        }
+    }
+
+    pub fn col_of(&self, letter: u8) -> u16 {
+        self.col.get(usize::from(letter.wrapping_sub(b'A'))).copied().unwrap_or(0)
+    }
+
+    pub fn axis_mask(&self) -> u8 {
+        AXIS_LETTERS.iter().enumerate().fold(0, |m, (i, &l)| if self.has(l) { m | 1 << i } else { m })
+    }
+
+    pub fn g_of(&self, grp: GGroup) -> Option<(u16, u16)> {
+        self.g.get(grp as usize).copied().flatten()
+    }
+
+    pub fn m_of(&self, grp: MGroup) -> Option<(u16, u16)> {
+        self.m.get(grp as usize).copied().flatten()
+    }
+
+    fn note_col(&mut self, col: u16) {
+        if self.first_col == 0 {
+            self.first_col = col;
+        }
+    }
+
+    /// Adds a word, or says that it starts the next command.
+    pub fn add(&mut self, w: Word) -> Result<Added, GcodeError> {
+        let err = |k| Err(GcodeError::new(k, w.col));
+        match w.letter {
+            b'G' => {
+                let Some(t) = w.tenths() else { return err(ErrorKind::NotInteger(b'G')) };
+                let Some(grp) = g_group(t) else {
+                    return err(ErrorKind::Unsupported(Unsupported::Code { letter: b'G', tenths: t }));
+                };
+                if grp == GGroup::Motion && self.axis_mask() != 0 {
+                    return Ok(Added::Split);
+                }
+                let slot = self.g.get_mut(grp as usize).ok_or(GcodeError::new(ErrorKind::ModalGroupViolation, w.col))?;
+                match *slot {
+                    // LinuxCNC lets G80 share a block with another motion code
+                    // (CAM preambles write `G0 ... G80`); the other one wins.
+                    Some((800, _)) if grp == GGroup::Motion => *slot = Some((t, w.col)),
+                    Some(_) if grp == GGroup::Motion && t == 800 => {}
+                    Some(_) => return err(ErrorKind::ModalGroupViolation),
+                    None => *slot = Some((t, w.col)),
+                }
+            }
+            b'M' => {
+                let t = match w.tenths() {
+                    Some(t) if t % 10 == 0 => t / 10,
+                    Some(t) => return err(ErrorKind::Unsupported(Unsupported::Code { letter: b'M', tenths: t })),
+                    None => return err(ErrorKind::NotInteger(b'M')),
+                };
+                let Some(grp) = m_group(t) else {
+                    return err(ErrorKind::Unsupported(Unsupported::Code { letter: b'M', tenths: t * 10 }));
+                };
+                if grp == MGroup::Coolant {
+                    let b = match t {
+                        7 => 1,
+                        8 => 2,
+                        _ => 4,
+                    };
+                    if self.coolant & b != 0 || (b == 4 && self.coolant != 0) || (b != 4 && self.coolant & 4 != 0) {
+                        return err(ErrorKind::ModalGroupViolation);
+                    }
+                    self.coolant |= b;
+                }
+                let slot = self.m.get_mut(grp as usize).ok_or(GcodeError::new(ErrorKind::ModalGroupViolation, w.col))?;
+                if slot.is_some() && grp != MGroup::Coolant {
+                    return err(ErrorKind::ModalGroupViolation);
+                }
+                *slot = Some((t, w.col));
+            }
+            b'X' | b'Y' | b'Z' | b'A' | b'F' | b'I' | b'J' | b'K' | b'L' | b'P' | b'Q' | b'R' | b'S' | b'T' => {
+                if self.has(w.letter) {
+                    return err(ErrorKind::RepeatedWord(w.letter));
+                }
+                let i = usize::from(w.letter - b'A');
+                if let (Some(v), Some(c)) = (self.val.get_mut(i), self.col.get_mut(i)) {
+                    *v = w.value;
+                    *c = w.col;
+                }
+                self.present |= bit(w.letter);
+            }
+            l => return err(ErrorKind::Unsupported(Unsupported::Letter(l))),
+        }
+        self.note_col(w.col);
+        Ok(Added::Ok)
+    }
+}

@@ -1,0 +1,307 @@
+//! The RS274NGC interpreter: lines in, [`Command`]s in machine mm out.
+//!
+//! A line either succeeds completely or leaves no trace: its commands are
+//! collected in a small buffer and handed out only when the whole line
+//! interpreted cleanly; on an error the modal state is restored from a
+//! snapshot (it is `Copy` and a few hundred bytes) and the line's parameter
+//! writes are undone from the undo log. This is what lets check mode and the
+//! GRBL `error:N` reply continue with the next line safely.
+//!
+//! Positions: the interpreter runs ahead of the machine, so after homing and
+//! probing it only guesses where the tool stopped (homed axes at machine 0,
+//! probes at their target). The executor must feed back the real position
+//! with [`Interpreter::set_machine_position`] or [`Interpreter::probe_finished`]
+//! before the next line; [`Interpreter::needs_sync`] says when.
+
+mod block;
+mod exec;
+mod geom;
+mod state;
+
+pub use exec::{G30_PROBE_TRAVEL, LINE_COMMANDS};
+pub use state::{Motion, State, WCS_COUNT};
+
+use crate::command::{Command, Plane, Pos};
+use crate::gcode::{ErrorKind, GcodeError, Lexer, Name, ParamStore, Params, Token};
+use block::{Added, Block};
+use core::fmt::{self, Write};
+
+/// The interpreter: modal state plus parameters. About 2.3 KiB.
+#[derive(Clone, Debug)]
+pub struct Interpreter {
+    state: State,
+    params: Params,
+}
+
+impl Default for Interpreter {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Parameter access seen by the lexer: typed state first, then the table.
+struct Env<'s> {
+    state: &'s mut State,
+    params: &'s mut Params,
+}
+
+impl ParamStore for Env<'_> {
+    fn get(&self, n: u16) -> Result<f32, ErrorKind> {
+        match n {
+            0 => Ok(0.0),
+            1..=crate::gcode::params::PARAM_MAX => Ok(self.state.param(n).unwrap_or_else(|| self.params.get_num(n))),
+            _ => Err(ErrorKind::ParamOutOfRange),
+        }
+    }
+    fn set(&mut self, n: u16, v: f32) -> Result<(), ErrorKind> {
+        match n {
+            0 => Err(ErrorKind::ParamReadOnly),
+            1..=crate::gcode::params::PARAM_MAX => {
+                if self.state.set_param(n, v)? {
+                    Ok(())
+                } else {
+                    self.params.set_num(n, v)
+                }
+            }
+            _ => Err(ErrorKind::ParamOutOfRange),
+        }
+    }
+    fn get_named(&self, name: &Name) -> Result<f32, ErrorKind> {
+        self.params.get_name(name)
+    }
+    fn set_named(&mut self, name: &Name, v: f32) -> Result<(), ErrorKind> {
+        self.params.set_name(name, v)
+    }
+}
+
+fn cmd_finite(c: &Command) -> bool {
+    let all = |s: &[f32]| s.iter().all(|v| v.is_finite());
+    let feed = |f: &crate::command::Feed| match f {
+        crate::command::Feed::PerMin(v) | crate::command::Feed::InverseTime(v) => v.is_finite(),
+    };
+    match c {
+        Command::Rapid { end } => all(end),
+        Command::Line { end, feed: f } | Command::Probe { end, feed: f, .. } => all(end) && feed(f),
+        Command::Arc(a) => all(&a.end) && all(&a.center) && feed(&a.feed),
+        Command::Spline(s) => all(&s.end) && all(&s.p1) && all(&s.p2) && feed(&s.feed),
+        Command::Dwell { seconds } => seconds.is_finite(),
+        Command::Spindle { speed, .. } => speed.is_finite(),
+        Command::Aux { value, .. } => value.is_finite(),
+        _ => true,
+    }
+}
+
+impl Interpreter {
+    pub const fn new() -> Self {
+        Interpreter { state: State::new(), params: Params::new() }
+    }
+
+    /// Interprets one line (terminator optional). On success the line's
+    /// commands go to `out` in order; on error nothing is emitted and the
+    /// interpreter is as it was before the line.
+    pub fn execute_line(&mut self, line: &[u8], out: &mut dyn FnMut(Command)) -> Result<(), GcodeError> {
+        let snapshot = self.state;
+        self.params.begin_line();
+        let mut buf = exec::Out::new();
+        match self.run(line, &mut buf) {
+            Ok(()) => {
+                for c in buf {
+                    out(c);
+                }
+                Ok(())
+            }
+            Err(e) => {
+                self.state = snapshot;
+                self.params.rollback();
+                Err(e)
+            }
+        }
+    }
+
+    fn run_block(&mut self, b: &Block, buf: &mut exec::Out) -> Result<(), GcodeError> {
+        let before = buf.len();
+        exec::execute(&mut self.state, b, buf)?;
+        let bad = buf.get(before..).is_some_and(|s| s.iter().any(|c| !cmd_finite(c)));
+        if bad || !self.state.pos.iter().all(|v| v.is_finite()) {
+            return Err(GcodeError::new(ErrorKind::NotFinite, b.first_col));
+        }
+        Ok(())
+    }
+
+    fn run(&mut self, line: &[u8], buf: &mut exec::Out) -> Result<(), GcodeError> {
+        let mut lx = Lexer::new(line)?;
+        if lx.block_delete && self.state.block_delete {
+            return Ok(());
+        }
+        let mut block = Block::default();
+        loop {
+            let tok = {
+                let mut env = Env { state: &mut self.state, params: &mut self.params };
+                lx.next_token(&mut env)?
+            };
+            match tok {
+                None => break,
+                Some(Token::Message { text, col }) => {
+                    if block.msg.is_some() {
+                        buf.push(Command::Message(exec::message(text)))
+                            .map_err(|_| GcodeError::new(ErrorKind::TooManyCommands, col))?;
+                    } else {
+                        block.msg = Some((text, col));
+                    }
+                }
+                Some(Token::Word(w)) => {
+                    if block.add(w)? == Added::Split {
+                        self.run_block(&block, buf)?;
+                        block = Block::default();
+                        block.add(w)?;
+                    }
+                    if w.letter == b'M' && w.tenths() == Some(1170) {
+                        block.text = Some(lx.rest_text()?);
+                    }
+                }
+            }
+        }
+        if !block.is_empty() {
+            self.run_block(&block, buf)?;
+        }
+        Ok(())
+    }
+
+    /// The modal state, positions and offsets (read-only).
+    pub fn state(&self) -> &State {
+        &self.state
+    }
+
+    /// The parameter tables.
+    pub fn params(&self) -> &Params {
+        &self.params
+    }
+
+    /// Where the machine really is (after homing, probing, a hold or a jog).
+    pub fn set_machine_position(&mut self, pos: Pos) {
+        self.state.pos = pos;
+        self.state.needs_sync = false;
+        self.state.last_g5 = None;
+    }
+
+    /// A probe move ended at `pos`; `contact` says whether the probe tripped.
+    /// Sets #5061.. and #5070, and applies a pending G30 plate thickness as
+    /// a G92 Z offset so that work Z at the contact equals the thickness.
+    pub fn probe_finished(&mut self, pos: Pos, contact: bool) {
+        self.set_machine_position(pos);
+        self.state.probe = pos;
+        self.state.probe_ok = contact;
+        if let Some(t) = self.state.pending_probe_z.take() {
+            if contact {
+                let base = self.state.wcs_offsets.get(usize::from(self.state.wcs)).map_or(0.0, |o| o[2]);
+                if !self.state.g92_active {
+                    self.state.g92 = [0.0; crate::AXES];
+                }
+                self.state.g92[2] = pos[2] - base - t;
+                self.state.g92_active = true;
+            }
+        }
+    }
+
+    /// True after a command whose end only the machine knows.
+    pub fn needs_sync(&self) -> bool {
+        self.state.needs_sync
+    }
+
+    /// Block delete switch (`/` lines skipped while on; on by default).
+    pub fn set_block_delete(&mut self, on: bool) {
+        self.state.block_delete = on;
+    }
+
+    /// GRBL's soft reset: modal state back to defaults; offsets, stored
+    /// positions, parameters and the position survive.
+    pub fn reset(&mut self) {
+        let s = self.state;
+        self.state = State {
+            wcs_offsets: s.wcs_offsets,
+            g28: s.g28,
+            g30: s.g30,
+            g92: s.g92,
+            g92_active: s.g92_active,
+            pos: s.pos,
+            probe: s.probe,
+            probe_ok: s.probe_ok,
+            tool: s.tool,
+            block_delete: s.block_delete,
+            ..State::new()
+        };
+    }
+
+    /// Work coordinate offset (active G54.. plus G92), machine mm: GRBL's WCO.
+    pub fn wco(&self) -> Pos {
+        self.state.wco()
+    }
+
+    /// The body of GRBL's `$G` report, e.g. `G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0`
+    /// (the link layer wraps it in `[GC:` … `]`). F is in the active units.
+    pub fn write_gc_state(&self, w: &mut dyn Write) -> fmt::Result {
+        let s = &self.state;
+        crate::gcode::error::write_code(w, b'G', s.motion.tenths())?;
+        let wcs = match s.wcs {
+            k @ 0..=5 => 540 + 10 * u16::from(k),
+            k => 591 + u16::from(k) - 6,
+        };
+        w.write_char(' ')?;
+        crate::gcode::error::write_code(w, b'G', wcs)?;
+        let plane = match s.plane {
+            Plane::XY => 17,
+            Plane::ZX => 18,
+            Plane::YZ => 19,
+        };
+        write!(
+            w,
+            " G{plane} G{} G{} G{} ",
+            if s.inch { 20 } else { 21 },
+            if s.incremental { 91 } else { 90 },
+            if s.inverse_time { 93 } else { 94 },
+        )?;
+        w.write_str(match s.spindle {
+            crate::command::SpindleDir::Cw => "M3",
+            crate::command::SpindleDir::Ccw => "M4",
+            crate::command::SpindleDir::Off => "M5",
+        })?;
+        match (s.mist, s.flood) {
+            (false, false) => w.write_str(" M9")?,
+            (true, false) => w.write_str(" M7")?,
+            (false, true) => w.write_str(" M8")?,
+            (true, true) => w.write_str(" M7 M8")?,
+        }
+        write!(w, " T{} F{} S{}", s.tool, s.feed / s.unit(), s.speed)
+    }
+
+    /// GRBL's `$#` report lines (G54..G59.3, G28, G30, G92, TLO, PRB), all
+    /// axes, machine mm with three decimals, each followed by `eol`.
+    pub fn write_offsets(&self, w: &mut dyn Write, eol: &str) -> fmt::Result {
+        let s = &self.state;
+        let pos = |w: &mut dyn Write, p: &Pos| -> fmt::Result {
+            for (i, v) in p.iter().enumerate() {
+                if i > 0 {
+                    w.write_char(',')?;
+                }
+                write!(w, "{v:.3}")?;
+            }
+            Ok(())
+        };
+        for (k, o) in s.wcs_offsets.iter().enumerate() {
+            w.write_char('[')?;
+            let code = if k < 6 { 540 + 10 * k as u16 } else { 591 + k as u16 - 6 };
+            crate::gcode::error::write_code(w, b'G', code)?;
+            w.write_char(':')?;
+            pos(w, o)?;
+            write!(w, "]{eol}")?;
+        }
+        for (label, p) in [("G28", &s.g28), ("G30", &s.g30), ("G92", &s.g92)] {
+            write!(w, "[{label}:")?;
+            pos(w, p)?;
+            write!(w, "]{eol}")?;
+        }
+        write!(w, "[TLO:0.000]{eol}[PRB:")?;
+        pos(w, &s.probe)?;
+        write!(w, ":{}]{eol}", u8::from(s.probe_ok))
+    }
+}

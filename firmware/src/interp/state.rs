@@ -1,0 +1,232 @@
+//! The interpreter's modal state: small and `Copy`, so a line can be rolled
+//! back by restoring a snapshot taken before it ran.
+//!
+//! Offsets and stored positions live here as typed values in machine mm
+//! and are also visible through their RS274NGC parameter numbers (see
+//! [`State::param`]). All of them stay in mm whatever G20/G21 say, like
+//! LinuxCNC's parameters in a metric machine's units.
+
+use crate::command::{Plane, Pos, ProbeKind, SpindleDir};
+use crate::gcode::ErrorKind;
+use crate::AXES;
+
+/// Work coordinate systems G54..G59.3.
+pub const WCS_COUNT: usize = 9;
+
+/// Group 1 motion modes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Motion {
+    Rapid,
+    Linear,
+    ArcCw,
+    ArcCcw,
+    /// G5 cubic spline.
+    Cubic,
+    /// G5.1 quadratic spline.
+    Quadratic,
+    Probe(ProbeKind),
+    /// G80: axis words without a motion word are an error.
+    Cancel,
+}
+
+impl Motion {
+    /// The G number in tenths.
+    pub const fn tenths(self) -> u16 {
+        match self {
+            Motion::Rapid => 0,
+            Motion::Linear => 10,
+            Motion::ArcCw => 20,
+            Motion::ArcCcw => 30,
+            Motion::Cubic => 50,
+            Motion::Quadratic => 51,
+            Motion::Probe(ProbeKind::Toward) => 382,
+            Motion::Probe(ProbeKind::TowardNoError) => 383,
+            Motion::Probe(ProbeKind::Away) => 384,
+            Motion::Probe(ProbeKind::AwayNoError) => 385,
+            Motion::Cancel => 800,
+        }
+    }
+    pub(crate) const fn from_tenths(t: u16) -> Option<Motion> {
+        Some(match t {
+            0 => Motion::Rapid,
+            10 => Motion::Linear,
+            20 => Motion::ArcCw,
+            30 => Motion::ArcCcw,
+            50 => Motion::Cubic,
+            51 => Motion::Quadratic,
+            382 => Motion::Probe(ProbeKind::Toward),
+            383 => Motion::Probe(ProbeKind::TowardNoError),
+            384 => Motion::Probe(ProbeKind::Away),
+            385 => Motion::Probe(ProbeKind::AwayNoError),
+            800 => Motion::Cancel,
+            _ => return None,
+        })
+    }
+}
+
+/// Everything modal, plus positions and offsets.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct State {
+    pub motion: Motion,
+    pub plane: Plane,
+    /// G20 (true) / G21.
+    pub inch: bool,
+    /// G91 (true) / G90.
+    pub incremental: bool,
+    /// G90.1 (true): arc centres absolute. G91.1 (default): relative to the start.
+    pub arc_absolute: bool,
+    /// G93 (true) / G94.
+    pub inverse_time: bool,
+    /// Active work coordinate system, 0 = G54 .. 8 = G59.3.
+    pub wcs: u8,
+    pub wcs_offsets: [Pos; WCS_COUNT],
+    pub g92: Pos,
+    pub g92_active: bool,
+    pub g28: Pos,
+    pub g30: Pos,
+    /// Where the tool is (or will be after the last emitted command), machine mm.
+    pub pos: Pos,
+    /// G94 feed rate, mm/min (0: none given yet).
+    pub feed: f32,
+    pub speed: f32,
+    pub spindle: SpindleDir,
+    pub mist: bool,
+    pub flood: bool,
+    pub tool: u32,
+    /// Last probe contact (machine mm) and whether it succeeded.
+    pub probe: Pos,
+    pub probe_ok: bool,
+    /// After a G5: the second control point's offset from the end, for the
+    /// next G5's implicit first control point.
+    pub last_g5: Option<[f32; 2]>,
+    /// G30 asked for the probed Z to become this work Z (mm).
+    pub pending_probe_z: Option<f32>,
+    /// `/` lines are skipped while this is on.
+    pub block_delete: bool,
+    /// The last command ended where only the machine knows (home, probe).
+    pub needs_sync: bool,
+}
+
+impl Default for State {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl State {
+    pub const fn new() -> Self {
+        State {
+            motion: Motion::Rapid,
+            plane: Plane::XY,
+            inch: false,
+            incremental: false,
+            arc_absolute: false,
+            inverse_time: false,
+            wcs: 0,
+            wcs_offsets: [[0.0; AXES]; WCS_COUNT],
+            g92: [0.0; AXES],
+            g92_active: false,
+            g28: [0.0; AXES],
+            g30: [0.0; AXES],
+            pos: [0.0; AXES],
+            feed: 0.0,
+            speed: 0.0,
+            spindle: SpindleDir::Off,
+            mist: false,
+            flood: false,
+            tool: 0,
+            probe: [0.0; AXES],
+            probe_ok: false,
+            last_g5: None,
+            pending_probe_z: None,
+            block_delete: true,
+            needs_sync: false,
+        }
+    }
+
+    /// Work coordinate offset: active G54.. plus G92 when active (GRBL's WCO).
+    pub fn wco(&self) -> Pos {
+        let base = self.wcs_offsets.get(usize::from(self.wcs)).copied().unwrap_or([0.0; AXES]);
+        let mut o = base;
+        if self.g92_active {
+            for (a, g) in o.iter_mut().zip(self.g92.iter()) {
+                *a += g;
+            }
+        }
+        o
+    }
+
+    /// Length factor from program units to mm.
+    pub fn unit(&self) -> f32 {
+        if self.inch {
+            25.4
+        } else {
+            1.0
+        }
+    }
+
+    fn slot(&mut self, n: u16) -> Option<&mut f32> {
+        match slot_of(n)? {
+            Slot::G28(a) => self.g28.get_mut(a),
+            Slot::G30(a) => self.g30.get_mut(a),
+            Slot::G92(a) => self.g92.get_mut(a),
+            Slot::Wcs(k, a) => self.wcs_offsets.get_mut(k).and_then(|o| o.get_mut(a)),
+        }
+    }
+
+    /// The typed value behind parameter `n`, if `n` is one of ours.
+    /// #5061-5064 probe (machine mm), #5070 probe ok, #5161 G28, #5181 G30,
+    /// #5210 G92 on, #5211 G92, #5220 active system 1-9, #5221+20k G54+k.
+    pub fn param(&self, n: u16) -> Option<f32> {
+        match n {
+            5061..=5064 => self.probe.get(usize::from(n - 5061)).copied(),
+            5070 => Some(f32::from(u8::from(self.probe_ok))),
+            5210 => Some(f32::from(u8::from(self.g92_active))),
+            5220 => Some(f32::from(self.wcs + 1)),
+            _ => match slot_of(n)? {
+                Slot::G28(a) => self.g28.get(a).copied(),
+                Slot::G30(a) => self.g30.get(a).copied(),
+                Slot::G92(a) => self.g92.get(a).copied(),
+                Slot::Wcs(k, a) => self.wcs_offsets.get(k).and_then(|o| o.get(a)).copied(),
+            },
+        }
+    }
+
+    /// Writes a typed parameter. `Ok(false)`: not one of ours (use the table).
+    pub fn set_param(&mut self, n: u16, v: f32) -> Result<bool, ErrorKind> {
+        match n {
+            5061..=5064 | 5070 | 5220 => Err(ErrorKind::ParamReadOnly),
+            5210 => {
+                self.g92_active = v != 0.0;
+                Ok(true)
+            }
+            _ => match self.slot(n) {
+                Some(s) => {
+                    *s = v;
+                    Ok(true)
+                }
+                None => Ok(false),
+            },
+        }
+    }
+}
+
+enum Slot {
+    G28(usize),
+    G30(usize),
+    G92(usize),
+    Wcs(usize, usize),
+}
+
+fn slot_of(n: u16) -> Option<Slot> {
+    let axis = |base: u16| usize::from(n - base);
+    Some(match n {
+        5161..=5164 => Slot::G28(axis(5161)),
+        5181..=5184 => Slot::G30(axis(5181)),
+        5211..=5214 => Slot::G92(axis(5211)),
+        5221..=5400 if usize::from((n - 5221) % 20) < AXES => {
+            Slot::Wcs(usize::from((n - 5221) / 20), usize::from((n - 5221) % 20))
+        }
+        _ => return None,
+    })
+}

@@ -1,0 +1,168 @@
+//! The serial link: GRBL 1.1 text and burin's framed protocol on one port.
+//!
+//! Split in two halves so the USB interrupt never waits for the parser and
+//! the parser never holds a lock the interrupt needs:
+//!
+//! ```text
+//! USB OTG_FS ISR (prio 2)          parse/plan task (prio 1)
+//!   RxSplitter::feed(chunk)          LineAssembler::poll(consumer)
+//!     realtime -> RtFlags (atomic)     -> LinkEvent::{Line, System, Frame, ...}
+//!     rest -> spsc ring of RxToken     RtFlags::take() -> realtime commands
+//! ```
+//!
+//! Mode selection (see the `protocol` crate docs): text at start; a 0x00
+//! byte switches to framed; `Bye` or [`RxSplitter::reset`] (port closed,
+//! USB reset) switches back. Both halves switch at the same point of the
+//! stream because the switch travels through the ring as a token.
+//!
+//! The ring carries `u16` tokens, not bytes, so markers (receive overflow,
+//! mode reset) sit at the exact place in the stream where they happened.
+//! [`RX_RING`] tokens hold more than the [`protocol::RX_WINDOW`] of 128 bytes
+//! that character-counting senders rely on, plus a USB packet of slack.
+//!
+//! [`Link`] bundles both halves with a plain ring for host-sim and tests.
+
+mod assembler;
+pub mod reply;
+pub mod rt;
+mod splitter;
+pub mod syscmd;
+
+pub use assembler::{LineAssembler, LinkEvent};
+pub use rt::{RtFlags, RtSet};
+pub use splitter::{RxSplitter, PACKET_ROOM, SNIFF};
+pub use syscmd::SysCmd;
+
+use heapless::{spsc, Deque};
+
+/// One ring entry: a received byte (0..=255) or a marker.
+pub type RxToken = u16;
+/// Input was dropped here (ring full): the line it hit is reported, not run.
+pub const TOKEN_OVERFLOW: RxToken = 0x100;
+/// The port was reset: back to text mode from here on.
+pub const TOKEN_TEXT_MODE: RxToken = 0x101;
+
+/// Ring size for the RTIC app: `heapless::spsc::Queue<RxToken, RX_RING>`
+/// holds `RX_RING - 1` tokens.
+pub const RX_RING: usize = 256;
+
+/// Which protocol the port speaks right now.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LinkMode {
+    Text,
+    Framed,
+}
+
+/// Where the splitter puts tokens.
+pub trait TokenSink {
+    /// Queue `t`; false if full.
+    fn push(&mut self, t: RxToken) -> bool;
+    /// Room left, in tokens (the ISR reads a packet only with
+    /// [`PACKET_ROOM`] free, so the ring overflows only on misuse).
+    fn free(&self) -> usize;
+}
+
+/// Where the assembler takes tokens from.
+pub trait TokenSource {
+    fn pop(&mut self) -> Option<RxToken>;
+}
+
+impl TokenSink for spsc::Producer<'_, RxToken> {
+    fn push(&mut self, t: RxToken) -> bool {
+        self.enqueue(t).is_ok()
+    }
+    fn free(&self) -> usize {
+        self.capacity() - self.len()
+    }
+}
+
+impl TokenSource for spsc::Consumer<'_, RxToken> {
+    fn pop(&mut self) -> Option<RxToken> {
+        self.dequeue()
+    }
+}
+
+impl<const N: usize> TokenSink for Deque<RxToken, N> {
+    fn push(&mut self, t: RxToken) -> bool {
+        self.push_back(t).is_ok()
+    }
+    fn free(&self) -> usize {
+        self.capacity() - self.len()
+    }
+}
+
+impl<const N: usize> TokenSource for Deque<RxToken, N> {
+    fn pop(&mut self) -> Option<RxToken> {
+        self.pop_front()
+    }
+}
+
+/// Both halves and a ring in one value, for single-threaded users (host-sim,
+/// tests). `feed` plays the interrupt, `poll` the task.
+#[derive(Debug)]
+pub struct Link {
+    splitter: RxSplitter,
+    assembler: LineAssembler,
+    ring: Deque<RxToken, RX_RING>,
+    flags: RtFlags,
+}
+
+impl Default for Link {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Link {
+    pub const fn new() -> Self {
+        Link {
+            splitter: RxSplitter::new(),
+            assembler: LineAssembler::new(),
+            ring: Deque::new(),
+            flags: RtFlags::new(),
+        }
+    }
+
+    /// Bytes the link can take now without dropping any. Like the USB
+    /// endpoint, a transport should hold bytes back rather than overfill.
+    pub fn room(&self) -> usize {
+        self.ring.free().saturating_sub(1 + SNIFF)
+    }
+
+    /// Receive bytes (the interrupt's job). Realtime commands are flagged
+    /// at once; take them with [`Link::take_realtime`].
+    pub fn feed(&mut self, bytes: &[u8]) {
+        self.splitter.feed(bytes, &mut self.ring, &self.flags);
+    }
+
+    /// The port was closed or reopened: back to text mode.
+    pub fn reset(&mut self) {
+        self.splitter.reset(&mut self.ring);
+    }
+
+    /// Next line, command or frame, if a complete one has arrived.
+    pub fn poll(&mut self) -> Option<LinkEvent<'_>> {
+        self.assembler.poll(&mut self.ring)
+    }
+
+    /// Realtime commands raised since the last call.
+    pub fn take_realtime(&self) -> RtSet {
+        self.flags.take()
+    }
+
+    /// The shared flags (an RTIC app keeps its own in a `static`).
+    pub fn flags(&self) -> &RtFlags {
+        &self.flags
+    }
+
+    /// Mode of the lines coming out of [`Link::poll`].
+    pub fn mode(&self) -> LinkMode {
+        self.assembler.mode()
+    }
+
+    /// Received bytes not yet turned into events (ring plus partial line):
+    /// `RX_WINDOW - rx_pending()` is the `Bf:` receive figure.
+    pub fn rx_pending(&self) -> usize {
+        self.ring.len() + self.assembler.pending()
+    }
+}

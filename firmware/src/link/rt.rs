@@ -1,0 +1,67 @@
+//! Realtime commands handed from the receive interrupt to the tasks as bits
+//! of one atomic word: no lock, no queue to get stuck behind a job, and a
+//! command raised twice before it is handled acts once (as in GRBL: two
+//! quick `!` are one hold; two `0x91` are one +10 % step).
+
+use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use protocol::Rt;
+
+/// Pending realtime commands plus the receive-overflow flag.
+#[derive(Debug, Default)]
+pub struct RtFlags {
+    pending: AtomicU32,
+    overflow: AtomicBool,
+}
+
+impl RtFlags {
+    pub const fn new() -> Self {
+        RtFlags {
+            pending: AtomicU32::new(0),
+            overflow: AtomicBool::new(false),
+        }
+    }
+
+    /// Mark `rt` pending (interrupt side).
+    pub fn raise(&self, rt: Rt) {
+        self.pending.fetch_or(rt.bit(), Ordering::Release);
+    }
+
+    /// Take every pending command at once (task side).
+    pub fn take(&self) -> RtSet {
+        RtSet(self.pending.swap(0, Ordering::Acquire))
+    }
+
+    /// Whether anything is pending, without taking it (for a wake-up check).
+    pub fn any(&self) -> bool {
+        self.pending.load(Ordering::Acquire) != 0
+    }
+
+    /// Record that input bytes were dropped (interrupt side).
+    pub fn set_overflow(&self) {
+        self.overflow.store(true, Ordering::Release);
+    }
+
+    /// Whether bytes were dropped since the last call (clears the flag).
+    pub fn take_overflow(&self) -> bool {
+        self.overflow.swap(false, Ordering::Acquire)
+    }
+}
+
+/// A set of realtime commands taken from [`RtFlags`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct RtSet(pub u32);
+
+impl RtSet {
+    pub fn contains(self, rt: Rt) -> bool {
+        self.0 & rt.bit() != 0
+    }
+
+    pub fn is_empty(self) -> bool {
+        self.0 == 0
+    }
+
+    /// The commands, highest priority (soft reset) first.
+    pub fn iter(self) -> impl Iterator<Item = Rt> {
+        Rt::iter_bits(self.0)
+    }
+}

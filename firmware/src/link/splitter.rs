@@ -1,0 +1,164 @@
+//! Interrupt side of the link: runs in the USB receive interrupt, takes the
+//! realtime commands out of the byte stream at once, and queues everything
+//! else as [`RxToken`]s for the task-side [`super::LineAssembler`].
+//!
+//! Realtime bytes are caught here, not in the assembler, so a feed hold acts
+//! even when the job queue is full and nobody is reading lines. In framed
+//! mode realtime commands are short frames; this side holds back the first
+//! [`SNIFF`] bytes of every frame, and a frame that ends within them and is
+//! a valid `Realtime` message is acted on here and never queued.
+
+use super::rt::RtFlags;
+use super::{RxToken, TokenSink, TOKEN_OVERFLOW, TOKEN_TEXT_MODE};
+use protocol::{frame, HostMsg, Rt};
+
+/// Frames up to this many encoded bytes are checked for realtime commands
+/// (an encoded `Realtime` frame is 5 bytes).
+pub const SNIFF: usize = 16;
+
+/// Free ring tokens the interrupt should see before reading a USB packet
+/// (64 bytes, plus one for a pending overflow marker and a sniffed frame).
+pub const PACKET_ROOM: usize = 64 + 1 + SNIFF;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Mode {
+    Text,
+    /// Framed; `passthrough` once the current frame outgrew the sniff buffer.
+    Framed { passthrough: bool },
+}
+
+/// Splits the raw receive stream into realtime flags and ring tokens.
+#[derive(Clone, Debug)]
+pub struct RxSplitter {
+    mode: Mode,
+    hold: [u8; SNIFF],
+    hold_len: usize,
+    /// Bytes were dropped and the marker is not in the ring yet.
+    dropped: bool,
+    /// A mode reset is waiting for room in the ring.
+    reset_pending: bool,
+}
+
+impl Default for RxSplitter {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl RxSplitter {
+    pub const fn new() -> Self {
+        RxSplitter {
+            mode: Mode::Text,
+            hold: [0; SNIFF],
+            hold_len: 0,
+            dropped: false,
+            reset_pending: false,
+        }
+    }
+
+    /// True while the link is in framed mode.
+    pub fn is_framed(&self) -> bool {
+        matches!(self.mode, Mode::Framed { .. })
+    }
+
+    /// The port was closed or USB reset: back to text mode. The marker goes
+    /// through the ring so the assembler switches at the same point.
+    pub fn reset(&mut self, ring: &mut impl TokenSink) {
+        self.mode = Mode::Text;
+        self.hold_len = 0;
+        self.reset_pending = true;
+        self.put_pending(ring);
+    }
+
+    /// Handle one received chunk (any size; the USB packet is at most 64).
+    pub fn feed(&mut self, chunk: &[u8], ring: &mut impl TokenSink, flags: &RtFlags) {
+        for &b in chunk {
+            match self.mode {
+                Mode::Text => self.text_byte(b, ring, flags),
+                Mode::Framed { passthrough } => self.framed_byte(b, passthrough, ring, flags),
+            }
+        }
+    }
+
+    fn text_byte(&mut self, b: u8, ring: &mut impl TokenSink, flags: &RtFlags) {
+        if let Some(rt) = Rt::from_byte(b) {
+            flags.raise(rt);
+            return;
+        }
+        if b == 0 {
+            self.mode = Mode::Framed { passthrough: false };
+            self.hold_len = 0;
+        }
+        self.put(RxToken::from(b), ring, flags);
+    }
+
+    fn framed_byte(&mut self, b: u8, passthrough: bool, ring: &mut impl TokenSink, flags: &RtFlags) {
+        if passthrough {
+            if b == 0 {
+                self.mode = Mode::Framed { passthrough: false };
+            }
+            self.put(RxToken::from(b), ring, flags);
+            return;
+        }
+        if b != 0 {
+            if let Some(slot) = self.hold.get_mut(self.hold_len) {
+                *slot = b;
+                self.hold_len += 1;
+            } else {
+                self.flush_hold(ring, flags);
+                self.mode = Mode::Framed { passthrough: true };
+                self.put(RxToken::from(b), ring, flags);
+            }
+            return;
+        }
+        // End of a short frame: is it realtime or the end of the session?
+        let mut copy = self.hold;
+        let len = self.hold_len;
+        match copy.get_mut(..len).map(frame::decode::<HostMsg>) {
+            Some(Ok(HostMsg::Realtime(rt))) => {
+                flags.raise(rt);
+                self.hold_len = 0;
+                return;
+            }
+            Some(Ok(HostMsg::Bye)) => self.mode = Mode::Text,
+            _ => {}
+        }
+        self.flush_hold(ring, flags);
+        self.put(0, ring, flags);
+    }
+
+    fn flush_hold(&mut self, ring: &mut impl TokenSink, flags: &RtFlags) {
+        let hold = self.hold;
+        for &b in hold.iter().take(self.hold_len) {
+            self.put(RxToken::from(b), ring, flags);
+        }
+        self.hold_len = 0;
+    }
+
+    /// Queue a token; on a full ring drop it and leave an overflow marker at
+    /// the first chance, so the assembler knows which line was damaged.
+    fn put(&mut self, t: RxToken, ring: &mut impl TokenSink, flags: &RtFlags) {
+        if self.put_pending(ring) && ring.push(t) {
+            return;
+        }
+        self.dropped = true;
+        flags.set_overflow();
+    }
+
+    /// Deliver owed markers (mode reset first); false if the ring is full.
+    fn put_pending(&mut self, ring: &mut impl TokenSink) -> bool {
+        if self.reset_pending {
+            if !ring.push(TOKEN_TEXT_MODE) {
+                return false;
+            }
+            self.reset_pending = false;
+        }
+        if self.dropped {
+            if !ring.push(TOKEN_OVERFLOW) {
+                return false;
+            }
+            self.dropped = false;
+        }
+        true
+    }
+}

@@ -1,0 +1,118 @@
+//! Errors and alarms of the motion half of the core.
+//!
+//! Stable code table (never renumber; add at the end of a range):
+//!
+//! | range | what |
+//! |---|---|
+//! | 400–419 | a command refused before any step ran (nothing moved) |
+//! | 420–439 | alarms: something happened while moving; the machine stops |
+
+use core::fmt;
+
+/// What went wrong in the motion core.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum MachineError {
+    /// 400: the move leaves the machine envelope on this axis.
+    SoftLimit { axis: u8 },
+    /// 401: this axis's max rate times its steps/mm exceeds `$201`; the move
+    /// could not be stepped without losing steps, so it is refused.
+    StepRateTooHigh { axis: u8 },
+    /// 402: an arc with zero radius or a non-finite geometry.
+    InvalidArc,
+    /// 403: an arc or spline would need more chords than the core allows.
+    TooManySegments,
+    /// 404: one block would need more steps than the stepper's counters hold.
+    MoveTooLong,
+    /// 405: a coordinate, feed or time is not a finite number in range.
+    InvalidNumber,
+    /// 406: feed rate zero or negative.
+    InvalidFeed,
+    /// 407: the machine is in alarm; only homing and clear-alarm are accepted.
+    InAlarm,
+    /// 408: the command arrived while another was still being fed to the planner.
+    Busy,
+    /// 409: homing is disabled (`$22=0`) or no axis has a homing cycle.
+    HomingDisabled,
+    /// 410: G27 or soft limits need a homed machine.
+    NotHomed,
+    /// 411: G38.2/G38.4 probe started in the state it waits for.
+    ProbeInitialState,
+    /// 420: a limit switch closed during motion; position is lost.
+    HardLimit { mask: u8 },
+    /// 421: homing seek ended without finding this axis's switch.
+    HomingNoSwitch { axis: u8 },
+    /// 422: the switch was still closed after pull-off.
+    HomingPullOff { axis: u8 },
+    /// 423: G27 found this axis's switch further away than `$205` allows.
+    VerifyHome { axis: u8, deviation_mm: f32 },
+    /// 424: G38.2/G38.4 reached the end without contact (or release).
+    ProbeNoContact,
+    /// 425: soft reset during motion; position is lost.
+    ResetDuringMotion,
+}
+
+impl MachineError {
+    /// Stable numeric code.
+    pub fn code(&self) -> u16 {
+        use MachineError::*;
+        match self {
+            SoftLimit { .. } => 400,
+            StepRateTooHigh { .. } => 401,
+            InvalidArc => 402,
+            TooManySegments => 403,
+            MoveTooLong => 404,
+            InvalidNumber => 405,
+            InvalidFeed => 406,
+            InAlarm => 407,
+            Busy => 408,
+            HomingDisabled => 409,
+            NotHomed => 410,
+            ProbeInitialState => 411,
+            HardLimit { .. } => 420,
+            HomingNoSwitch { .. } => 421,
+            HomingPullOff { .. } => 422,
+            VerifyHome { .. } => 423,
+            ProbeNoContact => 424,
+            ResetDuringMotion => 425,
+        }
+    }
+
+    /// True for alarms (the machine stops and locks until cleared).
+    pub fn is_alarm(&self) -> bool {
+        self.code() >= 420
+    }
+}
+
+fn axis_name(axis: u8) -> char {
+    crate::AXIS_NAMES.get(axis as usize).copied().unwrap_or('?')
+}
+
+impl fmt::Display for MachineError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        use MachineError::*;
+        match *self {
+            SoftLimit { axis } => write!(f, "move exceeds soft limit on {}", axis_name(axis)),
+            StepRateTooHigh { axis } => {
+                write!(f, "{} max rate needs more steps/s than $201 allows", axis_name(axis))
+            }
+            InvalidArc => f.write_str("invalid arc geometry"),
+            TooManySegments => f.write_str("arc or spline needs too many segments"),
+            MoveTooLong => f.write_str("move has too many steps for one block"),
+            InvalidNumber => f.write_str("coordinate or time out of range"),
+            InvalidFeed => f.write_str("feed rate must be positive"),
+            InAlarm => f.write_str("machine is in alarm"),
+            Busy => f.write_str("previous command still being planned"),
+            HomingDisabled => f.write_str("homing is disabled"),
+            NotHomed => f.write_str("machine is not homed"),
+            ProbeInitialState => f.write_str("probe already in target state"),
+            HardLimit { .. } => f.write_str("hard limit triggered; position lost"),
+            HomingNoSwitch { axis } => write!(f, "homing: no switch found on {}", axis_name(axis)),
+            HomingPullOff { axis } => write!(f, "homing: {} switch still closed after pull-off", axis_name(axis)),
+            VerifyHome { axis, deviation_mm } => {
+                write!(f, "G27: {} home off by {:.3} mm", axis_name(axis), deviation_mm)
+            }
+            ProbeNoContact => f.write_str("probe: no contact"),
+            ResetDuringMotion => f.write_str("reset during motion; position lost"),
+        }
+    }
+}

@@ -1,0 +1,483 @@
+//! The executor: takes [`Command`]s in program order and drives the
+//! segmenter, the planner and the segment preparer; runs homing, G27 and
+//! probing as small state machines; keeps alarms and the position-lost flag.
+//!
+//! It lives in the parse/plan task. It talks to the step interrupt only
+//! through the segment queue and [`Realtime`].
+
+mod error;
+mod homing;
+
+pub use error::MachineError;
+pub use homing::Homing;
+
+use crate::arc::{ArcChords, SplineChords};
+use crate::command::{AxisMask, Command, Feed, Pos, ProbeKind};
+use crate::planner::{Planner, Speed, Watch};
+use crate::realtime::{Realtime, Trip};
+use crate::settings::Settings;
+use crate::stepper::prep::{Preparer, SegmentSink};
+use crate::stepper::{StepConfig, Switches};
+use crate::AXES;
+
+/// What kind of move a path vertex ends (for traces and plots).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PathKind {
+    Rapid,
+    Feed,
+    Arc,
+    Spline,
+    Probe,
+    Home,
+}
+
+/// Things the executor reports as they happen.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Note<'a> {
+    /// A straight piece of commanded path was planned, ending here (mm).
+    Path { line: u32, kind: PathKind, end: Pos },
+    /// A command failed or an alarm went off while running.
+    Error { line: u32, error: MachineError },
+    /// A non-motion command ran, in order with motion.
+    Executed { line: u32, command: &'a Command },
+    /// G38.x finished: where the probe tripped (or the move ended).
+    Probed { line: u32, position: Pos, contact: bool },
+    /// Homing finished for these axes; the position was redefined.
+    Homed { axes: AxisMask },
+}
+
+#[derive(Clone, Debug)]
+enum Chords {
+    Arc(ArcChords),
+    Spline(SplineChords),
+}
+
+#[derive(Clone, Debug)]
+enum Pending {
+    None,
+    Chords { chords: Chords, speed: Speed, line: u32 },
+    Sync { command: Command, line: u32 },
+    ProbeWait { end: Pos, speed: Speed, kind: ProbeKind, line: u32 },
+    ProbeRun { kind: ProbeKind, line: u32 },
+    Homing(Homing),
+}
+
+/// Machine state as reported to the operator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum State {
+    Idle,
+    Run,
+    Hold,
+    Homing,
+    Alarm,
+}
+
+/// The executor. `N` is the planner ring size.
+#[derive(Debug)]
+pub struct Machine<const N: usize> {
+    pub planner: Planner<N>,
+    pub prep: Preparer,
+    cfg: StepConfig,
+    pending: Pending,
+    alarm: Option<MachineError>,
+    position_lost: bool,
+    homed: AxisMask,
+    /// End of everything accepted so far, mm (where the next command starts).
+    commanded: Pos,
+    override_epoch: u32,
+    switches: Switches,
+    /// Last G38.x result: position (mm) and whether contact happened.
+    pub probe_result: Option<(Pos, bool)>,
+}
+
+impl<const N: usize> Machine<N> {
+    pub fn new(settings: Settings, tick_hz: u32) -> Self {
+        let cfg = StepConfig::new(&settings, tick_hz);
+        Machine {
+            planner: Planner::new(settings),
+            prep: Preparer::new(settings, cfg),
+            cfg,
+            pending: Pending::None,
+            alarm: None,
+            position_lost: false,
+            homed: 0,
+            commanded: [0.0; AXES],
+            override_epoch: 0,
+            switches: Switches::default(),
+            probe_result: None,
+        }
+    }
+
+    pub fn settings(&self) -> &Settings {
+        &self.planner.settings
+    }
+    pub fn step_config(&self) -> StepConfig {
+        self.cfg
+    }
+    /// Ready for the next command (nothing left to feed to the planner).
+    pub fn ready(&self) -> bool {
+        matches!(self.pending, Pending::None) && !self.planner.is_full()
+    }
+    pub fn alarm(&self) -> Option<MachineError> {
+        self.alarm
+    }
+    pub fn position_lost(&self) -> bool {
+        self.position_lost
+    }
+    pub fn homed(&self) -> AxisMask {
+        self.homed
+    }
+    /// Where the next command starts, machine mm.
+    pub fn commanded_position(&self) -> Pos {
+        self.commanded
+    }
+    pub fn state(&self, rt: &Realtime) -> State {
+        if self.alarm.is_some() {
+            State::Alarm
+        } else if matches!(self.pending, Pending::Homing(_)) {
+            State::Homing
+        } else if self.prep.hold() != crate::stepper::prep::Hold::Running || rt.hold_requested() {
+            State::Hold
+        } else if self.planner.is_empty() && self.prep.is_idle() && rt.stepper_idle() {
+            State::Idle
+        } else {
+            State::Run
+        }
+    }
+
+    /// Set the position at power-up (or from a test), mm.
+    pub fn set_position(&mut self, rt: &Realtime, mm: &Pos) -> Result<(), MachineError> {
+        let steps = self.planner.to_steps(mm)?;
+        rt.redefine_position(&steps);
+        self.planner.clear(steps);
+        self.commanded = *mm;
+        Ok(())
+    }
+
+    fn steps_to_mm(&self, steps: &[i32; AXES]) -> Pos {
+        core::array::from_fn(|i| steps[i] as f32 / self.planner.settings.axes[i].steps_per_mm)
+    }
+
+    fn motion_idle(&self, rt: &Realtime, sink: &impl SegmentSink) -> bool {
+        self.planner.is_empty() && self.prep.is_idle() && sink.is_empty() && rt.stepper_idle()
+    }
+
+    fn speed(feed: Feed) -> Result<Speed, MachineError> {
+        match feed {
+            Feed::PerMin(f) if f > 0.0 && f.is_finite() => Ok(Speed::Feed(f / 60.0)),
+            Feed::InverseTime(v) if v > 0.0 && v.is_finite() => Ok(Speed::Time(60.0 / v)),
+            _ => Err(MachineError::InvalidFeed),
+        }
+    }
+
+    /// Soft limits: the envelope is `[-travel, 0]` when homing towards
+    /// positive, `[0, travel]` towards negative; travel 0 means unlimited.
+    fn check_soft(&self, lo: &Pos, hi: &Pos) -> Result<(), MachineError> {
+        let s = &self.planner.settings;
+        if !s.soft_limits {
+            return Ok(());
+        }
+        const EPS: f32 = 1e-3;
+        for i in 0..AXES {
+            let t = s.axes[i].max_travel;
+            if t <= 0.0 {
+                continue;
+            }
+            let (min, max) = if s.homing_dir_invert & (1 << i) != 0 { (0.0, t) } else { (-t, 0.0) };
+            if lo[i] < min - EPS || hi[i] > max + EPS {
+                return Err(MachineError::SoftLimit { axis: i as u8 });
+            }
+        }
+        Ok(())
+    }
+
+    fn push_line(
+        &mut self,
+        end: &Pos,
+        speed: Speed,
+        watch: Watch,
+        line: u32,
+        kind: PathKind,
+        obs: &mut dyn FnMut(Note),
+    ) -> Result<(), MachineError> {
+        let steps = self.planner.to_steps(end)?;
+        self.planner.push_line(steps, speed, watch, line)?;
+        self.commanded = *end;
+        obs(Note::Path { line, kind, end: *end });
+        Ok(())
+    }
+
+    /// Accept one command. Call only when [`ready`](Self::ready).
+    pub fn submit(&mut self, rt: &Realtime, cmd: &Command, line: u32, obs: &mut dyn FnMut(Note)) -> Result<(), MachineError> {
+        if !self.ready() {
+            return Err(MachineError::Busy);
+        }
+        let allowed_in_alarm = matches!(
+            cmd,
+            Command::Home { .. } | Command::ClearAlarm | Command::Report(_) | Command::Message(_)
+        );
+        if self.alarm.is_some() && !allowed_in_alarm {
+            return Err(MachineError::InAlarm);
+        }
+        let tol = self.planner.settings.arc_tolerance;
+        match cmd {
+            Command::Rapid { end } => {
+                self.check_soft(end, end)?;
+                self.push_line(end, Speed::Rapid, Watch::default(), line, PathKind::Rapid, obs)
+            }
+            Command::Line { end, feed } => {
+                self.check_soft(end, end)?;
+                let sp = Self::speed(*feed)?;
+                self.push_line(end, sp, Watch::default(), line, PathKind::Feed, obs)
+            }
+            Command::Arc(a) => {
+                let ch = ArcChords::new(&self.commanded, a, tol)?;
+                let (lo, hi) = ch.bounds();
+                self.check_soft(&lo, &hi)?;
+                let speed = self.chord_speed(a.feed, Chords::Arc(ch.clone()))?;
+                self.pending = Pending::Chords { chords: Chords::Arc(ch), speed, line };
+                self.feed_chords(obs)
+            }
+            Command::Spline(sp) => {
+                let ch = SplineChords::new(&self.commanded, sp, tol)?;
+                let (lo, hi) = ch.bounds();
+                self.check_soft(&lo, &hi)?;
+                let speed = self.chord_speed(sp.feed, Chords::Spline(ch.clone()))?;
+                self.pending = Pending::Chords { chords: Chords::Spline(ch), speed, line };
+                self.feed_chords(obs)
+            }
+            Command::Dwell { seconds } => {
+                if !(seconds.is_finite() && *seconds >= 0.0 && *seconds < 1.0e6) {
+                    return Err(MachineError::InvalidNumber);
+                }
+                let ticks = (*seconds as f64 * self.cfg.tick_hz as f64) as u64;
+                self.planner.push_dwell(ticks, line)
+            }
+            Command::Probe { end, feed, kind } => {
+                self.check_soft(end, end)?;
+                let speed = Self::speed(*feed)?;
+                self.pending = Pending::ProbeWait { end: *end, speed, kind: *kind, line };
+                Ok(())
+            }
+            Command::Home { axes } => {
+                let h = Homing::new(&self.planner.settings, *axes, false, line)?;
+                self.pending = Pending::Homing(h);
+                Ok(())
+            }
+            Command::VerifyHome { axes } => {
+                let h = Homing::new(&self.planner.settings, *axes, true, line)?;
+                if self.homed & h.axes() != h.axes() {
+                    return Err(MachineError::NotHomed);
+                }
+                self.pending = Pending::Homing(h);
+                Ok(())
+            }
+            Command::FeedOverride { percent } => {
+                rt.set_feed_override(*percent);
+                obs(Note::Executed { line, command: cmd });
+                Ok(())
+            }
+            Command::ClearAlarm => {
+                self.alarm = None;
+                obs(Note::Executed { line, command: cmd });
+                Ok(())
+            }
+            Command::Aux { synced: false, .. } | Command::Message(_) | Command::Report(_) => {
+                obs(Note::Executed { line, command: cmd });
+                Ok(())
+            }
+            _ => {
+                self.pending = Pending::Sync { command: cmd.clone(), line };
+                Ok(())
+            }
+        }
+    }
+
+    /// G93 arcs and splines: the whole curve takes `1/F` minutes, so every
+    /// chord runs at the curve's length over that time.
+    fn chord_speed(&self, feed: Feed, ch: Chords) -> Result<Speed, MachineError> {
+        let sp = Self::speed(feed)?;
+        let Speed::Time(t) = sp else { return Ok(sp) };
+        let mut prev = self.commanded;
+        let mut len = 0.0f32;
+        let mut add = |p: Pos| {
+            len += libm::sqrtf(p.iter().zip(&prev).map(|(a, b)| (a - b) * (a - b)).sum());
+            prev = p;
+        };
+        match ch {
+            Chords::Arc(c) => c.for_each(&mut add),
+            Chords::Spline(c) => c.for_each(&mut add),
+        }
+        if len <= 0.0 {
+            return Err(MachineError::InvalidNumber);
+        }
+        Ok(Speed::Feed(len / t))
+    }
+
+    fn feed_chords(&mut self, obs: &mut dyn FnMut(Note)) -> Result<(), MachineError> {
+        while !self.planner.is_full() {
+            let Pending::Chords { chords, speed, line } = &mut self.pending else { return Ok(()) };
+            let (speed, line) = (*speed, *line);
+            let (next, kind) = match chords {
+                Chords::Arc(c) => (c.next(), PathKind::Arc),
+                Chords::Spline(c) => (c.next(), PathKind::Spline),
+            };
+            let Some(p) = next else {
+                self.pending = Pending::None;
+                return Ok(());
+            };
+            let pushed = self.planner.to_steps(&p).and_then(|t| self.planner.push_chord(t, speed, line));
+            if let Err(e) = pushed {
+                self.pending = Pending::None;
+                return Err(e);
+            }
+            self.commanded = p;
+            obs(Note::Path { line, kind, end: p });
+        }
+        Ok(())
+    }
+
+    /// Drop everything queued and take the stepper's position as truth.
+    fn flush(&mut self, rt: &Realtime) {
+        rt.bump_generation();
+        self.prep.reset();
+        let pos = rt.position();
+        self.planner.clear(pos);
+        self.commanded = self.steps_to_mm(&pos);
+        rt.clear_trip();
+    }
+
+    fn raise_alarm(&mut self, rt: &Realtime, e: MachineError, line: u32, obs: &mut dyn FnMut(Note)) {
+        self.flush(rt);
+        self.pending = Pending::None;
+        self.alarm = Some(e);
+        obs(Note::Error { line, error: e });
+    }
+
+    /// Run the executor's background work: reset and trips, overrides,
+    /// chords, synced commands, homing/probing, then fill the segment queue.
+    /// `sw` are the switch pin levels as read now.
+    pub fn poll(&mut self, rt: &Realtime, sink: &mut impl SegmentSink, sw: Switches, obs: &mut dyn FnMut(Note)) {
+        self.switches = sw;
+        if rt.take_reset() {
+            let moving = !self.motion_idle(rt, sink);
+            self.flush(rt);
+            self.pending = Pending::None;
+            rt.clear_hold();
+            if moving {
+                self.position_lost = true;
+                self.alarm = Some(MachineError::ResetDuringMotion);
+                obs(Note::Error { line: 0, error: MachineError::ResetDuringMotion });
+            }
+        }
+        let epoch = rt.override_epoch();
+        if epoch != self.override_epoch {
+            self.override_epoch = epoch;
+            self.planner.set_overrides(rt.feed_override(), rt.rapid_override());
+        }
+        match rt.trip() {
+            Trip::None => {}
+            Trip::HardLimit => {
+                let mask = rt.trip_mask();
+                self.position_lost = true;
+                self.raise_alarm(rt, MachineError::HardLimit { mask }, 0, obs);
+            }
+            Trip::Probe => {
+                let pos = self.steps_to_mm(&rt.trip_position());
+                self.flush(rt);
+                if let Pending::ProbeRun { line, .. } = self.pending {
+                    self.probe_result = Some((pos, true));
+                    obs(Note::Probed { line, position: pos, contact: true });
+                }
+                self.pending = Pending::None;
+            }
+            Trip::Homing => {
+                let (mask, at) = (rt.trip_mask(), rt.trip_position());
+                self.flush(rt);
+                if let Pending::Homing(h) = &mut self.pending {
+                    h.tripped(mask, &at);
+                }
+            }
+        }
+        if let Pending::Chords { .. } = self.pending {
+            if let Err(e) = self.feed_chords(obs) {
+                obs(Note::Error { line: 0, error: e });
+            }
+        }
+        if !matches!(self.pending, Pending::None | Pending::Chords { .. }) && self.motion_idle(rt, sink) {
+            self.run_pending(rt, obs);
+        }
+        self.prep.fill(&mut self.planner, rt, sink);
+    }
+
+    fn run_pending(&mut self, rt: &Realtime, obs: &mut dyn FnMut(Note)) {
+        match core::mem::replace(&mut self.pending, Pending::None) {
+            Pending::None | Pending::Chords { .. } => {}
+            Pending::Sync { command, line } => {
+                if let Command::Pause { .. } = command {
+                    rt.feed_hold();
+                }
+                obs(Note::Executed { line, command: &command });
+            }
+            Pending::ProbeWait { end, speed, kind, line } => {
+                let contact = self.switches.probe ^ self.planner.settings.probe_invert;
+                let towards = matches!(kind, ProbeKind::Toward | ProbeKind::TowardNoError);
+                let must = matches!(kind, ProbeKind::Toward | ProbeKind::Away);
+                if contact == towards {
+                    if must {
+                        self.raise_alarm(rt, MachineError::ProbeInitialState, line, obs);
+                    }
+                    return;
+                }
+                let watch = Watch { limits: 0, probe: if towards { 1 } else { 2 }, homing: false };
+                match self.push_line(&end, speed, watch, line, PathKind::Probe, obs) {
+                    Ok(()) => self.pending = Pending::ProbeRun { kind, line },
+                    Err(e) => obs(Note::Error { line, error: e }),
+                }
+            }
+            Pending::ProbeRun { kind, line } => {
+                // The move ended without the probe tripping.
+                let pos = self.commanded;
+                self.probe_result = Some((pos, false));
+                obs(Note::Probed { line, position: pos, contact: false });
+                if matches!(kind, ProbeKind::Toward | ProbeKind::Away) {
+                    self.raise_alarm(rt, MachineError::ProbeNoContact, line, obs);
+                }
+            }
+            Pending::Homing(mut h) => {
+                let line = h.line();
+                let limits = self.switches.limits ^ self.planner.settings.limit_invert;
+                let pos = rt.position();
+                match h.step(&self.planner.settings, &pos, limits) {
+                    Ok(homing::Action::Move { target, rate, watch }) => {
+                        let end = self.steps_to_mm(&target);
+                        match self.push_line(&end, Speed::Feed(rate), watch, line, PathKind::Home, obs) {
+                            Ok(()) => self.pending = Pending::Homing(h),
+                            Err(e) => self.raise_alarm(rt, e, line, obs),
+                        }
+                    }
+                    Ok(homing::Action::Redefine { position }) => {
+                        rt.redefine_position(&position);
+                        self.planner.clear(position);
+                        self.commanded = self.steps_to_mm(&position);
+                        self.pending = Pending::Homing(h);
+                    }
+                    Ok(homing::Action::Done { axes, verified }) => {
+                        if !verified {
+                            self.homed |= axes;
+                            self.position_lost = false;
+                            self.alarm = None;
+                            obs(Note::Homed { axes });
+                        }
+                    }
+                    Err(e) => {
+                        if matches!(e, MachineError::VerifyHome { .. }) {
+                            self.position_lost = true;
+                        }
+                        self.raise_alarm(rt, e, line, obs);
+                    }
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,432 @@
+//! Look-ahead planner: a ring of blocks (straight moves in integer steps, or
+//! dwells) with entry speeds chosen so every block can still stop at the end
+//! of the known path.
+//!
+//! Replanning is incremental: `planned` marks the first block whose entry
+//! speed can still rise. Blocks before it either enter at their junction limit
+//! or accelerate as hard as allowed from the block before, so nothing
+//! appended later can change them. The backward pass stops as soon as an
+//! entry speed stops changing; the forward pass starts at `planned`.
+
+pub mod ramp;
+
+use crate::command::Pos;
+use crate::machine::MachineError;
+use crate::settings::Settings;
+use crate::AXES;
+pub use ramp::{Phase, Profile, Shape};
+
+/// What a block does.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BlockKind {
+    Line,
+    /// G4: stand still this many timer ticks.
+    Dwell { ticks: u64 },
+}
+
+/// What stops a block early (homing switches, probe).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct Watch {
+    /// Stop when any of these axes' limit switches closes.
+    pub limits: u8,
+    /// 1: stop when the probe closes; 2: stop when it opens.
+    pub probe: u8,
+    /// A homing move: hard limits do not apply (it starts on a closed switch).
+    pub homing: bool,
+}
+
+/// Speed request of a move.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Speed {
+    /// Path speed in mm/s (feed override applies).
+    Feed(f32),
+    /// The whole move takes this many seconds (G93; feed override applies).
+    Time(f32),
+    /// As fast as the axes allow (rapid override applies).
+    Rapid,
+}
+
+/// One planned move.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Block {
+    pub kind: BlockKind,
+    /// Absolute step counts at the end of the block.
+    pub target: [i32; AXES],
+    /// Steps per axis (absolute values) and the Bresenham event count.
+    pub steps: [u32; AXES],
+    pub count: u32,
+    /// Bit set: axis moves towards negative.
+    pub dir_mask: u8,
+    /// Path length, mm.
+    pub length: f32,
+    /// Requested speed before override, mm/s (infinite for rapids).
+    pub programmed: f32,
+    pub rapid: bool,
+    /// Highest path speed the axes allow, mm/s.
+    pub cap: f32,
+    /// Path speed after override and cap, mm/s.
+    pub nominal: f32,
+    /// Path acceleration the axes allow, mm/s².
+    pub accel: f32,
+    /// Cornering limit at the junction with the previous block, mm/s.
+    pub junction: f32,
+    pub max_entry: f32,
+    pub entry: f32,
+    pub watch: Watch,
+    /// Source line, for errors and traces.
+    pub line: u32,
+}
+
+impl Block {
+    const EMPTY: Block = Block {
+        kind: BlockKind::Line,
+        target: [0; AXES],
+        steps: [0; AXES],
+        count: 0,
+        dir_mask: 0,
+        length: 0.0,
+        programmed: 0.0,
+        rapid: false,
+        cap: 0.0,
+        nominal: 0.0,
+        accel: 1.0,
+        junction: 0.0,
+        max_entry: 0.0,
+        entry: 0.0,
+        watch: Watch { limits: 0, probe: 0, homing: false },
+        line: 0,
+    };
+
+    pub fn shape(&self, s: &Settings) -> Shape {
+        let jerk = match s.profile {
+            crate::settings::Profile::Trapezoid => 0.0,
+            crate::settings::Profile::SCurve => s.jerk.max(1e-3),
+        };
+        Shape { accel: self.accel, jerk }
+    }
+}
+
+/// Largest Bresenham count a block may have (the stepper scales counts by 2^3).
+pub const MAX_BLOCK_STEPS: u32 = 1 << 27;
+
+/// The look-ahead ring. `N` blocks (64 or more on the F411).
+#[derive(Debug)]
+pub struct Planner<const N: usize> {
+    blocks: [Block; N],
+    tail: usize,
+    len: usize,
+    /// Offset from the tail of the first block whose entry may still rise.
+    planned: usize,
+    /// Step position at the end of the last block pushed.
+    position: [i32; AXES],
+    prev_unit: [f32; AXES],
+    /// Path speed the previous block's junction may carry (0 after a stop).
+    prev_nominal: f32,
+    prev_length: f32,
+    feed_pct: f32,
+    rapid_pct: f32,
+    pub settings: Settings,
+}
+
+impl<const N: usize> Planner<N> {
+    pub fn new(settings: Settings) -> Self {
+        Planner {
+            blocks: [Block::EMPTY; N],
+            tail: 0,
+            len: 0,
+            planned: 0,
+            position: [0; AXES],
+            prev_unit: [0.0; AXES],
+            prev_nominal: 0.0,
+            prev_length: 0.0,
+            feed_pct: 1.0,
+            rapid_pct: 1.0,
+            settings,
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.len
+    }
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+    pub fn is_full(&self) -> bool {
+        self.len >= N
+    }
+    /// Block `k` counted from the oldest (0 is the one being executed).
+    pub fn block(&self, k: usize) -> Option<&Block> {
+        if k < self.len {
+            self.blocks.get((self.tail + k) % N)
+        } else {
+            None
+        }
+    }
+    fn at(&mut self, k: usize) -> &mut Block {
+        let i = (self.tail + k) % N;
+        &mut self.blocks[i]
+    }
+    /// Drop the oldest block (the preparer has turned it all into segments).
+    pub fn pop(&mut self) {
+        if self.len > 0 {
+            self.tail = (self.tail + 1) % N;
+            self.len -= 1;
+            self.planned = self.planned.saturating_sub(1);
+        }
+    }
+    /// Drop everything (reset, hard limit, probe or homing stop) and take the
+    /// stepper's actual position as the new start.
+    pub fn clear(&mut self, position: [i32; AXES]) {
+        self.len = 0;
+        self.planned = 0;
+        self.position = position;
+        self.stop_junction();
+    }
+    /// Step position at the end of everything planned.
+    pub fn position(&self) -> [i32; AXES] {
+        self.position
+    }
+    /// The next block must start from standstill (after dwell, sync, hold-flush).
+    pub fn stop_junction(&mut self) {
+        self.prev_nominal = 0.0;
+        self.prev_unit = [0.0; AXES];
+    }
+
+    /// Steps for a machine position in mm: rounded from the absolute target,
+    /// so the step count of a job never drifts from summing rounded deltas.
+    pub fn to_steps(&self, mm: &Pos) -> Result<[i32; AXES], MachineError> {
+        let mut out = [0i32; AXES];
+        for i in 0..AXES {
+            let v = libm::roundf(mm[i] * self.settings.axes[i].steps_per_mm);
+            if !v.is_finite() || v.abs() > 1.0e9 {
+                return Err(MachineError::InvalidNumber);
+            }
+            out[i] = v as i32;
+        }
+        Ok(out)
+    }
+
+    /// Queue a straight move to `target` steps. A zero-length move is dropped.
+    /// The caller checks `is_full` first.
+    pub fn push_line(&mut self, target: [i32; AXES], speed: Speed, watch: Watch, line: u32) -> Result<(), MachineError> {
+        self.push(target, speed, watch, line, false)
+    }
+
+    /// Queue one chord of an arc or spline. On a curve the axes feel the
+    /// tangential and the centripetal acceleration at once, so each gets half
+    /// of the acceleration budget: the sum stays within every axis limit.
+    pub fn push_chord(&mut self, target: [i32; AXES], speed: Speed, line: u32) -> Result<(), MachineError> {
+        self.push(target, speed, Watch::default(), line, true)
+    }
+
+    fn push(&mut self, target: [i32; AXES], speed: Speed, watch: Watch, line: u32, curve: bool) -> Result<(), MachineError> {
+        if self.is_full() {
+            return Err(MachineError::Busy);
+        }
+        let s = &self.settings;
+        let mut b = Block { target, watch, line, ..Block::EMPTY };
+        let mut mm = [0.0f32; AXES];
+        let mut len2 = 0.0;
+        for i in 0..AXES {
+            let d = target[i] as i64 - self.position[i] as i64;
+            let ad = d.unsigned_abs();
+            if ad > MAX_BLOCK_STEPS as u64 {
+                return Err(MachineError::MoveTooLong);
+            }
+            b.steps[i] = ad as u32;
+            if d < 0 {
+                b.dir_mask |= 1 << i;
+            }
+            mm[i] = d as f32 / s.axes[i].steps_per_mm;
+            len2 += mm[i] * mm[i];
+        }
+        b.count = b.steps.iter().copied().max().unwrap_or(0);
+        if b.count == 0 {
+            return Ok(());
+        }
+        b.length = libm::sqrtf(len2);
+        let mut unit = [0.0f32; AXES];
+        let (mut cap, mut accel) = (f32::INFINITY, f32::INFINITY);
+        for i in 0..AXES {
+            unit[i] = mm[i] / b.length;
+            if b.steps[i] == 0 {
+                continue;
+            }
+            let ax = &s.axes[i];
+            let sane = |v: f32| v.is_finite() && v > 0.0;
+            if !(sane(ax.max_rate) && sane(ax.max_accel) && sane(ax.steps_per_mm)) {
+                return Err(MachineError::InvalidNumber);
+            }
+            if ax.max_rate / 60.0 * ax.steps_per_mm > s.max_step_rate_hz {
+                return Err(MachineError::StepRateTooHigh { axis: i as u8 });
+            }
+            let u = unit[i].abs();
+            cap = cap.min(ax.max_rate / 60.0 / u);
+            accel = accel.min(ax.max_accel / u);
+        }
+        b.cap = cap;
+        b.accel = if curve { accel * 0.5 } else { accel };
+        match speed {
+            Speed::Feed(v) if v > 0.0 && v.is_finite() => b.programmed = v,
+            Speed::Time(t) if t > 0.0 && t.is_finite() => b.programmed = b.length / t,
+            Speed::Rapid => {
+                b.programmed = f32::INFINITY;
+                b.rapid = true;
+            }
+            _ => return Err(MachineError::InvalidFeed),
+        }
+        b.nominal = self.nominal(&b);
+        b.junction = self.junction_speed(&unit, b.length, curve);
+        b.max_entry = b.junction.min(b.nominal).min(self.prev_nominal);
+        b.entry = if self.len == 0 { 0.0 } else { b.max_entry };
+        self.prev_unit = unit;
+        self.prev_nominal = b.nominal;
+        self.prev_length = b.length;
+        self.position = target;
+        let k = self.len;
+        *self.at(k) = b;
+        self.len += 1;
+        self.replan(false);
+        Ok(())
+    }
+
+    /// Queue a dwell; motion stops before it.
+    pub fn push_dwell(&mut self, ticks: u64, line: u32) -> Result<(), MachineError> {
+        if self.is_full() {
+            return Err(MachineError::Busy);
+        }
+        let b = Block { kind: BlockKind::Dwell { ticks }, target: self.position, line, ..Block::EMPTY };
+        let k = self.len;
+        *self.at(k) = b;
+        self.len += 1;
+        self.stop_junction();
+        self.replan(false);
+        Ok(())
+    }
+
+    fn nominal(&self, b: &Block) -> f32 {
+        let pct = if b.rapid { self.rapid_pct } else { self.feed_pct };
+        let v = if b.rapid { b.cap * pct } else { b.programmed * pct };
+        v.min(b.cap)
+    }
+
+    /// Cornering speed at the junction with the previous block.
+    ///
+    /// Junction deviation: round the corner by a circle tangent to both moves
+    /// whose closest approach to the corner is `δ`. With `c = sin(θ/2)` of the
+    /// corner's half angle (θ = π when straight), the circle's radius is
+    /// `R = δ·c/(1 − c)` and `v = sqrt(a·R)` keeps the centripetal
+    /// acceleration within `a`.
+    ///
+    /// Chords of a curve turn by a small angle φ every chord length `l`, so
+    /// the tool really follows a curve of radius about `l/φ`. Junction
+    /// deviation alone allows `a·δ/tol` there (5× the limit with GRBL's
+    /// defaults); the second limit `v² ≤ a·l/φ` keeps curves honest.
+    ///
+    /// `a` is the acceleration the axes allow along the direction change
+    /// (the difference of the two unit vectors), not along either move.
+    fn junction_speed(&self, unit: &[f32; AXES], length: f32, curve: bool) -> f32 {
+        if self.prev_nominal <= 0.0 {
+            return 0.0;
+        }
+        let cos = -unit.iter().zip(&self.prev_unit).map(|(a, b)| a * b).sum::<f32>();
+        if cos > 0.999_999 {
+            return 0.0;
+        }
+        if cos < -0.999_999 {
+            return f32::INFINITY;
+        }
+        let mut d = [0.0f32; AXES];
+        for i in 0..AXES {
+            d[i] = unit[i] - self.prev_unit[i];
+        }
+        let dn = libm::sqrtf(d.iter().map(|v| v * v).sum());
+        let mut a = f32::INFINITY;
+        for i in 0..AXES {
+            let c = libm::fabsf(d[i]) / dn;
+            if c > 1e-6 {
+                a = a.min(self.settings.axes[i].max_accel / c);
+            }
+        }
+        let sin_half = libm::sqrtf(0.5 * (1.0 - cos));
+        let r = self.settings.junction_deviation * sin_half / (1.0 - sin_half);
+        let v_jd = libm::sqrtf(a * r);
+        let phi = libm::acosf((-cos).clamp(-1.0, 1.0)).max(1e-9);
+        let l = length.min(self.prev_length);
+        let a_curve = if curve { 0.5 * a } else { a };
+        let v_curve = libm::sqrtf(a_curve * l / phi);
+        v_jd.min(v_curve)
+    }
+
+    /// Apply new override percentages: every block's nominal speed and
+    /// junction limit change, so the whole ring is replanned.
+    pub fn set_overrides(&mut self, feed_pct: u8, rapid_pct: u8) {
+        self.feed_pct = feed_pct as f32 / 100.0;
+        self.rapid_pct = rapid_pct as f32 / 100.0;
+        let mut prev_nominal = None;
+        for k in 0..self.len {
+            let mut b = *self.at(k);
+            b.nominal = self.nominal(&b);
+            if b.kind == BlockKind::Line {
+                let pn = prev_nominal.unwrap_or(b.entry);
+                b.max_entry = b.junction.min(b.nominal).min(pn);
+                prev_nominal = Some(b.nominal);
+            } else {
+                prev_nominal = Some(0.0);
+            }
+            *self.at(k) = b;
+        }
+        if self.prev_nominal > 0.0 {
+            if let Some(p) = prev_nominal {
+                self.prev_nominal = p;
+            }
+        }
+        self.replan(true);
+    }
+
+    /// Backward then forward pass. `full` ignores the early stop.
+    pub fn replan(&mut self, full: bool) {
+        if self.len == 0 {
+            return;
+        }
+        if full {
+            self.planned = 0;
+        }
+        let shape_of = |b: &Block, s: &Settings| b.shape(s);
+        // Backward: the newest block must be able to stop at its end.
+        let mut next_entry = 0.0f32;
+        let mut k = self.len;
+        while k > self.planned + 1 {
+            k -= 1;
+            let st = self.settings;
+            let b = self.at(k);
+            let new = if b.kind == BlockKind::Line {
+                b.max_entry.min(shape_of(b, &st).reach(next_entry, b.length))
+            } else {
+                0.0
+            };
+            let unchanged = new == b.entry;
+            b.entry = new;
+            next_entry = new;
+            if unchanged && !full && k + 1 < self.len {
+                break;
+            }
+        }
+        // Forward: no block may be entered faster than the previous can reach.
+        for k in self.planned + 1..self.len {
+            let st = self.settings;
+            let prev = *self.at(k - 1);
+            let reach = match prev.kind {
+                BlockKind::Line => shape_of(&prev, &st).reach(prev.entry, prev.length),
+                BlockKind::Dwell { .. } => 0.0,
+            };
+            let b = self.at(k);
+            if reach <= b.entry {
+                b.entry = reach;
+                self.planned = k;
+            } else if b.entry >= b.max_entry {
+                self.planned = k;
+            }
+        }
+    }
+}

@@ -1,0 +1,185 @@
+//! Speed-change math shared by the planner (how fast can a block be entered)
+//! and the segment preparer (where is the tool at time t).
+//!
+//! Trapezoid: constant acceleration `a`.
+//!
+//! S-curve (burin's own, GRBL has none): each speed change is a symmetric
+//! jerk-limited ramp. Acceleration rises at jerk `j` to at most `a`, holds,
+//! and falls back to zero at `j`, so it is zero at every ramp end and block
+//! junction. A ramp of `dv` takes `dv/a + a/j` when `dv ≥ a²/j`, otherwise
+//! `2·sqrt(dv/j)`; because the ramp is point-symmetric its distance is
+//! always `(v0 + v1)/2 · T`. The planner uses the same distance function for
+//! look-ahead, so every planned speed is reachable by the S ramps and the
+//! acceleration limit is kept exactly; the price is slower speed changes.
+
+/// How speed changes: acceleration limit and, for S-curves, jerk.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Shape {
+    /// mm/s²
+    pub accel: f32,
+    /// mm/s³; `0` means unlimited (trapezoid).
+    pub jerk: f32,
+}
+
+impl Shape {
+    /// Duration of a speed change of `dv` (≥ 0).
+    pub fn time(&self, dv: f32) -> f32 {
+        let dv = dv.abs();
+        let a = self.accel;
+        if self.jerk <= 0.0 {
+            dv / a
+        } else if dv * self.jerk >= a * a {
+            dv / a + a / self.jerk
+        } else {
+            2.0 * libm::sqrtf(dv / self.jerk)
+        }
+    }
+
+    /// Distance to change speed between `v0` and `v1`.
+    pub fn dist(&self, v0: f32, v1: f32) -> f32 {
+        0.5 * (v0 + v1) * self.time(v1 - v0)
+    }
+
+    /// Highest speed reachable from `v` (accelerating or, read backwards,
+    /// decelerating) within `len` mm.
+    pub fn reach(&self, v: f32, len: f32) -> f32 {
+        let trap = libm::sqrtf(v * v + 2.0 * self.accel * len.max(0.0));
+        if self.jerk <= 0.0 {
+            return trap;
+        }
+        // The S ramp is never faster than the trapezoid: bisect below it.
+        let (mut lo, mut hi) = (v, trap);
+        for _ in 0..24 {
+            let mid = 0.5 * (lo + hi);
+            if self.dist(v, mid) <= len {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        lo
+    }
+
+    /// Lowest speed reachable when slowing from `v` within `len` mm.
+    pub fn reach_down(&self, v: f32, len: f32) -> f32 {
+        if self.jerk <= 0.0 {
+            return libm::sqrtf((v * v - 2.0 * self.accel * len.max(0.0)).max(0.0));
+        }
+        if self.dist(v, 0.0) <= len {
+            return 0.0;
+        }
+        let (mut lo, mut hi) = (0.0, v);
+        for _ in 0..24 {
+            let mid = 0.5 * (lo + hi);
+            if self.dist(v, mid) <= len {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        hi
+    }
+
+    /// Speed and distance `tau` seconds into a ramp from `v0` to `v1`.
+    pub fn eval(&self, v0: f32, v1: f32, tau: f32) -> (f32, f32) {
+        let dv = v1 - v0;
+        let sg = if dv < 0.0 { -1.0 } else { 1.0 };
+        let total = self.time(dv);
+        let tau = tau.clamp(0.0, total);
+        if self.jerk <= 0.0 || total <= 0.0 {
+            let a = if total > 0.0 { dv / total } else { 0.0 };
+            return (v0 + a * tau, v0 * tau + 0.5 * a * tau * tau);
+        }
+        let j = self.jerk;
+        let adv = dv.abs();
+        let (tj, ta) = if adv * j >= self.accel * self.accel {
+            (self.accel / j, adv / self.accel - self.accel / j)
+        } else {
+            (libm::sqrtf(adv / j), 0.0)
+        };
+        if tau < tj {
+            let v = v0 + sg * j * tau * tau / 2.0;
+            let s = v0 * tau + sg * j * tau * tau * tau / 6.0;
+            return (v, s);
+        }
+        if tau < tj + ta {
+            let ap = j * tj;
+            let v1a = v0 + sg * j * tj * tj / 2.0;
+            let s1 = v0 * tj + sg * j * tj * tj * tj / 6.0;
+            let u = tau - tj;
+            return (v1a + sg * ap * u, s1 + v1a * u + sg * ap * u * u / 2.0);
+        }
+        // Last jerk phase, written backwards from the end (point symmetry).
+        let w = total - tau;
+        let d = 0.5 * (v0 + v1) * total;
+        (v1 - sg * j * w * w / 2.0, d - (v1 * w - sg * j * w * w * w / 6.0))
+    }
+}
+
+/// One phase of a profile: a ramp or a cruise between two speeds.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Phase {
+    pub v0: f32,
+    pub v1: f32,
+    pub time: f32,
+    pub dist: f32,
+}
+
+/// Speed over the rest of a block: up to three phases (change to the peak,
+/// cruise, change to the exit speed).
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Profile {
+    pub phases: [Phase; 3],
+}
+
+impl Profile {
+    /// Plan `len` mm starting at `v0`, cruising at most at `vn`, ending at
+    /// `v1` (or as close as the distance allows).
+    pub fn plan(shape: &Shape, v0: f32, vn: f32, v1: f32, len: f32) -> Profile {
+        let len = len.max(0.0);
+        let vn = vn.max(1e-6);
+        let ramp = |a: f32, b: f32| Phase { v0: a, v1: b, time: shape.time(b - a), dist: shape.dist(a, b) };
+        let mut v1 = v1.min(vn);
+        // Entry too fast to reach the exit speed: slow down as much as possible.
+        if v0 > v1 && shape.dist(v0, v1) > len {
+            v1 = shape.reach_down(v0, len);
+            return Profile { phases: [ramp(v0, v1), Phase::default(), Phase::default()] };
+        }
+        // Entry too slow to reach the exit speed: speed up as much as possible.
+        if v1 > v0 && shape.dist(v0, v1) > len {
+            v1 = shape.reach(v0, len).min(v1);
+            return Profile { phases: [ramp(v0, v1), Phase::default(), Phase::default()] };
+        }
+        let (up, down) = (shape.dist(v0, vn), shape.dist(vn, v1));
+        let peak = if up + down <= len {
+            vn
+        } else if shape.jerk <= 0.0 {
+            let a = shape.accel;
+            libm::sqrtf(((2.0 * a * len + v0 * v0 + v1 * v1) / 2.0).max(0.0)).min(vn)
+        } else {
+            let (mut lo, mut hi) = (v0.max(v1), vn);
+            for _ in 0..24 {
+                let mid = 0.5 * (lo + hi);
+                if shape.dist(v0, mid) + shape.dist(mid, v1) <= len {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            lo
+        };
+        let a = ramp(v0, peak);
+        let c = ramp(peak, v1);
+        let cruise_len = (len - a.dist - c.dist).max(0.0);
+        let b = Phase { v0: peak, v1: peak, time: cruise_len / peak.max(1e-6), dist: cruise_len };
+        Profile { phases: [a, b, c] }
+    }
+
+    pub fn total_dist(&self) -> f32 {
+        self.phases.iter().map(|p| p.dist).sum()
+    }
+
+    pub fn exit_speed(&self) -> f32 {
+        self.phases.iter().rev().find(|p| p.time > 0.0).map_or(self.phases[0].v1, |p| p.v1)
+    }
+}

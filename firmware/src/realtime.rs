@@ -1,0 +1,211 @@
+//! Flags and counters shared between the USB interrupt (which catches the
+//! realtime bytes `!` `~` `0x18` and the override bytes), the step interrupt
+//! and the parse/plan task.
+//!
+//! Everything is a plain atomic so that no priority ever waits on a lock a
+//! lower priority holds. The struct is an instance, not a set of statics, so
+//! host-sim can run many machines side by side (tests run in parallel); the
+//! firmware keeps one in a `static`.
+
+use core::sync::atomic::{AtomicBool, AtomicI32, AtomicU32, AtomicU8, Ordering::Relaxed};
+
+use crate::AXES;
+
+/// Why the stepper stopped on its own.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Trip {
+    None = 0,
+    /// A watched homing switch closed (homing seek/locate, G27).
+    Homing = 1,
+    /// The probe reached the state the G38.x move waits for.
+    Probe = 2,
+    /// A limit switch closed during normal motion (hard limit).
+    HardLimit = 3,
+}
+
+/// The shared realtime state. All fields are lock-free atomics.
+#[derive(Debug)]
+pub struct Realtime {
+    /// Feed hold requested (`!`); cleared by cycle start.
+    hold: AtomicBool,
+    /// Cycle start (`~`) requested and not yet seen by the planner task.
+    cycle_start: AtomicBool,
+    /// Soft reset (0x18) requested.
+    reset: AtomicBool,
+    feed_override: AtomicU8,
+    rapid_override: AtomicU8,
+    override_epoch: AtomicU32,
+    /// Segment generation: the stepper drops segments from older generations,
+    /// which is how the planner task flushes the queue it cannot pop.
+    generation: AtomicU32,
+    underruns: AtomicU32,
+    trip: AtomicU8,
+    /// Axes whose switch caused the trip (limit switches) or the probe bit.
+    trip_mask: AtomicU8,
+    /// Machine position in steps, written by the stepper as it steps.
+    position: [AtomicI32; AXES],
+    /// Position at the moment of the last trip.
+    trip_position: [AtomicI32; AXES],
+    /// The stepper has no segment and the timer is stopped.
+    stepper_idle: AtomicBool,
+    /// A new position for the stepper (after homing), taken at its next segment.
+    new_position: [AtomicI32; AXES],
+    new_position_set: AtomicBool,
+}
+
+impl Default for Realtime {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Realtime {
+    pub const fn new() -> Self {
+        Realtime {
+            hold: AtomicBool::new(false),
+            cycle_start: AtomicBool::new(false),
+            reset: AtomicBool::new(false),
+            feed_override: AtomicU8::new(100),
+            rapid_override: AtomicU8::new(100),
+            override_epoch: AtomicU32::new(0),
+            generation: AtomicU32::new(0),
+            underruns: AtomicU32::new(0),
+            trip: AtomicU8::new(0),
+            trip_mask: AtomicU8::new(0),
+            position: [const { AtomicI32::new(0) }; AXES],
+            trip_position: [const { AtomicI32::new(0) }; AXES],
+            stepper_idle: AtomicBool::new(true),
+            new_position: [const { AtomicI32::new(0) }; AXES],
+            new_position_set: AtomicBool::new(false),
+        }
+    }
+
+    /// `!`: decelerate to a stop along the path.
+    pub fn feed_hold(&self) {
+        self.hold.store(true, Relaxed);
+    }
+    /// `~`: resume after a hold (or M0 pause).
+    pub fn cycle_start(&self) {
+        self.cycle_start.store(true, Relaxed);
+    }
+    /// 0x18: stop at once and flush everything.
+    pub fn request_reset(&self) {
+        self.reset.store(true, Relaxed);
+    }
+    pub fn hold_requested(&self) -> bool {
+        self.hold.load(Relaxed)
+    }
+    pub(crate) fn take_cycle_start(&self) -> bool {
+        self.cycle_start.swap(false, Relaxed)
+    }
+    pub(crate) fn clear_hold(&self) {
+        self.hold.store(false, Relaxed);
+    }
+    pub(crate) fn take_reset(&self) -> bool {
+        self.reset.swap(false, Relaxed)
+    }
+
+    /// Feed override in percent, clamped to 10–200.
+    pub fn set_feed_override(&self, percent: u16) {
+        let p = percent.clamp(10, 200) as u8;
+        if self.feed_override.swap(p, Relaxed) != p {
+            self.override_epoch.fetch_add(1, Relaxed);
+        }
+    }
+    /// Rapid override: 25, 50 or 100 percent (other values snap down to one of them).
+    pub fn set_rapid_override(&self, percent: u16) {
+        let p = match percent {
+            0..=37 => 25,
+            38..=74 => 50,
+            _ => 100,
+        };
+        if self.rapid_override.swap(p, Relaxed) != p {
+            self.override_epoch.fetch_add(1, Relaxed);
+        }
+    }
+    pub fn feed_override(&self) -> u8 {
+        self.feed_override.load(Relaxed)
+    }
+    pub fn rapid_override(&self) -> u8 {
+        self.rapid_override.load(Relaxed)
+    }
+    /// Changes whenever an override changes, so the planner knows to replan.
+    pub fn override_epoch(&self) -> u32 {
+        self.override_epoch.load(Relaxed)
+    }
+
+    pub fn generation(&self) -> u32 {
+        self.generation.load(Relaxed)
+    }
+    pub(crate) fn bump_generation(&self) -> u32 {
+        self.generation.fetch_add(1, Relaxed).wrapping_add(1)
+    }
+
+    /// Times the stepper ran dry while motion was still going (the planner
+    /// task did not keep up). Never reset except by power-up.
+    pub fn underruns(&self) -> u32 {
+        self.underruns.load(Relaxed)
+    }
+    pub(crate) fn count_underrun(&self) {
+        self.underruns.fetch_add(1, Relaxed);
+    }
+
+    pub fn trip(&self) -> Trip {
+        match self.trip.load(Relaxed) {
+            1 => Trip::Homing,
+            2 => Trip::Probe,
+            3 => Trip::HardLimit,
+            _ => Trip::None,
+        }
+    }
+    pub fn trip_mask(&self) -> u8 {
+        self.trip_mask.load(Relaxed)
+    }
+    pub fn trip_position(&self) -> [i32; AXES] {
+        core::array::from_fn(|i| self.trip_position[i].load(Relaxed))
+    }
+    pub(crate) fn set_trip(&self, trip: Trip, mask: u8, pos: &[i32; AXES]) {
+        for (a, p) in self.trip_position.iter().zip(pos) {
+            a.store(*p, Relaxed);
+        }
+        self.trip_mask.store(mask, Relaxed);
+        self.trip.store(trip as u8, Relaxed);
+    }
+    pub(crate) fn clear_trip(&self) {
+        self.trip.store(0, Relaxed);
+        self.trip_mask.store(0, Relaxed);
+    }
+
+    /// Machine position in steps as the stepper last wrote it.
+    pub fn position(&self) -> [i32; AXES] {
+        core::array::from_fn(|i| self.position[i].load(Relaxed))
+    }
+    pub(crate) fn store_position(&self, axis: usize, steps: i32) {
+        if let Some(a) = self.position.get(axis) {
+            a.store(steps, Relaxed);
+        }
+    }
+    pub fn stepper_idle(&self) -> bool {
+        self.stepper_idle.load(Relaxed)
+    }
+    pub(crate) fn set_stepper_idle(&self, idle: bool) {
+        self.stepper_idle.store(idle, Relaxed);
+    }
+
+    /// Redefine the machine position (homing). Only while the stepper is idle;
+    /// it adopts the value before its next step.
+    pub(crate) fn redefine_position(&self, pos: &[i32; AXES]) {
+        for (i, p) in pos.iter().enumerate() {
+            self.new_position[i].store(*p, Relaxed);
+            self.position[i].store(*p, Relaxed);
+        }
+        self.new_position_set.store(true, Relaxed);
+    }
+    pub(crate) fn take_new_position(&self) -> Option<[i32; AXES]> {
+        if self.new_position_set.swap(false, Relaxed) {
+            Some(core::array::from_fn(|i| self.new_position[i].load(Relaxed)))
+        } else {
+            None
+        }
+    }
+}

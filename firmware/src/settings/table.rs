@@ -1,0 +1,276 @@
+//! The numbered view of [`Settings`]: GRBL's `$n` numbers (so senders'
+//! settings dialogs work) plus burin's own from `$200`. Every write is
+//! validated here, once, so the planner and stepper can trust the struct.
+
+use super::{Profile, RapidMode, Settings};
+use crate::AXES;
+use protocol::Code;
+
+/// Why `$n=v` was refused. [`SettingError::code`] is the `error:N` number.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SettingError {
+    /// No setting has this number.
+    Unknown,
+    /// The value is NaN or infinite.
+    NotANumber,
+    /// Negative where only positive values make sense.
+    Negative,
+    /// Outside the setting's range.
+    OutOfRange,
+    /// A fraction given to a whole-number setting.
+    NotInteger,
+    /// A mask with bits for axes that do not exist.
+    BadMask,
+}
+
+impl SettingError {
+    /// Stable code: GRBL's where one exists (3, 2, 4), burin's otherwise.
+    pub const fn code(self) -> Code {
+        match self {
+            SettingError::Unknown => Code::InvalidStatement,
+            SettingError::NotANumber => Code::BadNumber,
+            SettingError::Negative => Code::NegativeValue,
+            SettingError::OutOfRange => Code::SettingRange,
+            SettingError::NotInteger => Code::SettingNotInteger,
+            SettingError::BadMask => Code::SettingBadMask,
+        }
+    }
+}
+
+/// The shape of a setting's values.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Kind {
+    /// Any real number in `min..=max`.
+    Real { min: f32, max: f32 },
+    /// A whole number in `min..=max`.
+    Int { min: u32, max: u32 },
+    /// 0 or 1.
+    Bool,
+    /// A bit mask using only `bits`.
+    Mask { bits: u8 },
+}
+
+const AXIS_BITS: u8 = (1 << AXES) - 1;
+const BIG: f32 = 1.0e6;
+
+/// `$0`–`$32`, in order.
+const GLOBAL: [(u16, Kind); 22] = [
+    (0, Kind::Real { min: 0.5, max: 100.0 }),
+    (1, Kind::Int { min: 0, max: 255 }),
+    (2, Kind::Mask { bits: AXIS_BITS }),
+    (3, Kind::Mask { bits: AXIS_BITS }),
+    (4, Kind::Bool),
+    (5, Kind::Mask { bits: AXIS_BITS }),
+    (6, Kind::Bool),
+    (10, Kind::Mask { bits: 0b11 }),
+    (11, Kind::Real { min: 0.0, max: 10.0 }),
+    (12, Kind::Real { min: 0.0001, max: 10.0 }),
+    (13, Kind::Bool),
+    (20, Kind::Bool),
+    (21, Kind::Bool),
+    (22, Kind::Bool),
+    (23, Kind::Mask { bits: AXIS_BITS }),
+    (24, Kind::Real { min: 0.1, max: BIG }),
+    (25, Kind::Real { min: 0.1, max: BIG }),
+    (26, Kind::Int { min: 0, max: 65535 }),
+    (27, Kind::Real { min: 0.0, max: 1000.0 }),
+    (30, Kind::Real { min: 0.0, max: BIG }),
+    (31, Kind::Real { min: 0.0, max: BIG }),
+    (32, Kind::Bool),
+];
+
+/// Per-axis groups: `$100+i` steps/mm, `$110+i` rate, `$120+i` accel,
+/// `$130+i` travel.
+const AXIS_GROUPS: [(u16, Kind); 4] = [
+    (100, Kind::Real { min: 0.001, max: BIG }),
+    (110, Kind::Real { min: 0.001, max: BIG }),
+    (120, Kind::Real { min: 0.001, max: BIG }),
+    (130, Kind::Real { min: 0.0, max: BIG }),
+];
+
+/// burin's own, `$200`–`$206` (documented on the [`Settings`] fields).
+const BURIN: [(u16, Kind); 7] = [
+    (200, Kind::Real { min: 0.0, max: 100.0 }),
+    (201, Kind::Real { min: 1.0, max: 2.0e6 }),
+    (202, Kind::Int { min: 0, max: 1 }),
+    (203, Kind::Real { min: 1.0, max: 1.0e9 }),
+    (204, Kind::Int { min: 0, max: 1 }),
+    (205, Kind::Real { min: 0.0, max: 100.0 }),
+    (206, Kind::Int { min: 0, max: 0xFFFF }),
+];
+
+/// The kind of setting `n`, or `None` if there is no such setting.
+pub fn kind(n: u16) -> Option<Kind> {
+    if let Some(&(_, k)) = GLOBAL.iter().chain(BURIN.iter()).find(|(m, _)| *m == n) {
+        return Some(k);
+    }
+    AXIS_GROUPS
+        .iter()
+        .find(|(base, _)| (*base..*base + AXES as u16).contains(&n))
+        .map(|(_, k)| *k)
+}
+
+/// Whether `$n` prints without decimals.
+pub fn is_integer(n: u16) -> bool {
+    !matches!(kind(n), Some(Kind::Real { .. }) | None)
+}
+
+/// Every setting number in ascending order (the `$$` listing).
+pub fn numbers() -> impl Iterator<Item = u16> {
+    let axes = AXIS_GROUPS
+        .iter()
+        .flat_map(|(base, _)| (0..AXES as u16).map(move |i| base + i));
+    GLOBAL
+        .iter()
+        .map(|(n, _)| *n)
+        .chain(axes)
+        .chain(BURIN.iter().map(|(n, _)| *n))
+}
+
+fn check(k: Kind, v: f32) -> Result<(), SettingError> {
+    if !v.is_finite() {
+        return Err(SettingError::NotANumber);
+    }
+    let whole = v == libm::truncf(v);
+    match k {
+        Kind::Real { min, max } => range(v, min, max),
+        Kind::Int { min, max } => {
+            if !whole {
+                return Err(SettingError::NotInteger);
+            }
+            range(v, min as f32, max as f32)
+        }
+        Kind::Bool => {
+            if !whole {
+                return Err(SettingError::NotInteger);
+            }
+            range(v, 0.0, 1.0)
+        }
+        Kind::Mask { bits } => {
+            if !whole {
+                return Err(SettingError::NotInteger);
+            }
+            range(v, 0.0, 255.0)?;
+            if (v as u32) & !u32::from(bits) != 0 {
+                return Err(SettingError::BadMask);
+            }
+            Ok(())
+        }
+    }
+}
+
+fn range(v: f32, min: f32, max: f32) -> Result<(), SettingError> {
+    if v < 0.0 && min >= 0.0 {
+        Err(SettingError::Negative)
+    } else if v < min || v > max {
+        Err(SettingError::OutOfRange)
+    } else {
+        Ok(())
+    }
+}
+
+impl Settings {
+    /// The value of `$n`, or `None` if there is no such setting.
+    pub fn get(&self, n: u16) -> Option<f32> {
+        let b = |x: bool| if x { 1.0 } else { 0.0 };
+        Some(match n {
+            0 => self.step_pulse_us,
+            1 => f32::from(self.idle_delay_ms),
+            2 => f32::from(self.step_invert),
+            3 => f32::from(self.dir_invert),
+            4 => b(self.enable_invert),
+            5 => f32::from(self.limit_invert),
+            6 => b(self.probe_invert),
+            10 => f32::from(self.status_mask),
+            11 => self.junction_deviation,
+            12 => self.arc_tolerance,
+            13 => b(self.report_inches),
+            20 => b(self.soft_limits),
+            21 => b(self.hard_limits),
+            22 => b(self.homing_enable),
+            23 => f32::from(self.homing_dir_invert),
+            24 => self.homing_feed,
+            25 => self.homing_seek,
+            26 => f32::from(self.homing_debounce_ms),
+            27 => self.homing_pulloff,
+            30 => self.spindle_max,
+            31 => self.spindle_min,
+            32 => b(self.laser_mode),
+            100..=139 => {
+                let a = self.axes.get(usize::from(n % 10))?;
+                match n / 10 {
+                    10 => a.steps_per_mm,
+                    11 => a.max_rate,
+                    12 => a.max_accel,
+                    _ => a.max_travel,
+                }
+            }
+            200 => self.dir_setup_us,
+            201 => self.max_step_rate_hz,
+            202 => b(self.profile == Profile::SCurve),
+            203 => self.jerk,
+            204 => b(self.rapid_mode == RapidMode::Independent),
+            205 => self.verify_home_tolerance,
+            206 => f32::from(self.homing_order),
+            _ => return None,
+        })
+    }
+
+    /// Set `$n` to `v` after validating it; on error nothing changes.
+    pub fn set(&mut self, n: u16, v: f32) -> Result<(), SettingError> {
+        check(kind(n).ok_or(SettingError::Unknown)?, v)?;
+        // Validated above: whole numbers in range, so these casts are exact.
+        let (u8v, u16v, on) = (v as u8, v as u16, v != 0.0);
+        match n {
+            0 => self.step_pulse_us = v,
+            1 => self.idle_delay_ms = u16v,
+            2 => self.step_invert = u8v,
+            3 => self.dir_invert = u8v,
+            4 => self.enable_invert = on,
+            5 => self.limit_invert = u8v,
+            6 => self.probe_invert = on,
+            10 => self.status_mask = u8v,
+            11 => self.junction_deviation = v,
+            12 => self.arc_tolerance = v,
+            13 => self.report_inches = on,
+            20 => self.soft_limits = on,
+            21 => self.hard_limits = on,
+            22 => self.homing_enable = on,
+            23 => self.homing_dir_invert = u8v,
+            24 => self.homing_feed = v,
+            25 => self.homing_seek = v,
+            26 => self.homing_debounce_ms = u16v,
+            27 => self.homing_pulloff = v,
+            30 => self.spindle_max = v,
+            31 => self.spindle_min = v,
+            32 => self.laser_mode = on,
+            100..=139 => {
+                let a = self
+                    .axes
+                    .get_mut(usize::from(n % 10))
+                    .ok_or(SettingError::Unknown)?;
+                match n / 10 {
+                    10 => a.steps_per_mm = v,
+                    11 => a.max_rate = v,
+                    12 => a.max_accel = v,
+                    _ => a.max_travel = v,
+                }
+            }
+            200 => self.dir_setup_us = v,
+            201 => self.max_step_rate_hz = v,
+            202 => self.profile = if on { Profile::SCurve } else { Profile::Trapezoid },
+            203 => self.jerk = v,
+            204 => {
+                self.rapid_mode = if on {
+                    RapidMode::Independent
+                } else {
+                    RapidMode::Coordinated
+                }
+            }
+            205 => self.verify_home_tolerance = v,
+            206 => self.homing_order = u16v,
+            _ => return Err(SettingError::Unknown),
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,245 @@
+//! Step generation, split between two priorities:
+//!
+//! - [`prep::Preparer`] (parse/plan task) turns planner blocks into short
+//!   constant-rate [`Segment`]s and pushes them into a lock-free spsc queue;
+//! - [`Stepper`] (step timer interrupt) pops segments and runs Bresenham
+//!   across the axes, one timer event at a time.
+//!
+//! A segment carries a copy of its block's Bresenham numbers, so the
+//! interrupt never reads memory the planner task writes: it only pops the
+//! queue's consumer end and reads [`Realtime`] atomics.
+
+pub mod prep;
+
+use crate::realtime::{Realtime, Trip};
+use crate::settings::Settings;
+use crate::AXES;
+
+/// Highest smoothing level: at low step rates the Bresenham runs at up to
+/// 2^3 times the dominant axis's rate so slower axes step at evenly spaced times.
+pub const MAX_AMASS: u8 = 3;
+
+/// A run of timer events at one constant period.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Segment {
+    /// Timer events in this segment (dominant-axis steps << `amass`).
+    pub events: u32,
+    /// Ticks between events.
+    pub period: u32,
+    pub amass: u8,
+    /// First segment of a block: restart Bresenham with the numbers below.
+    pub new_block: bool,
+    /// The block's steps per axis and event count.
+    pub steps: [u32; AXES],
+    pub count: u32,
+    pub dir_mask: u8,
+    /// Homing/probe conditions that stop the stepper at once.
+    pub watch: crate::planner::Watch,
+    /// Path speed at the end of this segment reaches zero (end of motion
+    /// or completed hold): running dry after it is not an underrun.
+    pub end_of_motion: bool,
+    /// Realtime generation this segment belongs to (older ones are dropped).
+    pub generation: u32,
+    /// Path speed during this segment, mm/min (status reports, traces).
+    pub speed_mm_min: f32,
+    /// Source line of the block.
+    pub line: u32,
+}
+
+/// Switch inputs as pin levels (before the invert settings).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct Switches {
+    pub limits: u8,
+    pub probe: bool,
+}
+
+/// What one timer event does to the pins.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StepEvent {
+    /// Logical directions after this event (bit set: negative).
+    pub dir_mask: u8,
+    /// Axes that step at this event.
+    pub step_mask: u8,
+    /// Direction pin levels (after `$3`).
+    pub dir_pins: u8,
+    /// Step pin levels during the pulse (after `$2`); idle level is `step_invert`.
+    pub step_pins: u8,
+    /// Ticks until the next event; 0: stop the timer (idle or stopped).
+    pub ticks: u32,
+}
+
+/// Pin timing in timer ticks and the invert masks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StepConfig {
+    pub tick_hz: u32,
+    pub pulse_ticks: u32,
+    pub dir_setup_ticks: u32,
+    /// Shortest time between two events: the pulse must end first.
+    pub min_period: u32,
+    pub step_invert: u8,
+    pub dir_invert: u8,
+    pub limit_invert: u8,
+    pub probe_invert: bool,
+    pub hard_limits: bool,
+}
+
+impl StepConfig {
+    pub fn new(s: &Settings, tick_hz: u32) -> Self {
+        let ticks = |us: f32| libm::ceilf(us.max(0.0) * tick_hz as f32 / 1.0e6).max(1.0) as u32;
+        let pulse_ticks = ticks(s.step_pulse_us);
+        let ceiling = libm::ceilf(tick_hz as f32 / s.max_step_rate_hz.max(1.0)) as u32;
+        StepConfig {
+            tick_hz,
+            pulse_ticks,
+            dir_setup_ticks: ticks(s.dir_setup_us),
+            min_period: ceiling.max(pulse_ticks + 1),
+            step_invert: s.step_invert,
+            dir_invert: s.dir_invert,
+            limit_invert: s.limit_invert,
+            probe_invert: s.probe_invert,
+            hard_limits: s.hard_limits,
+        }
+    }
+}
+
+/// The interrupt half: Bresenham over the current segment.
+#[derive(Debug)]
+pub struct Stepper {
+    pub cfg: StepConfig,
+    seg: Option<Segment>,
+    left: u32,
+    acc: [u32; AXES],
+    position: [i32; AXES],
+    dir: u8,
+    halted: Option<u32>,
+    last_end: bool,
+}
+
+impl Stepper {
+    pub fn new(cfg: StepConfig) -> Self {
+        Stepper {
+            cfg,
+            seg: None,
+            left: 0,
+            acc: [0; AXES],
+            position: [0; AXES],
+            dir: 0,
+            halted: None,
+            last_end: true,
+        }
+    }
+
+    /// Position in steps.
+    pub fn position(&self) -> [i32; AXES] {
+        self.position
+    }
+    /// Set the position (homing, power-up); only while idle.
+    pub fn set_position(&mut self, rt: &Realtime, pos: [i32; AXES]) {
+        self.position = pos;
+        for (i, p) in pos.iter().enumerate() {
+            rt.store_position(i, *p);
+        }
+    }
+    /// Speed of the running segment, mm/min (0 when idle).
+    pub fn speed_mm_min(&self) -> f32 {
+        self.seg.map_or(0.0, |s| s.speed_mm_min)
+    }
+    /// Source line of the running segment.
+    pub fn line(&self) -> u32 {
+        self.seg.map_or(0, |s| s.line)
+    }
+    pub fn is_idle(&self) -> bool {
+        self.left == 0
+    }
+
+    fn event(&self, step_mask: u8, ticks: u32) -> StepEvent {
+        StepEvent {
+            dir_mask: self.dir,
+            step_mask,
+            dir_pins: self.dir ^ self.cfg.dir_invert,
+            step_pins: step_mask ^ self.cfg.step_invert,
+            ticks,
+        }
+    }
+
+    fn idle(&mut self, rt: &Realtime) -> StepEvent {
+        if !self.last_end && self.halted.is_none() {
+            rt.count_underrun();
+        }
+        self.last_end = true;
+        self.left = 0;
+        self.seg = None;
+        rt.set_stepper_idle(true);
+        self.event(0, 0)
+    }
+
+    fn trip(&mut self, rt: &Realtime, trip: Trip, mask: u8, generation: u32) -> StepEvent {
+        rt.set_trip(trip, mask, &self.position);
+        self.halted = Some(generation);
+        self.idle(rt)
+    }
+
+    /// One timer event. `pop` takes the next segment from the queue;
+    /// `sw` are the switch pin levels as read now.
+    pub fn on_event(&mut self, rt: &Realtime, pop: &mut impl FnMut() -> Option<Segment>, sw: Switches) -> StepEvent {
+        let generation = rt.generation();
+        if let Some(g) = self.halted {
+            if g == generation {
+                return self.idle(rt);
+            }
+            self.halted = None;
+        }
+        while self.left == 0 {
+            let Some(s) = pop() else {
+                return self.idle(rt);
+            };
+            if s.generation != generation {
+                continue;
+            }
+            if let Some(p) = rt.take_new_position() {
+                self.position = p;
+            }
+            rt.set_stepper_idle(false);
+            self.left = s.events;
+            self.last_end = s.end_of_motion;
+            let new_block = s.new_block;
+            self.seg = Some(s);
+            if new_block {
+                let threshold = s.count << MAX_AMASS;
+                self.acc = [threshold / 2; AXES];
+                if s.dir_mask != self.dir {
+                    self.dir = s.dir_mask;
+                    return self.event(0, self.cfg.dir_setup_ticks);
+                }
+            }
+        }
+        let Some(seg) = self.seg else {
+            return self.idle(rt);
+        };
+        let lim = sw.limits ^ self.cfg.limit_invert;
+        let probe = sw.probe ^ self.cfg.probe_invert;
+        if seg.watch.limits & lim != 0 {
+            return self.trip(rt, Trip::Homing, seg.watch.limits & lim, generation);
+        }
+        if (seg.watch.probe == 1 && probe) || (seg.watch.probe == 2 && !probe) {
+            return self.trip(rt, Trip::Probe, 0, generation);
+        }
+        if self.cfg.hard_limits && !seg.watch.homing && lim != 0 {
+            return self.trip(rt, Trip::HardLimit, lim, generation);
+        }
+        let threshold = seg.count << MAX_AMASS;
+        let shift = MAX_AMASS.saturating_sub(seg.amass);
+        let mut mask = 0u8;
+        for i in 0..AXES {
+            self.acc[i] += seg.steps[i] << shift;
+            if self.acc[i] >= threshold {
+                self.acc[i] -= threshold;
+                mask |= 1 << i;
+                self.position[i] += if self.dir & (1 << i) != 0 { -1 } else { 1 };
+                rt.store_position(i, self.position[i]);
+            }
+        }
+        self.left -= 1;
+        self.event(mask, seg.period)
+    }
+}

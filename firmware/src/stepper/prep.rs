@@ -1,0 +1,435 @@
+//! The segment preparer: walks the oldest planner block's speed profile in
+//! steps of [`SEGMENT_S`] and emits one constant-rate [`Segment`] per step.
+//!
+//! The preparer always plans from the speed it actually has (`v`), so an
+//! override, a hold, a resume or a newly appended block only ever changes
+//! the profile of the remaining distance, and the block's step count is
+//! handed out exactly: the last segment of a block takes every step left.
+
+use super::{Segment, StepConfig, MAX_AMASS};
+use crate::planner::{Block, BlockKind, Phase, Planner, Profile, Shape};
+use crate::realtime::Realtime;
+use crate::settings::Settings;
+
+/// Target duration of one segment, seconds.
+pub const SEGMENT_S: f32 = 0.002;
+/// Smoothing keeps the fine event rate at or below this (Hz).
+pub const AMASS_FINE_HZ: f32 = 16_000.0;
+/// Longest event period of a dwell segment, seconds.
+const DWELL_CHUNK_S: f32 = 0.01;
+
+/// Where a segment queue's producer end lives: the spsc producer on the
+/// MCU, a plain queue in host-sim.
+pub trait SegmentSink {
+    fn push(&mut self, s: Segment) -> Result<(), Segment>;
+    fn is_full(&self) -> bool;
+    fn is_empty(&self) -> bool;
+}
+
+impl SegmentSink for heapless::spsc::Producer<'_, Segment> {
+    fn push(&mut self, s: Segment) -> Result<(), Segment> {
+        self.enqueue(s)
+    }
+    fn is_full(&self) -> bool {
+        !self.ready()
+    }
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+impl<const N: usize> SegmentSink for heapless::spsc::Queue<Segment, N> {
+    fn push(&mut self, s: Segment) -> Result<(), Segment> {
+        self.enqueue(s)
+    }
+    fn is_full(&self) -> bool {
+        heapless::spsc::Queue::is_full(self)
+    }
+    fn is_empty(&self) -> bool {
+        heapless::spsc::Queue::is_empty(self)
+    }
+}
+
+/// Feed hold progress.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Hold {
+    Running,
+    Decelerating,
+    Held,
+}
+
+/// The planner-task half of step generation.
+#[derive(Debug)]
+pub struct Preparer {
+    cfg: StepConfig,
+    settings: Settings,
+    active: bool,
+    block: Option<Block>,
+    new_block: bool,
+    steps_done: u32,
+    /// Distance into the block at the end of the last segment, mm.
+    s_done: f32,
+    /// Speed at the end of the last segment, mm/s.
+    v: f32,
+    profile: Profile,
+    phase: usize,
+    tau: f32,
+    s_phase0: f32,
+    profile_exit: f32,
+    profile_nominal: f32,
+    tick_carry: f32,
+    /// Fractional dominant steps covered at the end of the last segment.
+    frac_prev: f32,
+    dwell_left: u64,
+    last_dir: u8,
+    hold: Hold,
+    /// Highest segment speed so far, mm/min.
+    pub max_speed_mm_min: f32,
+}
+
+impl Preparer {
+    pub fn new(settings: Settings, cfg: StepConfig) -> Self {
+        Preparer {
+            cfg,
+            settings,
+            active: false,
+            block: None,
+            new_block: false,
+            steps_done: 0,
+            s_done: 0.0,
+            v: 0.0,
+            profile: Profile::default(),
+            phase: 0,
+            tau: 0.0,
+            s_phase0: 0.0,
+            profile_exit: 0.0,
+            profile_nominal: 0.0,
+            tick_carry: 0.0,
+            frac_prev: 0.0,
+            dwell_left: 0,
+            last_dir: 0,
+            hold: Hold::Running,
+            max_speed_mm_min: 0.0,
+        }
+    }
+
+    /// Forget everything in flight (flush after reset, trip or alarm).
+    pub fn reset(&mut self) {
+        self.active = false;
+        self.block = None;
+        self.v = 0.0;
+        self.tick_carry = 0.0;
+        self.hold = Hold::Running;
+    }
+
+    pub fn hold(&self) -> Hold {
+        self.hold
+    }
+    /// No block in progress.
+    pub fn is_idle(&self) -> bool {
+        !self.active
+    }
+    /// Current planned path speed, mm/s.
+    pub fn speed(&self) -> f32 {
+        self.v
+    }
+
+    /// Push segments until the queue is full or there is nothing to prepare.
+    pub fn fill<const N: usize>(&mut self, pl: &mut Planner<N>, rt: &Realtime, sink: &mut impl SegmentSink) {
+        while !sink.is_full() {
+            match self.next_segment(pl, rt) {
+                Some(seg) => {
+                    if sink.push(seg).is_err() {
+                        break;
+                    }
+                }
+                None => break,
+            }
+        }
+    }
+
+    fn shape(&self) -> Shape {
+        self.block.map_or(Shape { accel: 1.0, jerk: 0.0 }, |b| b.shape(&self.settings))
+    }
+
+    fn exit_target<const N: usize>(pl: &Planner<N>) -> f32 {
+        match pl.block(1) {
+            Some(b) if b.kind == BlockKind::Line => b.entry,
+            _ => 0.0,
+        }
+    }
+
+    fn set_profile(&mut self, p: Profile) {
+        self.profile = p;
+        self.phase = 0;
+        self.tau = 0.0;
+        self.s_phase0 = self.s_done;
+    }
+
+    fn replan<const N: usize>(&mut self, pl: &Planner<N>) {
+        let Some(b) = self.block else { return };
+        let exit = Self::exit_target(pl);
+        let p = Profile::plan(&self.shape(), self.v, b.nominal, exit, b.length - self.s_done);
+        self.profile_exit = exit;
+        self.profile_nominal = b.nominal;
+        self.set_profile(p);
+    }
+
+    fn plan_hold(&mut self) {
+        let sh = self.shape();
+        let ramp = Phase { v0: self.v, v1: 0.0, time: sh.time(self.v), dist: sh.dist(self.v, 0.0) };
+        let zero = Phase::default();
+        self.set_profile(Profile { phases: [ramp, zero, zero] });
+    }
+
+    /// An S-curve profile may only be replaced where acceleration is zero.
+    fn can_replan(&self) -> bool {
+        self.settings.profile == crate::settings::Profile::Trapezoid
+            || self.tau == 0.0
+            || self.phase >= 3
+            || self.profile.phases.get(self.phase).is_some_and(|p| p.v0 == p.v1)
+    }
+
+    /// Walk the profile for `dt` seconds; returns the time actually walked
+    /// and whether the profile ended.
+    fn advance(&mut self, mut dt: f32) -> (f32, bool) {
+        let mut used = 0.0;
+        while dt > 0.0 && self.phase < 3 {
+            let ph = self.profile.phases[self.phase];
+            let rem = ph.time - self.tau;
+            if dt < rem {
+                self.tau += dt;
+                used += dt;
+                dt = 0.0;
+            } else {
+                used += rem.max(0.0);
+                dt -= rem.max(0.0);
+                self.phase += 1;
+                self.s_phase0 += ph.dist;
+                self.tau = 0.0;
+            }
+        }
+        if self.phase < 3 {
+            let ph = self.profile.phases[self.phase];
+            let (v, s) = if ph.v0 == ph.v1 {
+                (ph.v0, ph.v0 * self.tau)
+            } else {
+                self.shape().eval(ph.v0, ph.v1, self.tau)
+            };
+            self.v = v;
+            self.s_done = self.s_phase0 + s;
+            (used, false)
+        } else {
+            self.v = self.profile.exit_speed();
+            self.s_done = self.s_phase0;
+            (used, true)
+        }
+    }
+
+    fn start_block<const N: usize>(&mut self, pl: &Planner<N>) -> bool {
+        let Some(b) = pl.block(0).copied() else { return false };
+        self.block = Some(b);
+        self.active = true;
+        self.new_block = true;
+        self.steps_done = 0;
+        self.s_done = 0.0;
+        self.frac_prev = 0.0;
+        match b.kind {
+            BlockKind::Dwell { ticks } => {
+                self.dwell_left = ticks;
+                self.v = 0.0;
+            }
+            BlockKind::Line => {
+                self.v = self.v.min(b.max_entry.max(b.entry));
+                if self.hold == Hold::Decelerating {
+                    self.plan_hold();
+                } else {
+                    self.replan(pl);
+                }
+            }
+        }
+        true
+    }
+
+    fn finish_block<const N: usize>(&mut self, pl: &mut Planner<N>) {
+        pl.pop();
+        self.active = false;
+        self.block = None;
+    }
+
+    fn next_segment<const N: usize>(&mut self, pl: &mut Planner<N>, rt: &Realtime) -> Option<Segment> {
+        if rt.hold_requested() && self.hold == Hold::Running {
+            if self.active && self.v > 0.0 {
+                self.hold = Hold::Decelerating;
+                self.plan_hold();
+            } else {
+                self.hold = Hold::Held;
+            }
+        }
+        if self.hold == Hold::Held {
+            if !rt.take_cycle_start() {
+                return None;
+            }
+            rt.clear_hold();
+            self.hold = Hold::Running;
+            if self.active && self.block.is_some_and(|b| b.kind == BlockKind::Line) {
+                self.replan(pl);
+            }
+        }
+        loop {
+            if !self.active && !self.start_block(pl) {
+                return None;
+            }
+            let b = self.block?;
+            if let BlockKind::Dwell { .. } = b.kind {
+                if let Some(seg) = self.dwell_segment(rt, &b) {
+                    return Some(seg);
+                }
+                self.finish_block(pl);
+                continue;
+            }
+            if self.hold == Hold::Running {
+                let exit = Self::exit_target(pl);
+                let changed = exit != self.profile_exit || b.nominal != pl.block(0).map_or(b.nominal, |c| c.nominal);
+                if changed && self.can_replan() {
+                    if let Some(c) = pl.block(0) {
+                        self.block = Some(*c);
+                    }
+                    self.replan(pl);
+                }
+            }
+            if let Some(seg) = self.motion_segment(pl, rt) {
+                return Some(seg);
+            }
+            if self.hold == Hold::Held {
+                return None;
+            }
+        }
+    }
+
+    fn dwell_segment(&mut self, rt: &Realtime, b: &Block) -> Option<Segment> {
+        if self.dwell_left == 0 {
+            return None;
+        }
+        let chunk = (DWELL_CHUNK_S * self.cfg.tick_hz as f32) as u64;
+        let period = self.dwell_left.min(chunk.max(1)) as u32;
+        let events = (self.dwell_left / period as u64).min(u32::MAX as u64) as u32;
+        self.dwell_left -= period as u64 * events as u64;
+        let first = core::mem::replace(&mut self.new_block, false);
+        Some(Segment {
+            events,
+            period,
+            amass: 0,
+            new_block: first,
+            steps: [0; crate::AXES],
+            count: 1,
+            dir_mask: self.last_dir,
+            watch: Default::default(),
+            end_of_motion: true,
+            generation: rt.generation(),
+            speed_mm_min: 0.0,
+            line: b.line,
+        })
+    }
+
+    fn motion_segment<const N: usize>(&mut self, pl: &mut Planner<N>, rt: &Realtime) -> Option<Segment> {
+        let b = self.block?;
+        let mut time = 0.0f32;
+        let (target, block_end, stopped) = loop {
+            let (dt, ended) = self.advance(SEGMENT_S);
+            time += dt;
+            let block_end = self.s_done >= b.length - 1e-6 || (ended && self.hold != Hold::Decelerating);
+            let hold_done = ended && self.hold == Hold::Decelerating && !block_end;
+            let target = if block_end {
+                b.count
+            } else {
+                let t = libm::floorf(self.s_done / b.length * b.count as f32);
+                (t.max(0.0) as u32).min(b.count)
+            };
+            if target > self.steps_done || block_end || hold_done {
+                break (target, block_end, hold_done);
+            }
+        };
+        let n = target.saturating_sub(self.steps_done);
+        self.steps_done = target;
+        let s_steps = if block_end { b.count as f32 } else { self.s_done / b.length * b.count as f32 };
+        let end_speed_zero = stopped || (block_end && self.v <= 1e-3);
+        if block_end {
+            self.finish_block(pl);
+            if self.hold == Hold::Decelerating && pl.is_empty() {
+                self.v = 0.0;
+            }
+        }
+        if stopped || (self.hold == Hold::Decelerating && self.v <= 1e-3 && (block_end || stopped)) {
+            self.hold = Hold::Held;
+            self.v = 0.0;
+        }
+        if n == 0 {
+            // Nothing to step, but the stepper must learn that motion ends
+            // here, or running dry would count as an underrun.
+            if end_speed_zero || self.hold == Hold::Held {
+                let first = core::mem::replace(&mut self.new_block, false);
+                return Some(Segment {
+                    events: 0,
+                    period: self.cfg.min_period,
+                    amass: 0,
+                    new_block: first,
+                    steps: b.steps,
+                    count: b.count,
+                    dir_mask: b.dir_mask,
+                    watch: b.watch,
+                    end_of_motion: true,
+                    generation: rt.generation(),
+                    speed_mm_min: 0.0,
+                    line: b.line,
+                });
+            }
+            return None;
+        }
+        let minor = b.steps.iter().any(|&s| s != 0 && s != b.count);
+        // The step rate comes from the fractional steps the profile covered
+        // in this time, not from the whole steps handed out: otherwise a
+        // 2 ms segment at 3.4 steps would run 3 or 4 steps at 3/4.
+        let covered = (s_steps - self.frac_prev).max(1e-3);
+        self.frac_prev = s_steps;
+        let rate = if time > 0.0 { covered / time } else { self.v / b.length * b.count as f32 };
+        let dominant = if rate > 0.0 { self.cfg.tick_hz as f32 / rate } else { f32::MAX };
+        let mut amass = 0u8;
+        if minor {
+            let fine_min = self.cfg.tick_hz as f32 / AMASS_FINE_HZ;
+            while amass < MAX_AMASS && dominant / (2u32 << amass) as f32 >= fine_min {
+                amass += 1;
+            }
+        }
+        let events = n << amass;
+        let ticks = (dominant * n as f32).min(u32::MAX as f32) + self.tick_carry;
+        let period_f = ticks / events as f32;
+        let period = if period_f >= self.cfg.min_period as f32 {
+            let p = (period_f.min(u32::MAX as f32) as u32).max(self.cfg.min_period);
+            self.tick_carry = (ticks - p as f32 * events as f32).clamp(0.0, p as f32);
+            p
+        } else {
+            // Never faster than the ceiling; the lost time is not made up.
+            self.tick_carry = 0.0;
+            self.cfg.min_period
+        };
+        let speed_mm_min = rate / b.count as f32 * b.length * 60.0;
+        self.max_speed_mm_min = self.max_speed_mm_min.max(speed_mm_min);
+        let first = core::mem::replace(&mut self.new_block, false);
+        self.last_dir = b.dir_mask;
+        Some(Segment {
+            events,
+            period,
+            amass,
+            new_block: first,
+            steps: b.steps,
+            count: b.count,
+            dir_mask: b.dir_mask,
+            watch: b.watch,
+            end_of_motion: end_speed_zero || self.hold == Hold::Held,
+            generation: rt.generation(),
+            speed_mm_min,
+            line: b.line,
+        })
+    }
+}

@@ -1,0 +1,153 @@
+//! The `$n` settings table and the GRBL text replies, byte for byte.
+
+use burin::link::reply::{self, BuildInfo, Cadence, Extras, Format, ReplyBuf};
+use burin::settings::table::{self, SettingError};
+use burin::settings::{Profile, Settings};
+use protocol::msg::pins;
+use protocol::{MachineState, Overrides, Status};
+
+#[test]
+fn numbers_are_ascending_unique_and_all_readable() {
+    let s = Settings::default();
+    let nums: Vec<u16> = table::numbers().collect();
+    assert!(nums.windows(2).all(|w| w[0] < w[1]));
+    assert_eq!(nums.len(), 22 + 16 + 7);
+    for n in &nums {
+        let v = s.get(*n).unwrap_or_else(|| panic!("${n} unreadable"));
+        let mut t = s;
+        assert_eq!(t.set(*n, v), Ok(()), "${n}={v} default must be valid");
+        assert_eq!(t, s);
+    }
+    for n in [7, 14, 99, 104, 114, 140, 199, 207, 65535] {
+        assert_eq!(s.get(n), None, "${n}");
+    }
+}
+
+#[test]
+fn writes_are_validated_and_errors_change_nothing() {
+    let mut s = Settings::default();
+    let before = s;
+    let cases: [(u16, f32, SettingError, u16); 9] = [
+        (999, 1.0, SettingError::Unknown, 3),
+        (110, f32::NAN, SettingError::NotANumber, 2),
+        (110, -5.0, SettingError::Negative, 4),
+        (100, 0.0, SettingError::OutOfRange, 110),
+        (1, 2.5, SettingError::NotInteger, 111),
+        (20, 2.0, SettingError::OutOfRange, 110),
+        (3, 16.0, SettingError::BadMask, 112),
+        (10, 4.0, SettingError::BadMask, 112),
+        (12, 0.0, SettingError::OutOfRange, 110),
+    ];
+    for (n, v, err, code) in cases {
+        assert_eq!(s.set(n, v), Err(err), "${n}={v}");
+        assert_eq!(err.code().code(), code);
+        assert_eq!(s, before, "a refused write changes nothing");
+    }
+    assert_eq!(s.set(110, 6000.0), Ok(()));
+    assert_eq!(s.axes[0].max_rate, 6000.0);
+    assert_eq!(s.set(133, 45.0), Ok(()));
+    assert_eq!(s.axes[3].max_travel, 45.0);
+    assert_eq!(s.set(202, 1.0), Ok(()));
+    assert_eq!(s.profile, Profile::SCurve);
+    assert_eq!(s.set(3, 5.0), Ok(()));
+    assert_eq!(s.get(3), Some(5.0));
+}
+
+fn text(f: impl FnOnce(&mut ReplyBuf) -> core::fmt::Result) -> String {
+    let mut b = ReplyBuf::new();
+    f(&mut b).expect("fits");
+    b.as_str().to_string()
+}
+
+#[test]
+fn simple_replies() {
+    assert_eq!(text(|w| reply::ok(w)), "ok\r\n");
+    assert_eq!(text(|w| reply::error(w, 22)), "error:22\r\n");
+    assert_eq!(text(|w| reply::alarm(w, 1)), "ALARM:1\r\n");
+    assert_eq!(text(|w| reply::banner(w)), "\r\nGrbl 1.1h ['$' for help]\r\n");
+    assert_eq!(text(|w| reply::msg(w, "Pgm End")), "[MSG:Pgm End]\r\n");
+    assert_eq!(text(|w| reply::gc(w, "G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0")),
+        "[GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]\r\n");
+    let info = BuildInfo { firmware: "0.1.0", board: "blackpill-f411", options: "VNMH", planner_blocks: 32 };
+    assert_eq!(
+        text(|w| reply::build_info(w, &info)),
+        "[VER:1.1h.burin-0.1.0:blackpill-f411]\r\n[OPT:VNMH,32,128]\r\n"
+    );
+    let f = Format { axes: 3, inches: false };
+    assert_eq!(text(|w| reply::param(w, "G54", &[1.0, -2.0, 0.0004, 9.0], f)), "[G54:1.000,-2.000,0.000]\r\n");
+    assert_eq!(text(|w| reply::probe(w, &[1.0, 2.0, -0.00001], true, f)), "[PRB:1.000,2.000,0.000:1]\r\n");
+}
+
+#[test]
+fn settings_listing() {
+    let out = text(|w| {
+        let s = Settings::default();
+        for n in [0u16, 1, 10, 110, 206] {
+            reply::setting(w, n, s.get(n).unwrap_or(-1.0))?;
+        }
+        Ok(())
+    });
+    assert_eq!(out, "$0=2.000\r\n$1=25\r\n$10=1\r\n$110=5000.000\r\n$206=52\r\n");
+    let mut all = String::new();
+    reply::settings(&mut all, &Settings::default()).expect("string sink");
+    assert_eq!(all.lines().count(), 45);
+    assert!(all.starts_with("$0=2.000\r\n$1=25\r\n$2=0\r\n"));
+}
+
+fn status() -> Status {
+    Status {
+        state: MachineState::Run,
+        mpos: [10.0, 20.5, -1.25, 0.0],
+        wco: [5.0, 0.5, -1.0, 0.0],
+        feed: 1500.0,
+        spindle: 12000.0,
+        planner_free: 15,
+        rx_free: 128,
+        line: Some(42),
+        pins: pins::LIMIT_X | pins::PROBE | pins::HOLD,
+        ..Status::default()
+    }
+}
+
+#[test]
+fn status_report_fields_in_grbl_order() {
+    let f = Format { axes: 3, inches: false };
+    let all = Extras { wco: true, ov: true };
+    assert_eq!(
+        text(|w| reply::status(w, &status(), 3, f, all)),
+        "<Run|MPos:10.000,20.500,-1.250|Bf:15,128|Ln:42|FS:1500,12000|Pn:XPH|WCO:5.000,0.500,-1.000|Ov:100,100,100>\r\n"
+    );
+    let mut hold = status();
+    hold.state = MachineState::Hold;
+    hold.substate = 1;
+    hold.line = None;
+    hold.pins = 0;
+    assert_eq!(
+        text(|w| reply::status(w, &hold, 0, Format { axes: 4, inches: false }, Extras::default())),
+        "<Hold:1|WPos:5.000,20.000,-0.250,0.000|FS:1500,12000>\r\n"
+    );
+    assert_eq!(
+        text(|w| reply::status(w, &hold, 1, Format { axes: 3, inches: true }, Extras::default())),
+        "<Hold:1|MPos:0.3937,0.8071,-0.0492|FS:59,12000>\r\n"
+    );
+}
+
+#[test]
+fn wco_and_overrides_every_tenth_report_or_on_change() {
+    let mut c = Cadence::default();
+    let mut s = status();
+    let first = c.next(&s);
+    assert!(first.wco && first.ov, "first report carries everything");
+    let mut wco_count = 0;
+    let mut ov_count = 0;
+    for _ in 0..20 {
+        let e = c.next(&s);
+        wco_count += usize::from(e.wco);
+        ov_count += usize::from(e.ov);
+    }
+    assert_eq!((wco_count, ov_count), (2, 2));
+    s.overrides = Overrides { feed: 110, ..Overrides::default() };
+    assert!(c.next(&s).ov, "a change shows at once");
+    s.wco[0] = 1.0;
+    assert!(c.next(&s).wco);
+}

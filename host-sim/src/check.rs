@@ -1,0 +1,163 @@
+//! Check mode: interpret a whole file without motion, report every error,
+//! and optionally dump each emitted command as one JSON object per line.
+//!
+//! The output is a contract other tools diff against reference interpreters:
+//!
+//! - errors: `FILE:LINE:COL: error[CODE]: message` (CODE from
+//!   [`burin::gcode::ErrorKind::code`]); interpretation continues with the
+//!   next line, and the failed line leaves no trace (as LinuxCNC's check);
+//! - `--dump`: `{"line":N,"kind":K,...}` per command. Motion kinds (`rapid`,
+//!   `line`, `arc`, `spline`, `probe`) carry `end` (one number per axis,
+//!   machine mm; A in degrees); feed moves carry `feed` (mm/min, or the
+//!   inverse-time value with `"feed_mode":"inverse_time"`); arcs add
+//!   `center` (the plane's two axes), `plane` (`XY`, `ZX`, `YZ`), `dir`
+//!   (`cw`/`ccw`) and `turns` (extra full turns); splines add `p1`, `p2`.
+//!   Other kinds: `dwell` (`seconds`), `home`/`verify_home` (`axes`),
+//!   `spindle` (`dir`, `speed`), `coolant` (`mist`, `flood`), `aux` (`pin`,
+//!   `value`, `synced`), `motors` (`enable`, `axes`), `pause` (`optional`),
+//!   `program_end`, `wait_idle`, `message` (`text`), `report` (`what`),
+//!   `feed_override` (`percent`), `tool` (`number`), `save_settings`,
+//!   `load_settings`, `clear_alarm`.
+//!
+//! After a home or probe command, check mode assumes the machine ended where
+//! the interpreter guessed (homed axes at 0, probes touching at their target).
+
+use burin::command::{ArcDir, Command, Feed, Plane, Pos, ReportKind, SpindleDir};
+use burin::interp::Interpreter;
+use burin::AXIS_NAMES;
+use std::io::{self, Write};
+
+fn nums(v: &[f32]) -> String {
+    let parts: Vec<String> = v.iter().map(|x| format!("{x}")).collect();
+    format!("[{}]", parts.join(","))
+}
+
+fn axes(mask: u8) -> String {
+    let names: Vec<String> = AXIS_NAMES
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| mask & (1 << i) != 0)
+        .map(|(_, c)| format!("\"{c}\""))
+        .collect();
+    format!("[{}]", names.join(","))
+}
+
+fn json_str(s: &str) -> String {
+    let mut o = String::from("\"");
+    for c in s.chars() {
+        match c {
+            '"' => o.push_str("\\\""),
+            '\\' => o.push_str("\\\\"),
+            c if (c as u32) < 0x20 => o.push_str(&format!("\\u{:04x}", c as u32)),
+            c => o.push(c),
+        }
+    }
+    o.push('"');
+    o
+}
+
+fn feed(f: &Feed) -> String {
+    match f {
+        Feed::PerMin(v) => format!(",\"feed\":{v}"),
+        Feed::InverseTime(v) => format!(",\"feed\":{v},\"feed_mode\":\"inverse_time\""),
+    }
+}
+
+fn motion(kind: &str, end: &Pos) -> String {
+    format!("\"kind\":\"{kind}\",\"end\":{}", nums(end))
+}
+
+/// The JSON object (without the line field) for one command.
+pub fn command_json(c: &Command) -> String {
+    match c {
+        Command::Rapid { end } => motion("rapid", end),
+        Command::Line { end, feed: f } => motion("line", end) + &feed(f),
+        Command::Arc(a) => {
+            let plane = match a.plane {
+                Plane::XY => "XY",
+                Plane::ZX => "ZX",
+                Plane::YZ => "YZ",
+            };
+            let dir = if a.dir == ArcDir::Cw { "cw" } else { "ccw" };
+            format!(
+                "{},\"center\":{},\"plane\":\"{plane}\",\"dir\":\"{dir}\",\"turns\":{}{}",
+                motion("arc", &a.end),
+                nums(&a.center),
+                a.turns,
+                feed(&a.feed)
+            )
+        }
+        Command::Spline(s) => {
+            format!("{},\"p1\":{},\"p2\":{}{}", motion("spline", &s.end), nums(&s.p1), nums(&s.p2), feed(&s.feed))
+        }
+        Command::Probe { end, feed: f, kind } => {
+            format!("{},\"probe\":\"{kind:?}\"{}", motion("probe", end), feed(f))
+        }
+        Command::Dwell { seconds } => format!("\"kind\":\"dwell\",\"seconds\":{seconds}"),
+        Command::Home { axes: m } => format!("\"kind\":\"home\",\"axes\":{}", axes(*m)),
+        Command::VerifyHome { axes: m } => format!("\"kind\":\"verify_home\",\"axes\":{}", axes(*m)),
+        Command::Spindle { dir, speed } => {
+            let d = match dir {
+                SpindleDir::Off => "off",
+                SpindleDir::Cw => "cw",
+                SpindleDir::Ccw => "ccw",
+            };
+            format!("\"kind\":\"spindle\",\"dir\":\"{d}\",\"speed\":{speed}")
+        }
+        Command::Coolant { mist, flood } => format!("\"kind\":\"coolant\",\"mist\":{mist},\"flood\":{flood}"),
+        Command::Aux { pin, value, synced } => {
+            format!("\"kind\":\"aux\",\"pin\":{pin},\"value\":{value},\"synced\":{synced}")
+        }
+        Command::Motors { enable, axes: m } => {
+            format!("\"kind\":\"motors\",\"enable\":{enable},\"axes\":{}", axes(*m))
+        }
+        Command::Pause { optional } => format!("\"kind\":\"pause\",\"optional\":{optional}"),
+        Command::ProgramEnd => "\"kind\":\"program_end\"".into(),
+        Command::WaitIdle => "\"kind\":\"wait_idle\"".into(),
+        Command::Message(m) => format!("\"kind\":\"message\",\"text\":{}", json_str(m)),
+        Command::Report(r) => {
+            let w = match r {
+                ReportKind::Position => "position",
+                ReportKind::Firmware => "firmware",
+                ReportKind::Endstops => "endstops",
+            };
+            format!("\"kind\":\"report\",\"what\":\"{w}\"")
+        }
+        Command::FeedOverride { percent } => format!("\"kind\":\"feed_override\",\"percent\":{percent}"),
+        Command::Tool { number } => format!("\"kind\":\"tool\",\"number\":{number}"),
+        Command::SaveSettings => "\"kind\":\"save_settings\"".into(),
+        Command::LoadSettings => "\"kind\":\"load_settings\"".into(),
+        Command::ClearAlarm => "\"kind\":\"clear_alarm\"".into(),
+    }
+}
+
+/// Interprets `source` line by line; prints errors (and with `dump` the
+/// commands) to `out`; returns how many lines failed.
+pub fn check_file(path_label: &str, source: &str, dump: bool, out: &mut dyn Write) -> io::Result<usize> {
+    let mut interp = Interpreter::new();
+    let mut errors = 0;
+    for (i, line) in source.split('\n').enumerate() {
+        let n = i + 1;
+        let mut cmds: Vec<Command> = Vec::new();
+        match interp.execute_line(line.as_bytes(), &mut |c| cmds.push(c)) {
+            Ok(()) => {
+                if dump {
+                    for c in &cmds {
+                        writeln!(out, "{{\"line\":{n},{}}}", command_json(c))?;
+                    }
+                }
+                if interp.needs_sync() {
+                    match cmds.iter().rev().find(|c| matches!(c, Command::Probe { .. })) {
+                        Some(Command::Probe { end, .. }) => interp.probe_finished(*end, true),
+                        _ => interp.set_machine_position(interp.state().pos),
+                    }
+                }
+            }
+            Err(e) => {
+                errors += 1;
+                writeln!(out, "{path_label}:{n}:{}: error[{}]: {e}", e.col, e.code())?;
+            }
+        }
+    }
+    Ok(errors)
+}

@@ -1,0 +1,245 @@
+//! The simulated machine: the firmware settings plus the world around the
+//! steppers (where the limit switches and the probe surface are).
+//! Loaded from TOML with `--machine FILE`; see `MachineConfig::default` for
+//! the documented default, and `host-sim/machines/default.toml` for the same
+//! machine written out as a file with every key explained.
+
+mod file;
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use burin::settings::{AxisSettings, Settings};
+use burin::AXES;
+
+/// A limit switch that closes when the axis reaches `trip_mm` (machine
+/// coordinates) going in its homing direction, and opens again `hysteresis_mm`
+/// back off it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LimitSwitch {
+    pub trip_mm: f32,
+    pub hysteresis_mm: f32,
+}
+
+/// A probe that closes while the tool is at or beyond a plane on one axis,
+/// e.g. a workpiece top at Z = -20 mm: `axis: 2, trip_mm: -20.0, towards_negative: true`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProbeSurface {
+    pub axis: usize,
+    pub trip_mm: f32,
+    pub towards_negative: bool,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct MachineConfig {
+    /// Step timer rate in Hz (TIM5 runs at the 96 MHz timer clock on the F411).
+    pub tick_hz: u32,
+    pub settings: Settings,
+    pub limits: [Option<LimitSwitch>; AXES],
+    pub probe: Option<ProbeSurface>,
+    /// Machine position at power-up, mm.
+    pub start_position_mm: [f32; AXES],
+}
+
+/// The default machine: a small 300 × 300 × 100 mm gantry mill on the
+/// default board (WeAct Black Pill, STM32F411).
+///
+/// * `tick_hz` = 96 MHz: TIM5 clocked straight from the F411's 96 MHz timer
+///   clock with no prescaler, as the firmware runs it. One tick is 10.4 ns, so
+///   a 200 kHz step period is 480 ticks and the 2 µs pulse 192 ticks: timing
+///   quantisation is well below what a driver can see. (An F401 runs the same
+///   timer at 84 MHz; give such a machine its own file.)
+/// * `settings` = [`Settings::default`] (GRBL-like values: 80 steps/mm X/Y,
+///   400 steps/mm Z, 2 µs pulses, junction deviation 0.01 mm, arc tolerance
+///   0.002 mm, homing towards the positive ends, soft/hard limits off).
+/// * Limit switches on X, Y and Z at machine 0, the positive end, because the
+///   axes home towards positive: after homing the envelope is
+///   X ∈ [-300, 0], Y ∈ [-300, 0], Z ∈ [-100, 0] mm, and the firmware's
+///   coordinates agree with the simulated world. A (rotary) has no switch.
+/// * A probe plate/workpiece top at Z = -50 mm, probed downwards.
+/// * Power-up position (-1, -1, -1, 0): parked where a homing cycle leaves
+///   the machine, pulled off each switch by `$27` = 1 mm, so no switch is
+///   closed at power-up.
+impl Default for MachineConfig {
+    fn default() -> Self {
+        let settings = Settings::default();
+        let switch = Some(LimitSwitch {
+            trip_mm: 0.0,
+            hysteresis_mm: 0.05,
+        });
+        MachineConfig {
+            tick_hz: 96_000_000,
+            settings,
+            limits: [switch, switch, switch, None],
+            probe: Some(ProbeSurface {
+                axis: 2,
+                trip_mm: -50.0,
+                towards_negative: true,
+            }),
+            start_position_mm: [-1.0, -1.0, -1.0, 0.0],
+        }
+    }
+}
+
+/// Why a machine file was refused. Every message names the file key at fault.
+#[derive(Debug)]
+pub enum ConfigError {
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// TOML syntax, a wrong type or an unknown key; `toml`'s message names
+    /// the key and shows the line.
+    Parse(String),
+    /// A value the machine cannot run with.
+    Invalid { key: String, message: String },
+}
+
+impl ConfigError {
+    fn invalid(key: impl Into<String>, message: impl Into<String>) -> Self {
+        ConfigError::Invalid {
+            key: key.into(),
+            message: message.into(),
+        }
+    }
+}
+
+impl fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ConfigError::Io { path, source } => write!(f, "{}: {source}", path.display()),
+            ConfigError::Parse(m) => write!(f, "{m}"),
+            ConfigError::Invalid { key, message } => write!(f, "`{key}`: {message}"),
+        }
+    }
+}
+
+impl std::error::Error for ConfigError {}
+
+impl MachineConfig {
+    /// Reads a machine file. Keys left out keep the default machine's values.
+    pub fn from_toml_str(text: &str) -> Result<Self, ConfigError> {
+        let mut cfg = MachineConfig::default();
+        file::apply(text, &mut cfg)?;
+        cfg.validate()?;
+        Ok(cfg)
+    }
+
+    pub fn load(path: impl AsRef<Path>) -> Result<Self, ConfigError> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::from_toml_str(&text).map_err(|e| match e {
+            ConfigError::Parse(m) => ConfigError::Parse(format!("{}: {m}", path.display())),
+            other => other,
+        })
+    }
+
+    /// Step pulse width and direction setup time in timer ticks (rounded up,
+    /// so a driver never sees less than the configured time).
+    pub fn pulse_ticks(&self) -> (u32, u32) {
+        let t = |us: f32| (f64::from(us) * f64::from(self.tick_hz) / 1e6).ceil() as u32;
+        (
+            t(self.settings.step_pulse_us),
+            t(self.settings.dir_setup_us),
+        )
+    }
+
+    /// Refuses values the core cannot run with; the error names the TOML key.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let s = &self.settings;
+        if self.tick_hz < 1_000 {
+            return Err(ConfigError::invalid("tick_hz", "must be at least 1000 Hz"));
+        }
+        for (i, ax) in s.axes.iter().enumerate() {
+            validate_axis(file::AXIS_KEYS[i], ax)?;
+        }
+        positive("motion.arc_tolerance_mm", s.arc_tolerance)?;
+        at_least_zero("motion.junction_deviation_mm", s.junction_deviation)?;
+        positive("motion.jerk_mm_s3", s.jerk)?;
+        positive("motion.max_step_rate_hz", s.max_step_rate_hz)?;
+        positive("pulses.step_pulse_us", s.step_pulse_us)?;
+        at_least_zero("pulses.dir_setup_us", s.dir_setup_us)?;
+        if s.step_pulse_us * s.max_step_rate_hz >= 1e6 {
+            return Err(ConfigError::invalid(
+                "pulses.step_pulse_us",
+                format!(
+                    "a {} µs pulse does not fit in one period of motion.max_step_rate_hz = {} Hz",
+                    s.step_pulse_us, s.max_step_rate_hz
+                ),
+            ));
+        }
+        positive("homing.feed_mm_min", s.homing_feed)?;
+        positive("homing.seek_mm_min", s.homing_seek)?;
+        at_least_zero("homing.pulloff_mm", s.homing_pulloff)?;
+        at_least_zero("homing.verify_tolerance_mm", s.verify_home_tolerance)?;
+        at_least_zero("spindle.min_rpm", s.spindle_min)?;
+        at_least_zero("spindle.max_rpm", s.spindle_max)?;
+        if s.spindle_min > s.spindle_max {
+            return Err(ConfigError::invalid(
+                "spindle.min_rpm",
+                "must not exceed spindle.max_rpm",
+            ));
+        }
+        for (i, sw) in self.limits.iter().enumerate() {
+            if let Some(sw) = sw {
+                finite(file::TRIP_KEYS[i], sw.trip_mm)?;
+                at_least_zero("limits.hysteresis_mm", sw.hysteresis_mm)?;
+            }
+        }
+        if let Some(p) = &self.probe {
+            if p.axis >= AXES {
+                return Err(ConfigError::invalid("probe.axis", "no such axis"));
+            }
+            finite("probe.trip_mm", p.trip_mm)?;
+        }
+        for &v in &self.start_position_mm {
+            finite("start_position_mm", v)?;
+        }
+        Ok(())
+    }
+}
+
+fn validate_axis(keys: [&str; 4], ax: &AxisSettings) -> Result<(), ConfigError> {
+    positive(keys[0], ax.steps_per_mm)?;
+    positive(keys[1], ax.max_rate)?;
+    positive(keys[2], ax.max_accel)?;
+    at_least_zero(keys[3], ax.max_travel)
+}
+
+fn finite(key: &str, v: f32) -> Result<(), ConfigError> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(ConfigError::invalid(
+            key,
+            format!("must be a finite number (got {v})"),
+        ))
+    }
+}
+
+fn positive(key: &str, v: f32) -> Result<(), ConfigError> {
+    finite(key, v)?;
+    if v > 0.0 {
+        Ok(())
+    } else {
+        Err(ConfigError::invalid(
+            key,
+            format!("must be greater than 0 (got {v})"),
+        ))
+    }
+}
+
+fn at_least_zero(key: &str, v: f32) -> Result<(), ConfigError> {
+    finite(key, v)?;
+    if v >= 0.0 {
+        Ok(())
+    } else {
+        Err(ConfigError::invalid(
+            key,
+            format!("must not be negative (got {v})"),
+        ))
+    }
+}

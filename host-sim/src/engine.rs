@@ -1,0 +1,384 @@
+//! The discrete-event simulation: the firmware library's executor, planner,
+//! preparer and stepper run against a virtual timer in `u64` ticks.
+//!
+//! Events at the same tick run in RTIC priority order: the step-timer event
+//! (prio 3) first, then realtime input from "USB" (prio 2: hold, resume,
+//! overrides, reset), then the parse/plan task (prio 1), which refills the
+//! segment queue whenever the stepper took a segment. Tasks take no virtual
+//! time. There are no threads, clocks or hash maps, so two runs of the same
+//! job are identical event for event.
+
+mod world;
+
+use std::collections::VecDeque;
+
+use burin::command::Command;
+use burin::interp::Interpreter;
+use burin::machine::{Machine, MachineError, Note, PathKind};
+use burin::realtime::Realtime;
+use burin::stepper::{Segment, Stepper};
+use burin::AXES;
+use heapless::spsc::Queue;
+
+use crate::config::MachineConfig;
+use crate::record::{AxisInfo, MoveKind, PinEvent, Recorder, RunError, RunInfo, Summary};
+pub use world::World;
+
+/// Planner ring size (the F411 build uses the same).
+pub const PLANNER_BLOCKS: usize = 64;
+/// Segment queue slots (heapless 0.9 holds one less).
+pub const SEGMENT_SLOTS: usize = 16;
+
+/// Realtime input, delivered at a tick as the USB interrupt would.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Input {
+    FeedHold,
+    CycleStart,
+    FeedOverride(u16),
+    RapidOverride(u16),
+    Reset,
+}
+
+/// A simulated machine.
+pub struct Sim<'r> {
+    cfg: MachineConfig,
+    pub rt: Realtime,
+    pub machine: Machine<PLANNER_BLOCKS>,
+    queue: Queue<Segment, SEGMENT_SLOTS>,
+    pub stepper: Stepper,
+    pub world: World,
+    now: u64,
+    next_step: Option<u64>,
+    inputs: VecDeque<(u64, Input)>,
+    commands: VecDeque<(u32, Command)>,
+    rec: &'r mut dyn Recorder,
+    /// Resume automatically after M0/M1 (a batch run has no operator).
+    pub auto_resume: bool,
+    stats: Stats,
+}
+
+#[derive(Default)]
+struct Stats {
+    moves: u32,
+    steps: [u64; AXES],
+    distance: f64,
+    last_path: Option<[f32; AXES]>,
+    errors: Vec<RunError>,
+    last_speed: f32,
+    max_speed: f32,
+    dir: u8,
+    dir_changed: u64,
+    probe: Option<([f32; AXES], bool)>,
+    barrier_done: bool,
+}
+
+fn kind(k: PathKind) -> MoveKind {
+    match k {
+        PathKind::Rapid => MoveKind::Rapid,
+        PathKind::Feed => MoveKind::Feed,
+        PathKind::Arc => MoveKind::Arc,
+        PathKind::Spline => MoveKind::Spline,
+        PathKind::Probe => MoveKind::Probe,
+        PathKind::Home => MoveKind::Home,
+    }
+}
+
+fn machine_error(line: u32, e: MachineError) -> RunError {
+    RunError { line, code: e.code(), message: e.to_string() }
+}
+
+impl<'r> Sim<'r> {
+    pub fn new(cfg: &MachineConfig, rec: &'r mut dyn Recorder) -> Self {
+        let rt = Realtime::new();
+        let mut machine = Machine::new(cfg.settings, cfg.tick_hz);
+        let mut stepper = Stepper::new(machine.step_config());
+        let world = World::new(cfg);
+        let start = cfg.start_position_mm;
+        // An out-of-range start position falls back to 0.
+        if machine.set_position(&rt, &start).is_err() {
+            let _ = machine.set_position(&rt, &[0.0; AXES]);
+        }
+        stepper.set_position(&rt, rt.position());
+        let s = &cfg.settings;
+        let sc = machine.step_config();
+        let info = RunInfo {
+            tick_hz: cfg.tick_hz,
+            axes: std::array::from_fn(|i| AxisInfo {
+                name: burin::AXIS_NAMES[i],
+                steps_per_mm: s.axes[i].steps_per_mm,
+                max_rate_mm_min: s.axes[i].max_rate,
+                max_accel_mm_s2: s.axes[i].max_accel,
+                travel_mm: s.axes[i].max_travel,
+            }),
+            pulse_ticks: sc.pulse_ticks,
+            dir_setup_ticks: sc.dir_setup_ticks,
+        };
+        rec.start(&info);
+        let stats = Stats { last_path: Some(machine.commanded_position()), ..Stats::default() };
+        Sim {
+            cfg: cfg.clone(),
+            rt,
+            machine,
+            queue: Queue::new(),
+            stepper,
+            world,
+            now: 0,
+            next_step: None,
+            inputs: VecDeque::new(),
+            commands: VecDeque::new(),
+            rec,
+            auto_resume: true,
+            stats,
+        }
+    }
+
+    pub fn now(&self) -> u64 {
+        self.now
+    }
+    pub fn tick_hz(&self) -> u32 {
+        self.cfg.tick_hz
+    }
+    /// Errors so far.
+    pub fn errors(&self) -> &[RunError] {
+        &self.stats.errors
+    }
+    /// Last G38.x result (machine mm, contact).
+    pub fn probe_result(&self) -> Option<([f32; AXES], bool)> {
+        self.machine.probe_result
+    }
+
+    /// Schedule realtime input at `tick` (kept in tick order; equal ticks in call order).
+    pub fn input_at(&mut self, tick: u64, input: Input) {
+        let at = self.inputs.iter().position(|(t, _)| *t > tick).unwrap_or(self.inputs.len());
+        self.inputs.insert(at, (tick, input));
+    }
+
+    /// Queue a command as if line `line` produced it.
+    pub fn push_command(&mut self, line: u32, cmd: Command) {
+        self.commands.push_back((line, cmd));
+    }
+
+    fn apply_input(&mut self, i: Input) {
+        match i {
+            Input::FeedHold => self.rt.feed_hold(),
+            Input::CycleStart => self.rt.cycle_start(),
+            Input::FeedOverride(p) => self.rt.set_feed_override(p),
+            Input::RapidOverride(p) => self.rt.set_rapid_override(p),
+            Input::Reset => self.rt.request_reset(),
+        }
+    }
+
+    /// Prio 1: feed queued commands to the executor and refill the segment queue.
+    fn plan_task(&mut self) {
+        let Sim { machine, rt, queue, commands, rec, stats, world, .. } = self;
+        loop {
+            while machine.ready() {
+                let Some((line, cmd)) = commands.pop_front() else { break };
+                let motion = cmd.end().is_some();
+                match machine.submit(rt, &cmd, line, &mut |n| note(stats, &mut **rec, n)) {
+                    Ok(()) => stats.moves += u32::from(motion),
+                    Err(e) => stats.errors.push(machine_error(line, e)),
+                }
+            }
+            machine.poll(rt, queue, world.switches(), &mut |n| note(stats, &mut **rec, n));
+            if !(machine.ready() && !commands.is_empty()) {
+                break;
+            }
+        }
+    }
+
+    /// Prio 3: one step-timer event.
+    fn step_event(&mut self) {
+        let sw = self.world.switches();
+        let queue = &mut self.queue;
+        let ev = self.stepper.on_event(&self.rt, &mut || queue.dequeue(), sw);
+        if ev.dir_mask != self.stats.dir {
+            self.stats.dir = ev.dir_mask;
+            self.stats.dir_changed = self.now;
+        }
+        if ev.step_mask != 0 {
+            self.world.step(ev.step_mask, ev.dir_mask);
+            for i in 0..AXES {
+                self.stats.steps[i] += u64::from(ev.step_mask >> i & 1);
+            }
+            let p = self.stepper.position();
+            self.rec.step_event(&PinEvent {
+                tick: self.now,
+                dir_mask: ev.dir_mask,
+                step_mask: ev.step_mask,
+                dir_changed_tick: self.stats.dir_changed,
+                pos: [p[0] as i64, p[1] as i64, p[2] as i64, p[3] as i64],
+            });
+        }
+        let v = self.stepper.speed_mm_min();
+        if v != self.stats.last_speed {
+            self.stats.last_speed = v;
+            self.stats.max_speed = self.stats.max_speed.max(v);
+            self.rec.velocity(self.now, v);
+        }
+        self.next_step = if ev.ticks == 0 { None } else { Some(self.now + u64::from(ev.ticks)) };
+    }
+
+    /// True when nothing is moving, queued or pending.
+    pub fn idle(&self) -> bool {
+        self.commands.is_empty()
+            && self.machine.ready()
+            && self.machine.planner.is_empty()
+            && self.machine.prep.is_idle()
+            && self.queue.is_empty()
+            && self.next_step.is_none()
+    }
+
+    /// Run until idle (or stuck on a hold nobody releases), then return.
+    pub fn run(&mut self) {
+        self.run_until(u64::MAX);
+    }
+
+    /// Run events up to and including `until`.
+    pub fn run_until(&mut self, until: u64) {
+        self.plan_task();
+        loop {
+            while let Some(&(t, i)) = self.inputs.front() {
+                if t > self.now {
+                    break;
+                }
+                self.inputs.pop_front();
+                self.apply_input(i);
+                self.plan_task();
+            }
+            if self.next_step.is_none() && !self.queue.is_empty() {
+                self.next_step = Some(self.now);
+            }
+            let t_in = self.inputs.front().map(|(t, _)| *t);
+            let next = match (self.next_step, t_in) {
+                (Some(a), Some(b)) => a.min(b),
+                (Some(a), None) => a,
+                (None, Some(b)) => b,
+                (None, None) => {
+                    if self.auto_resume && self.machine.prep.hold() == burin::stepper::prep::Hold::Held {
+                        self.rt.cycle_start();
+                        self.plan_task();
+                        if !self.queue.is_empty() {
+                            continue;
+                        }
+                    }
+                    self.plan_task();
+                    if self.queue.is_empty() {
+                        return;
+                    }
+                    continue;
+                }
+            };
+            if next > until {
+                return;
+            }
+            self.now = next;
+            if self.next_step == Some(next) {
+                let before = self.queue.len();
+                self.step_event();
+                if self.queue.len() != before || self.next_step.is_none() {
+                    self.plan_task();
+                }
+            }
+        }
+    }
+
+    /// Figures for the summary (`lines` and work offsets come from the caller).
+    pub fn summary(&self, lines: u32, wco: [f32; AXES]) -> Summary {
+        let s = &self.cfg.settings;
+        let pos = self.rt.position();
+        let mm: [f64; AXES] = std::array::from_fn(|i| pos[i] as f64 / s.axes[i].steps_per_mm as f64);
+        Summary {
+            lines,
+            moves: self.stats.moves,
+            job_time_s: self.now as f64 / self.cfg.tick_hz as f64,
+            distance_mm: self.stats.distance,
+            max_feed_mm_min: self.stats.max_speed as f64,
+            steps: self.stats.steps,
+            final_position_steps: std::array::from_fn(|i| pos[i] as i64),
+            final_position_mm: mm,
+            final_work_position_mm: std::array::from_fn(|i| mm[i] - wco[i] as f64),
+            planner_underruns: self.rt.underruns(),
+            errors: self.stats.errors.clone(),
+        }
+    }
+
+    /// Hand the summary to the recorder.
+    pub fn finish(&mut self, summary: &Summary) -> std::io::Result<()> {
+        self.rec.finish(summary)
+    }
+
+    fn take_barrier(&mut self) -> bool {
+        std::mem::take(&mut self.stats.barrier_done)
+    }
+}
+
+fn note(stats: &mut Stats, rec: &mut dyn Recorder, n: Note) {
+    match n {
+        Note::Path { line, kind: k, end } => {
+            if let Some(p) = stats.last_path {
+                let d2: f32 = p.iter().zip(&end).map(|(a, b)| (a - b) * (a - b)).sum();
+                stats.distance += (d2 as f64).sqrt();
+            }
+            stats.last_path = Some(end);
+            rec.commanded(line, kind(k), end);
+        }
+        Note::Error { line, error } => stats.errors.push(machine_error(line, error)),
+        Note::Probed { position, contact, .. } => {
+            stats.probe = Some((position, contact));
+            stats.last_path = Some(position);
+            stats.barrier_done = true;
+        }
+        Note::Homed { .. } => {
+            stats.barrier_done = true;
+        }
+        Note::Executed { .. } => {}
+    }
+}
+
+/// Simulate a G-code job from source text.
+pub fn run_job(config: &MachineConfig, source: &str, recorder: &mut dyn Recorder) -> Summary {
+    let mut sim = Sim::new(config, recorder);
+    let mut interp = Interpreter::new();
+    interp.set_machine_position(sim.machine.commanded_position());
+    let mut lines = 0u32;
+    let mut gcode_errors = Vec::new();
+    for (i, text) in source.lines().enumerate() {
+        let line_no = i as u32 + 1;
+        lines = line_no;
+        let mut cmds = Vec::new();
+        match interp.execute_line(text.as_bytes(), &mut |c| cmds.push(c)) {
+            Ok(()) => {}
+            Err(e) => {
+                gcode_errors.push(RunError { line: line_no, code: e.kind.code(), message: e.to_string() });
+                continue;
+            }
+        }
+        for c in cmds {
+            sim.push_command(line_no, c);
+        }
+        if interp.needs_sync() {
+            // Homing and probing end where only the machine knows: run to idle.
+            sim.run();
+            let _ = sim.take_barrier();
+            match sim.stats.probe.take() {
+                Some((pos, contact)) => interp.probe_finished(pos, contact),
+                None => interp.set_machine_position(sim.machine.commanded_position()),
+            }
+        }
+        if sim.machine.alarm().is_some() {
+            sim.run();
+            break;
+        }
+    }
+    sim.run();
+    let mut summary = sim.summary(lines, interp.wco());
+    let mut errors = gcode_errors;
+    errors.extend(summary.errors.drain(..));
+    errors.sort_by_key(|e| e.line);
+    summary.errors = errors;
+    // A recorder's I/O error cannot be reported through the Summary; callers
+    // that care use `Sim` and `finish` directly.
+    let _ = sim.finish(&summary);
+    summary
+}

@@ -1,0 +1,110 @@
+//! The physical machine around the steppers: where the carriage really is
+//! (counted from the step pulses, independent of what the core believes)
+//! and which switches that closes.
+
+use burin::stepper::Switches;
+use burin::AXES;
+
+use crate::config::MachineConfig;
+
+#[derive(Clone, Copy, Debug)]
+struct Limit {
+    /// Trip point in world steps.
+    trip: i64,
+    /// Steps back off the trip point at which it opens again.
+    hysteresis: i64,
+    /// +1: closes at or above `trip`; -1: at or below.
+    sense: i64,
+    closed: bool,
+}
+
+/// World position and switch states.
+#[derive(Clone, Debug)]
+pub struct World {
+    /// Physical position in steps from world zero.
+    pub steps: [i64; AXES],
+    limits: [Option<Limit>; AXES],
+    probe: Option<(usize, i64, i64)>,
+    limit_invert: u8,
+    probe_invert: bool,
+    pins: Switches,
+    watched: u8,
+}
+
+impl World {
+    pub fn new(cfg: &MachineConfig) -> Self {
+        let s = &cfg.settings;
+        let spm = |i: usize| s.axes[i].steps_per_mm as f64;
+        let steps = std::array::from_fn(|i| (cfg.start_position_mm[i] as f64 * spm(i)).round() as i64);
+        let limits = std::array::from_fn(|i| {
+            cfg.limits[i].map(|l| Limit {
+                trip: (l.trip_mm as f64 * spm(i)).round() as i64,
+                hysteresis: (l.hysteresis_mm.max(0.0) as f64 * spm(i)).round() as i64,
+                sense: if s.homing_dir_invert & (1 << i) != 0 { -1 } else { 1 },
+                closed: false,
+            })
+        });
+        let probe = cfg.probe.filter(|p| p.axis < AXES).map(|p| {
+            let sense = if p.towards_negative { -1 } else { 1 };
+            (p.axis, (p.trip_mm as f64 * spm(p.axis)).round() as i64, sense)
+        });
+        let mut watched = 0u8;
+        for (i, l) in limits.iter().enumerate() {
+            if l.is_some() {
+                watched |= 1 << i;
+            }
+        }
+        if let Some((a, _, _)) = probe {
+            watched |= 1 << a;
+        }
+        let mut w = World {
+            steps,
+            limits,
+            probe,
+            limit_invert: s.limit_invert,
+            probe_invert: s.probe_invert,
+            pins: Switches::default(),
+            watched,
+        };
+        w.update();
+        w
+    }
+
+    /// Pin levels as the firmware would read them (inversion applied).
+    pub fn switches(&self) -> Switches {
+        self.pins
+    }
+
+    /// Apply one step event.
+    #[inline]
+    pub fn step(&mut self, step_mask: u8, dir_mask: u8) {
+        for i in 0..AXES {
+            if step_mask & (1 << i) != 0 {
+                self.steps[i] += if dir_mask & (1 << i) != 0 { -1 } else { 1 };
+            }
+        }
+        if step_mask & self.watched != 0 {
+            self.update();
+        }
+    }
+
+    fn update(&mut self) {
+        let mut limits = 0u8;
+        for i in 0..AXES {
+            if let Some(l) = &mut self.limits[i] {
+                let x = self.steps[i] * l.sense;
+                let t = l.trip * l.sense;
+                if x >= t {
+                    l.closed = true;
+                } else if x < t - l.hysteresis {
+                    l.closed = false;
+                }
+                if l.closed {
+                    limits |= 1 << i;
+                }
+            }
+        }
+        let contact = self.probe.is_some_and(|(a, trip, sense)| self.steps[a] * sense >= trip * sense);
+        self.pins = Switches { limits: limits ^ self.limit_invert, probe: contact ^ self.probe_invert };
+    }
+}

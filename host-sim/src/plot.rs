@@ -1,0 +1,311 @@
+//! `--plot FILE.svg`: what the job did, for a person to look at.
+//!
+//! Top panel: the XY view in machine mm, the commanded path coloured by kind
+//! (rapids dashed grey, feeds blue, arcs purple, splines pink, probing red,
+//! homing orange) drawn over a translucent orange band that is the path the
+//! steppers actually took. Where the two part, the band shows it.
+//! Bottom panel: the commanded path speed over time.
+//!
+//! A job can have millions of chords and tens of millions of steps, so the
+//! paths are simplified as they stream in (a point is dropped when it lies
+//! within a tolerance of the line it extends) and the tolerance doubles
+//! whenever a path grows past its point budget: the file stays under ~100k
+//! points while every shape wider than a pixel survives.
+
+mod svg;
+
+use std::io::{self, Write};
+
+use crate::record::{MoveKind, PinEvent, Recorder, RunInfo, Summary};
+
+/// Point budget per path; past it the tolerance doubles.
+const PATH_CAP: usize = 40_000;
+/// Velocity samples kept; past it they are folded into min/max buckets.
+const VEL_CAP: usize = 20_000;
+/// Starting simplification tolerance, mm: far below a pixel at any sane zoom.
+const START_TOL: f64 = 0.002;
+/// Coarsest tolerance, mm: beyond it only kind changes are left to drop.
+const MAX_TOL: f64 = 10_000.0;
+
+/// A streaming line simplifier (Reumann–Witkam): a point is kept only when
+/// the path leaves a corridor of half-width `tol` around the line through
+/// the last kept point, or when its tag (move kind) changes.
+#[derive(Clone, Debug)]
+pub(crate) struct Simplifier {
+    pub(crate) kept: Vec<([f64; 2], u8)>,
+    tol: f64,
+    dir: Option<[f64; 2]>,
+    last: Option<([f64; 2], u8)>,
+    last_kept: bool,
+    cap: usize,
+}
+
+impl Simplifier {
+    fn new() -> Self {
+        Simplifier {
+            kept: Vec::new(),
+            tol: START_TOL,
+            dir: None,
+            last: None,
+            last_kept: false,
+            cap: PATH_CAP,
+        }
+    }
+
+    fn keep(&mut self, p: [f64; 2], tag: u8) {
+        self.kept.push((p, tag));
+        self.dir = None;
+        self.last = Some((p, tag));
+        self.last_kept = true;
+    }
+
+    fn push(&mut self, p: [f64; 2], tag: u8) {
+        let Some((last, ltag)) = self.last else {
+            return self.keep(p, tag);
+        };
+        if ltag != tag && !self.last_kept {
+            // The end of a run of one kind must survive.
+            self.keep(last, ltag);
+        }
+        let anchor = self.kept.last().map_or(last, |k| k.0);
+        let d = [p[0] - anchor[0], p[1] - anchor[1]];
+        match self.dir {
+            None => {
+                let len = d[0].hypot(d[1]);
+                if len > self.tol {
+                    self.dir = Some([d[0] / len, d[1] / len]);
+                }
+            }
+            Some(u) => {
+                let off = (d[0] * u[1] - d[1] * u[0]).abs();
+                let along = d[0] * u[0] + d[1] * u[1];
+                let last_along = (last[0] - anchor[0]) * u[0] + (last[1] - anchor[1]) * u[1];
+                if off > self.tol || along < last_along - self.tol {
+                    // The path left the corridor: `last` becomes the anchor.
+                    self.keep(last, ltag);
+                    let d = [p[0] - last[0], p[1] - last[1]];
+                    let len = d[0].hypot(d[1]);
+                    if len > self.tol {
+                        self.dir = Some([d[0] / len, d[1] / len]);
+                    }
+                }
+            }
+        }
+        self.last = Some((p, tag));
+        self.last_kept = false;
+        if self.kept.len() > self.cap {
+            self.coarsen();
+        }
+    }
+
+    /// Doubles the tolerance until what is kept fits half the budget.
+    fn coarsen(&mut self) {
+        let pending = if self.last_kept { None } else { self.last };
+        while self.kept.len() > self.cap / 2 && self.tol < MAX_TOL {
+            let mut s = Simplifier::new();
+            s.tol = self.tol * 2.0;
+            for &(p, t) in &self.kept {
+                s.push(p, t);
+            }
+            s.finish();
+            self.tol = s.tol;
+            self.kept = s.kept;
+        }
+        // Kind changes are kept whatever the tolerance; if they alone fill
+        // the budget, grow it rather than re-simplifying on every point.
+        if self.kept.len() > self.cap / 2 {
+            self.cap = self.kept.len() * 2;
+        }
+        self.dir = None;
+        self.last = self.kept.last().copied();
+        self.last_kept = true;
+        if let Some((p, t)) = pending {
+            self.push(p, t);
+        }
+    }
+
+    /// Keeps the final point.
+    fn finish(&mut self) {
+        if let Some((p, t)) = self.last {
+            if !self.last_kept {
+                self.kept.push((p, t));
+                self.last_kept = true;
+            }
+        }
+    }
+}
+
+/// Path speed over time, folded into min/max buckets when it grows long.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Velocity {
+    pub(crate) samples: Vec<(u64, f32)>,
+    pub(crate) max: f32,
+}
+
+impl Velocity {
+    fn push(&mut self, tick: u64, v: f32) {
+        if !v.is_finite() {
+            return;
+        }
+        self.max = self.max.max(v);
+        self.samples.push((tick, v));
+        if self.samples.len() > VEL_CAP {
+            self.samples = fold_min_max(&self.samples, VEL_CAP / 4);
+        }
+    }
+}
+
+/// Keeps, per time bucket, the first, minimum, maximum and last sample in
+/// time order, so peaks and plateaus survive any amount of folding.
+pub(crate) fn fold_min_max(s: &[(u64, f32)], buckets: usize) -> Vec<(u64, f32)> {
+    let (Some(first), Some(last)) = (s.first(), s.last()) else {
+        return Vec::new();
+    };
+    let span = (last.0 - first.0).max(1);
+    let width = span.div_ceil(buckets.max(1) as u64).max(1);
+    let mut out = Vec::with_capacity(buckets * 4);
+    let mut i = 0;
+    while i < s.len() {
+        let b = (s[i].0 - first.0) / width;
+        let mut j = i;
+        while j < s.len() && (s[j].0 - first.0) / width == b {
+            j += 1;
+        }
+        let run = &s[i..j];
+        let mut pick = [0, 0, 0, run.len() - 1];
+        for (k, x) in run.iter().enumerate() {
+            if x.1 < run[pick[1]].1 {
+                pick[1] = k;
+            }
+            if x.1 > run[pick[2]].1 {
+                pick[2] = k;
+            }
+        }
+        pick.sort_unstable();
+        let mut prev = usize::MAX;
+        for k in pick {
+            if k != prev {
+                out.push(run[k]);
+                prev = k;
+            }
+        }
+        i = j;
+    }
+    out
+}
+
+pub(crate) fn kind_tag(k: MoveKind) -> u8 {
+    match k {
+        MoveKind::Rapid => 0,
+        MoveKind::Feed => 1,
+        MoveKind::Arc => 2,
+        MoveKind::Spline => 3,
+        MoveKind::Probe => 4,
+        MoveKind::Home => 5,
+    }
+}
+
+/// The `--plot` recorder; the SVG is written by `finish`.
+pub struct SvgPlot<W: Write> {
+    out: Option<W>,
+    job_name: String,
+    info: Option<RunInfo>,
+    mm_per_step: [f64; 2],
+    /// Where the tool stood before the first step (from the first event).
+    start: Option<[f64; 2]>,
+    commanded: Simplifier,
+    stepped: Simplifier,
+    velocity: Velocity,
+    last_tick: u64,
+    last_xy_steps: Option<[i64; 2]>,
+}
+
+impl<W: Write> SvgPlot<W> {
+    pub fn new(out: W, job_name: &str) -> Self {
+        SvgPlot {
+            out: Some(out),
+            job_name: job_name.to_string(),
+            info: None,
+            mm_per_step: [1.0, 1.0],
+            start: None,
+            commanded: Simplifier::new(),
+            stepped: Simplifier::new(),
+            velocity: Velocity::default(),
+            last_tick: 0,
+            last_xy_steps: None,
+        }
+    }
+
+    fn xy_mm(&self, steps: [i64; 2]) -> [f64; 2] {
+        [
+            steps[0] as f64 * self.mm_per_step[0],
+            steps[1] as f64 * self.mm_per_step[1],
+        ]
+    }
+}
+
+impl<W: Write> Recorder for SvgPlot<W> {
+    fn start(&mut self, info: &RunInfo) {
+        for (i, m) in self.mm_per_step.iter_mut().enumerate() {
+            let spm = f64::from(info.axes[i].steps_per_mm);
+            *m = if spm > 0.0 { 1.0 / spm } else { 1.0 };
+        }
+        self.info = Some(info.clone());
+    }
+
+    fn step_event(&mut self, ev: &PinEvent) {
+        self.last_tick = self.last_tick.max(ev.tick);
+        let xy = [ev.pos[0], ev.pos[1]];
+        if self.last_xy_steps == Some(xy) {
+            return;
+        }
+        if self.last_xy_steps.is_none() {
+            // Undo this event's own steps to find where the tool started.
+            let back = |axis: usize| -> i64 {
+                if ev.step_mask & (1 << axis) == 0 {
+                    0
+                } else if ev.dir_mask & (1 << axis) != 0 {
+                    1
+                } else {
+                    -1
+                }
+            };
+            let before = self.xy_mm([xy[0] + back(0), xy[1] + back(1)]);
+            self.start = Some(before);
+            self.stepped.push(before, 0);
+        }
+        self.last_xy_steps = Some(xy);
+        let p = self.xy_mm(xy);
+        self.stepped.push(p, 0);
+    }
+
+    fn commanded(&mut self, _line: u32, kind: MoveKind, to_mm: [f32; burin::AXES]) {
+        let p = [f64::from(to_mm[0]), f64::from(to_mm[1])];
+        self.commanded.push(p, kind_tag(kind));
+    }
+
+    fn velocity(&mut self, tick: u64, mm_per_min: f32) {
+        self.last_tick = self.last_tick.max(tick);
+        self.velocity.push(tick, mm_per_min);
+    }
+
+    fn finish(&mut self, summary: &Summary) -> io::Result<()> {
+        let Some(out) = self.out.take() else {
+            return Err(io::Error::other("SVG plot finished twice"));
+        };
+        self.commanded.finish();
+        self.stepped.finish();
+        let info = self.info.clone().unwrap_or_else(svg::fallback_info);
+        let plot = svg::Plot {
+            job_name: &self.job_name,
+            info: &info,
+            summary,
+            start: self.start,
+            commanded: &self.commanded.kept,
+            stepped: &self.stepped.kept,
+            velocity: &self.velocity,
+            end_tick: self.last_tick,
+        };
+        svg::write(out, &plot)
+    }
+}

@@ -1,0 +1,437 @@
+//! Drawing the collected plot data as one self-contained SVG: plain text,
+//! CSS classes for the styles, no scripts, so browsers, Inkscape and
+//! `rsvg-convert` all render it the same.
+
+use std::fmt::Write as _;
+use std::io::{self, Write};
+
+use burin::{AXES, AXIS_NAMES};
+
+use super::Velocity;
+use crate::record::{AxisInfo, RunInfo, Summary};
+use crate::report::format_duration;
+
+pub(super) struct Plot<'a> {
+    pub job_name: &'a str,
+    pub info: &'a RunInfo,
+    pub summary: &'a Summary,
+    pub start: Option<[f64; 2]>,
+    pub commanded: &'a [([f64; 2], u8)],
+    pub stepped: &'a [([f64; 2], u8)],
+    pub velocity: &'a Velocity,
+    pub end_tick: u64,
+}
+
+/// Used when a run never called `start` (nothing to scale steps by).
+pub(super) fn fallback_info() -> RunInfo {
+    RunInfo {
+        tick_hz: 1,
+        axes: AXIS_NAMES.map(|name| AxisInfo {
+            name,
+            steps_per_mm: 1.0,
+            max_rate_mm_min: 0.0,
+            max_accel_mm_s2: 0.0,
+            travel_mm: 0.0,
+        }),
+        pulse_ticks: 1,
+        dir_setup_ticks: 0,
+    }
+}
+
+/// Move kinds by tag: legend name, CSS for the stroke.
+const KINDS: [(&str, &str); 6] = [
+    (
+        "rapid",
+        "stroke:#8a8a8a;stroke-width:1;stroke-dasharray:5 3",
+    ),
+    ("feed", "stroke:#1f6fb4;stroke-width:1.4"),
+    ("arc", "stroke:#7b3fb5;stroke-width:1.3"),
+    ("spline", "stroke:#d6409c;stroke-width:1.3"),
+    ("probe", "stroke:#d62728;stroke-width:1.3"),
+    ("home", "stroke:#8c564b;stroke-width:1.3"),
+];
+const STEPPED: &str =
+    "stroke:#ffb52e;stroke-opacity:0.4;stroke-width:4.5;stroke-linejoin:round;stroke-linecap:round";
+const FONT: &str = "DejaVu Sans, Helvetica, Arial, sans-serif";
+const W: f64 = 1000.0;
+const LEFT: f64 = 80.0;
+const RIGHT: f64 = 30.0;
+
+fn esc(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// A 1-2-5 tick step giving about `n` ticks over `span`.
+fn nice_step(span: f64, n: f64) -> f64 {
+    let raw = (span / n).max(1e-9);
+    let mag = 10f64.powf(raw.log10().floor());
+    let f = raw / mag;
+    let m = if f <= 1.0 {
+        1.0
+    } else if f <= 2.0 {
+        2.0
+    } else if f <= 5.0 {
+        5.0
+    } else {
+        10.0
+    };
+    m * mag
+}
+
+fn ticks(lo: f64, hi: f64, n: f64) -> (Vec<f64>, usize) {
+    let step = nice_step(hi - lo, n);
+    let decimals = if step >= 1.0 {
+        0
+    } else {
+        (-step.log10()).ceil() as usize
+    };
+    let mut v = Vec::new();
+    let mut t = (lo / step).ceil() * step;
+    while t <= hi + step * 1e-6 && v.len() < 100 {
+        v.push(if t.abs() < step * 1e-6 { 0.0 } else { t });
+        t += step;
+    }
+    (v, decimals)
+}
+
+/// A panel: data box [x0, x1] × [y0, y1] mapped onto pixels.
+struct Frame {
+    left: f64,
+    top: f64,
+    w: f64,
+    h: f64,
+    x: (f64, f64),
+    y: (f64, f64),
+}
+
+impl Frame {
+    fn px(&self, x: f64) -> f64 {
+        self.left + (x - self.x.0) / (self.x.1 - self.x.0) * self.w
+    }
+    fn py(&self, y: f64) -> f64 {
+        self.top + self.h - (y - self.y.0) / (self.y.1 - self.y.0) * self.h
+    }
+
+    /// Background, grid, tick labels and axis titles.
+    fn axes(&self, s: &mut String, xlabel: &str, ylabel: &str) {
+        let (l, t, r, b) = (self.left, self.top, self.left + self.w, self.top + self.h);
+        let _ = writeln!(
+            s,
+            r##"<rect x="{l:.1}" y="{t:.1}" width="{:.1}" height="{:.1}" fill="#fcfcfc" stroke="none"/>"##,
+            self.w, self.h
+        );
+        let (xt, xd) = ticks(self.x.0, self.x.1, self.w / 90.0);
+        for v in xt {
+            let x = self.px(v);
+            let _ = writeln!(
+                s,
+                r#"<line class="grid" x1="{x:.1}" y1="{t:.1}" x2="{x:.1}" y2="{b:.1}"/>"#
+            );
+            let _ = writeln!(
+                s,
+                r#"<text x="{x:.1}" y="{:.1}" text-anchor="middle">{v:.xd$}</text>"#,
+                b + 16.0
+            );
+        }
+        let (yt, yd) = ticks(self.y.0, self.y.1, (self.h / 60.0).max(2.0));
+        for v in yt {
+            let y = self.py(v);
+            let _ = writeln!(
+                s,
+                r#"<line class="grid" x1="{l:.1}" y1="{y:.1}" x2="{r:.1}" y2="{y:.1}"/>"#
+            );
+            let _ = writeln!(
+                s,
+                r#"<text x="{:.1}" y="{:.1}" text-anchor="end">{v:.yd$}</text>"#,
+                l - 6.0,
+                y + 4.0
+            );
+        }
+        let _ = writeln!(
+            s,
+            r##"<rect x="{l:.1}" y="{t:.1}" width="{:.1}" height="{:.1}" fill="none" stroke="#777" stroke-width="1"/>"##,
+            self.w, self.h
+        );
+        let _ = writeln!(
+            s,
+            r#"<text class="lab" x="{:.1}" y="{:.1}" text-anchor="middle">{xlabel}</text>"#,
+            l + self.w / 2.0,
+            b + 36.0
+        );
+        let (cx, cy) = (l - 56.0, t + self.h / 2.0);
+        let _ = writeln!(
+            s,
+            r#"<text class="lab" x="{cx:.1}" y="{cy:.1}" text-anchor="middle" transform="rotate(-90 {cx:.1} {cy:.1})">{ylabel}</text>"#
+        );
+    }
+
+    fn clip(&self, s: &mut String, id: &str) {
+        let _ = writeln!(
+            s,
+            r#"<clipPath id="{id}"><rect x="{:.1}" y="{:.1}" width="{:.1}" height="{:.1}"/></clipPath>"#,
+            self.left, self.top, self.w, self.h
+        );
+    }
+}
+
+/// Bounds of everything drawn in XY, padded, never degenerate.
+fn xy_bounds(p: &Plot) -> ((f64, f64), (f64, f64)) {
+    let mut lo = [f64::INFINITY; 2];
+    let mut hi = [f64::NEG_INFINITY; 2];
+    let pts = p
+        .commanded
+        .iter()
+        .chain(p.stepped)
+        .map(|k| k.0)
+        .chain(p.start);
+    for q in pts.filter(|q| q[0].is_finite() && q[1].is_finite()) {
+        for i in 0..2 {
+            lo[i] = lo[i].min(q[i]);
+            hi[i] = hi[i].max(q[i]);
+        }
+    }
+    if lo[0] > hi[0] {
+        return ((-10.0, 10.0), (-10.0, 10.0));
+    }
+    let span = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1.0);
+    let pad = span * 0.04;
+    let r = |i: usize| {
+        let half = ((hi[i] - lo[i]).max(1.0) / 2.0) + pad;
+        let mid = (hi[i] + lo[i]) / 2.0;
+        (mid - half, mid + half)
+    };
+    (r(0), r(1))
+}
+
+fn polyline(s: &mut String, class: &str, f: &Frame, pts: impl Iterator<Item = [f64; 2]>) {
+    s.push_str(r#"<polyline class=""#);
+    s.push_str(class);
+    s.push_str(r#"" points=""#);
+    for q in pts {
+        let _ = write!(s, "{:.1},{:.1} ", f.px(q[0]), f.py(q[1]));
+    }
+    s.push_str("\"/>\n");
+}
+
+fn xy_panel(s: &mut String, p: &Plot, top: f64) -> f64 {
+    let ((x0, x1), (y0, y1)) = xy_bounds(p);
+    let pw = W - LEFT - RIGHT;
+    let ph = (pw * (y1 - y0) / (x1 - x0)).clamp(240.0, 680.0);
+    // Equal aspect: one scale, the data centred in the other direction.
+    let scale = (pw / (x1 - x0)).min(ph / (y1 - y0));
+    let (hx, hy) = (pw / scale / 2.0, ph / scale / 2.0);
+    let (mx, my) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
+    let f = Frame {
+        left: LEFT,
+        top,
+        w: pw,
+        h: ph,
+        x: (mx - hx, mx + hx),
+        y: (my - hy, my + hy),
+    };
+    let (xn, yn) = (AXIS_NAMES[0], AXIS_NAMES[1]);
+    f.axes(
+        s,
+        &format!("{xn} (machine mm)"),
+        &format!("{yn} (machine mm)"),
+    );
+    f.clip(s, "xyclip");
+    s.push_str("<g clip-path=\"url(#xyclip)\">\n");
+    polyline(s, "stepped", &f, p.stepped.iter().map(|k| k.0));
+    // Runs of one kind become one polyline, each starting where the last ended.
+    let mut prev = p.start;
+    let mut i = 0;
+    while i < p.commanded.len() {
+        let tag = p.commanded[i].1;
+        let mut j = i;
+        while j < p.commanded.len() && p.commanded[j].1 == tag {
+            j += 1;
+        }
+        let run = prev
+            .into_iter()
+            .chain(p.commanded[i..j].iter().map(|k| k.0));
+        polyline(s, &format!("k{tag}"), &f, run);
+        prev = Some(p.commanded[j - 1].0);
+        i = j;
+    }
+    let end = p.stepped.last().or(p.commanded.last()).map(|k| k.0);
+    if let Some(q) = p.start {
+        let _ = writeln!(
+            s,
+            r##"<circle cx="{:.1}" cy="{:.1}" r="5" fill="#2ca02c" stroke="#fff"/>"##,
+            f.px(q[0]),
+            f.py(q[1])
+        );
+    }
+    if let Some(q) = end {
+        let _ = writeln!(
+            s,
+            r##"<rect x="{:.1}" y="{:.1}" width="9" height="9" fill="#d62728" stroke="#fff"/>"##,
+            f.px(q[0]) - 4.5,
+            f.py(q[1]) - 4.5
+        );
+    }
+    s.push_str("</g>\n");
+    top + ph
+}
+
+fn velocity_panel(s: &mut String, p: &Plot, top: f64) -> f64 {
+    let hz = f64::from(p.info.tick_hz.max(1));
+    let t_end = (p.end_tick as f64 / hz).max(p.summary.job_time_s).max(1e-3);
+    let vmax = f64::from(p.velocity.max)
+        .max(p.summary.max_feed_mm_min)
+        .max(1.0);
+    let f = Frame {
+        left: LEFT,
+        top,
+        w: W - LEFT - RIGHT,
+        h: 210.0,
+        x: (0.0, t_end),
+        y: (0.0, vmax * 1.12),
+    };
+    f.axes(s, "time (s)", "path speed (mm/min)");
+    f.clip(s, "vclip");
+    s.push_str("<g clip-path=\"url(#vclip)\">\n");
+    let pts: Vec<[f64; 2]> = p
+        .velocity
+        .samples
+        .iter()
+        .map(|&(t, v)| [t as f64 / hz, f64::from(v)])
+        .collect();
+    if let (Some(a), Some(b)) = (pts.first(), pts.last()) {
+        let area = std::iter::once([a[0], 0.0])
+            .chain(pts.iter().copied())
+            .chain(std::iter::once([b[0], 0.0]));
+        polyline(s, "varea", &f, area);
+        polyline(s, "vline", &f, pts.iter().copied());
+    } else {
+        let _ = writeln!(
+            s,
+            r#"<text x="{:.1}" y="{:.1}" text-anchor="middle">no speed samples</text>"#,
+            f.left + f.w / 2.0,
+            f.top + f.h / 2.0
+        );
+    }
+    let ym = f.py(vmax);
+    let _ = writeln!(
+        s,
+        r##"<line x1="{:.1}" y1="{ym:.1}" x2="{:.1}" y2="{ym:.1}" stroke="#d62728" stroke-width="1" stroke-dasharray="6 4"/>"##,
+        f.left,
+        f.left + f.w
+    );
+    let _ = writeln!(
+        s,
+        r##"<text x="{:.1}" y="{:.1}" text-anchor="end" fill="#d62728">max {vmax:.0} mm/min</text>"##,
+        f.left + f.w - 6.0,
+        ym - 5.0
+    );
+    s.push_str("</g>\n");
+    top + f.h
+}
+
+fn legend(s: &mut String, p: &Plot, y: f64) {
+    let mut present = [false; KINDS.len()];
+    for k in p.commanded {
+        if let Some(b) = present.get_mut(usize::from(k.1)) {
+            *b = true;
+        }
+    }
+    let mut x = LEFT;
+    let mut item = |s: &mut String, class: &str, name: &str| {
+        let _ = writeln!(
+            s,
+            r#"<line class="{class}" x1="{x:.1}" y1="{y:.1}" x2="{:.1}" y2="{y:.1}"/><text x="{:.1}" y="{:.1}">{name}</text>"#,
+            x + 26.0,
+            x + 32.0,
+            y + 4.0
+        );
+        x += 44.0 + 7.5 * name.len() as f64;
+    };
+    for (tag, (name, _)) in KINDS.iter().enumerate().filter(|(i, _)| present[*i]) {
+        item(s, &format!("k{tag}"), name);
+    }
+    item(s, "stepped", "stepped (actual)");
+    let _ = writeln!(
+        s,
+        r##"<circle cx="{:.1}" cy="{y:.1}" r="5" fill="#2ca02c"/><text x="{:.1}" y="{:.1}">start</text>"##,
+        x + 5.0,
+        x + 14.0,
+        y + 4.0
+    );
+    let _ = writeln!(
+        s,
+        r##"<rect x="{:.1}" y="{:.1}" width="9" height="9" fill="#d62728"/><text x="{:.1}" y="{:.1}">end</text>"##,
+        x + 60.0,
+        y - 4.5,
+        x + 74.0,
+        y + 4.0
+    );
+}
+
+fn subtitle(p: &Plot) -> String {
+    let sm = p.summary;
+    let steps: u64 = sm.steps.iter().sum();
+    let mut t = format!(
+        "{} lines · {} moves · job time {} · distance {:.1} mm · max feed {:.0} mm/min · {} steps",
+        sm.lines,
+        sm.moves,
+        format_duration(sm.job_time_s),
+        sm.distance_mm,
+        sm.max_feed_mm_min,
+        steps
+    );
+    if sm.planner_underruns > 0 {
+        let _ = write!(t, " · {} underruns", sm.planner_underruns);
+    }
+    if !sm.errors.is_empty() {
+        let n = sm.errors.len();
+        let _ = write!(t, " · {n} error{}", if n == 1 { "" } else { "s" });
+    }
+    t
+}
+
+pub(super) fn write<W: Write>(mut out: W, p: &Plot) -> io::Result<()> {
+    let mut body = String::with_capacity(1 << 20);
+    let _ = writeln!(
+        body,
+        r##"<text x="{LEFT}" y="34" font-size="22" font-weight="bold" fill="#222">{}</text>"##,
+        esc(p.job_name)
+    );
+    let _ = writeln!(
+        body,
+        r##"<text x="{LEFT}" y="58" font-size="13" fill="#555">{}</text>"##,
+        esc(&subtitle(p))
+    );
+    legend(&mut body, p, 84.0);
+    let xy_bottom = xy_panel(&mut body, p, 102.0);
+    let v_bottom = velocity_panel(&mut body, p, xy_bottom + 58.0);
+    let h = v_bottom + 52.0;
+    let mut head = String::new();
+    let _ = writeln!(
+        head,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{W}" height="{h:.0}" viewBox="0 0 {W} {h:.0}" font-family="{FONT}" font-size="12">"#
+    );
+    let _ = writeln!(head, "<title>burin host-sim: {}</title>", esc(p.job_name));
+    head.push_str("<style>\npolyline { fill: none; stroke-linejoin: round; }\n");
+    for (tag, (_, css)) in KINDS.iter().enumerate() {
+        let _ = writeln!(head, ".k{tag} {{ {css}; fill: none; }}");
+    }
+    let _ = writeln!(head, ".stepped {{ {STEPPED}; fill: none; }}");
+    head.push_str(
+        ".grid { stroke: #e4e4e4; stroke-width: 1; }\n\
+         .lab { font-size: 13px; fill: #333; }\n\
+         text { fill: #444; }\n\
+         .vline { stroke: #1f6fb4; stroke-width: 1.2; fill: none; }\n\
+         polyline.varea { fill: #1f6fb4; fill-opacity: 0.12; stroke: none; }\n</style>\n",
+    );
+    let _ = writeln!(head, r#"<rect width="{W}" height="{h:.0}" fill="white"/>"#);
+    out.write_all(head.as_bytes())?;
+    out.write_all(body.as_bytes())?;
+    out.write_all(b"</svg>\n")?;
+    out.flush()
+}
+
+const _: () = assert!(AXES >= 2);

@@ -1,0 +1,174 @@
+//! Machine files: the shipped samples parse, the default file is the default
+//! machine, and every refusal names the key at fault.
+
+use burin::settings::{Profile, RapidMode};
+use host_sim::config::{ConfigError, MachineConfig};
+
+fn machine(name: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("machines")
+        .join(name)
+}
+
+#[test]
+fn default_file_is_exactly_the_default_machine() {
+    let cfg = MachineConfig::load(machine("default.toml")).unwrap();
+    assert_eq!(cfg, MachineConfig::default());
+}
+
+#[test]
+fn empty_file_is_the_default_machine() {
+    assert_eq!(
+        MachineConfig::from_toml_str("").unwrap(),
+        MachineConfig::default()
+    );
+}
+
+#[test]
+fn default_machine_is_consistent() {
+    let d = MachineConfig::default();
+    d.validate().unwrap();
+    assert_eq!(d.tick_hz, 96_000_000);
+    assert_eq!(d.pulse_ticks(), (192, 96));
+    // Homing towards +, switches at 0: power-up position is off every switch.
+    for (i, sw) in d.limits.iter().enumerate() {
+        if let Some(sw) = sw {
+            assert!(d.start_position_mm[i] < sw.trip_mm - sw.hysteresis_mm);
+        }
+    }
+}
+
+#[test]
+fn sample_machines_parse_and_differ() {
+    let p = MachineConfig::load(machine("plotter.toml")).unwrap();
+    assert_eq!(p.settings.profile, Profile::SCurve);
+    assert_eq!(p.settings.homing_dir_invert, 0b0111);
+    assert_eq!(p.settings.axes[0].max_rate, 12000.0);
+    assert_eq!(p.probe, None);
+    assert!(p.settings.soft_limits);
+    let l = MachineConfig::load(machine("laser.toml")).unwrap();
+    assert!(l.settings.laser_mode);
+    assert_eq!(l.limits[2], None);
+    assert_eq!(l.settings.homing_order, 0x3);
+    // Keys a sample leaves out keep the default machine's values.
+    assert_eq!(l.tick_hz, 96_000_000);
+    assert_eq!(l.settings.rapid_mode, RapidMode::Coordinated);
+}
+
+#[test]
+fn every_section_maps_onto_settings() {
+    let cfg = MachineConfig::from_toml_str(
+        r#"
+        tick_hz = 84_000_000
+        start_position_mm = [1, 2, 3, 4]
+        [axes.z]
+        steps_per_mm = 1600
+        [motion]
+        profile = "scurve"
+        rapid_mode = "independent"
+        jerk_mm_s3 = 1e4
+        [pulses]
+        step_invert = "xa"
+        dir_invert = "Y, Z"
+        [homing]
+        towards_negative = "XY"
+        order = ["XY", "Z", "A"]
+        [limits]
+        switches = "XYZA"
+        a_trip_mm = 5.5
+        hysteresis_mm = 0.2
+        [probe]
+        axis = "x"
+        trip_mm = 12
+        direction = "positive"
+        [report]
+        machine_position = false
+        buffer_state = true
+        "#,
+    )
+    .unwrap();
+    let s = &cfg.settings;
+    assert_eq!(cfg.tick_hz, 84_000_000);
+    assert_eq!(cfg.start_position_mm, [1.0, 2.0, 3.0, 4.0]);
+    assert_eq!(s.axes[2].steps_per_mm, 1600.0);
+    assert_eq!(s.axes[2].max_rate, 1000.0, "unset keys keep the default");
+    assert_eq!(
+        (s.profile, s.rapid_mode),
+        (Profile::SCurve, RapidMode::Independent)
+    );
+    assert_eq!(s.jerk, 10_000.0);
+    assert_eq!((s.step_invert, s.dir_invert), (0b1001, 0b0110));
+    assert_eq!((s.homing_dir_invert, s.homing_order), (0b0011, 0x843));
+    let a = cfg.limits[3].unwrap();
+    assert_eq!((a.trip_mm, a.hysteresis_mm), (5.5, 0.2));
+    assert_eq!(cfg.limits[0].unwrap().hysteresis_mm, 0.2);
+    let p = cfg.probe.unwrap();
+    assert_eq!((p.axis, p.trip_mm, p.towards_negative), (0, 12.0, false));
+    assert_eq!(s.status_mask, 0b10);
+}
+
+fn refusal(text: &str) -> String {
+    match MachineConfig::from_toml_str(text) {
+        Ok(_) => panic!("accepted:\n{text}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn unknown_keys_are_refused_by_name() {
+    for (text, key) in [
+        ("stepz_per_mm = 3", "stepz_per_mm"),
+        ("[axes.x]\nsteps_per_nm = 80", "steps_per_nm"),
+        ("[axes.b]\nsteps_per_mm = 80", "b"),
+        ("[motion]\njunction_deviation = 0.01", "junction_deviation"),
+        ("[limits]\nsoft_limits = true", "soft_limits"),
+        ("[probe]\nplane = 1", "plane"),
+    ] {
+        let m = refusal(text);
+        assert!(m.contains(&format!("`{key}`")), "{m}");
+    }
+}
+
+#[test]
+fn bad_values_are_refused_by_key() {
+    for (text, key) in [
+        ("[axes.x]\nsteps_per_mm = -80", "axes.x.steps_per_mm"),
+        ("[axes.y]\nmax_accel_mm_s2 = 0", "axes.y.max_accel_mm_s2"),
+        ("[axes.z]\nmax_rate_mm_min = nan", "axes.z.max_rate_mm_min"),
+        ("[axes.a]\ntravel_mm = -inf", "axes.a.travel_mm"),
+        ("tick_hz = 0", "tick_hz"),
+        ("[motion]\narc_tolerance_mm = 0", "motion.arc_tolerance_mm"),
+        ("[pulses]\nstep_pulse_us = 10", "pulses.step_pulse_us"),
+        ("[pulses]\nstep_invert = \"XQ\"", "pulses.step_invert"),
+        ("[homing]\norder = [\"Z\", \"\"]", "homing.order"),
+        ("[homing]\npulloff_mm = -1", "homing.pulloff_mm"),
+        ("[spindle]\nmin_rpm = 2000", "spindle.min_rpm"),
+        ("[limits]\nx_trip_mm = nan", "limits.x_trip_mm"),
+        ("[probe]\naxis = \"xy\"", "probe.axis"),
+        ("start_position_mm = [0, 0, nan, 0]", "start_position_mm"),
+    ] {
+        let e = MachineConfig::from_toml_str(text).unwrap_err();
+        assert!(matches!(e, ConfigError::Invalid { .. }), "{text}: {e}");
+        assert!(e.to_string().contains(&format!("`{key}`")), "{text}: {e}");
+    }
+}
+
+#[test]
+fn wrong_types_and_enum_names_are_refused_with_the_key() {
+    for (text, key) in [
+        ("[motion]\nprofile = \"jerky\"", "profile"),
+        ("[motion]\nrapid_mode = 1", "rapid_mode"),
+        ("[axes.x]\nsteps_per_mm = \"80\"", "steps_per_mm"),
+        ("tick_hz = -5", "tick_hz"),
+        ("start_position_mm = [0, 0]", "start_position_mm"),
+    ] {
+        let m = refusal(text);
+        assert!(m.contains(key), "{text}: {m}");
+    }
+}
+
+#[test]
+fn missing_file_names_the_path() {
+    let e = MachineConfig::load("/nonexistent/burin.toml").unwrap_err();
+    assert!(e.to_string().contains("/nonexistent/burin.toml"));
+}
