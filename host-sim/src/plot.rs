@@ -20,8 +20,8 @@ use crate::record::{MoveKind, PinEvent, Recorder, RunInfo, Summary};
 
 /// Point budget per path; past it the tolerance doubles.
 const PATH_CAP: usize = 40_000;
-/// Velocity samples kept; past it they are folded into min/max buckets.
-const VEL_CAP: usize = 20_000;
+/// Samples kept per time series; past it they fold into min/max buckets.
+const SERIES_CAP: usize = 20_000;
 /// Starting simplification tolerance, mm: far below a pixel at any sane zoom.
 const START_TOL: f64 = 0.002;
 /// Coarsest tolerance, mm: beyond it only kind changes are left to drop.
@@ -135,22 +135,36 @@ impl Simplifier {
     }
 }
 
-/// Path speed over time, folded into min/max buckets when it grows long.
-#[derive(Clone, Debug, Default)]
-pub(crate) struct Velocity {
+/// A value over time (path speed, Z height), folded into min/max buckets
+/// when it grows long. Each sample holds until the next.
+#[derive(Clone, Debug)]
+pub(crate) struct Series {
     pub(crate) samples: Vec<(u64, f32)>,
+    pub(crate) min: f32,
     pub(crate) max: f32,
 }
 
-impl Velocity {
+impl Default for Series {
+    fn default() -> Self {
+        Series {
+            samples: Vec::new(),
+            min: f32::INFINITY,
+            max: f32::NEG_INFINITY,
+        }
+    }
+}
+
+impl Series {
     fn push(&mut self, tick: u64, v: f32) {
         if !v.is_finite() {
             return;
         }
+        self.min = self.min.min(v);
         self.max = self.max.max(v);
         self.samples.push((tick, v));
-        if self.samples.len() > VEL_CAP {
-            self.samples = fold_min_max(&self.samples, VEL_CAP / 4);
+        if self.samples.len() > SERIES_CAP {
+            // At most 4 points per bucket: half the cap, so folding is rare.
+            self.samples = fold_min_max(&self.samples, SERIES_CAP / 8);
         }
     }
 }
@@ -210,14 +224,15 @@ pub struct SvgPlot<W: Write> {
     out: Option<W>,
     job_name: String,
     info: Option<RunInfo>,
-    mm_per_step: [f64; 2],
+    mm_per_step: [f64; 3],
     /// Where the tool stood before the first step (from the first event).
     start: Option<[f64; 2]>,
     commanded: Simplifier,
     stepped: Simplifier,
-    velocity: Velocity,
+    velocity: Series,
+    z: Series,
     last_tick: u64,
-    last_xy_steps: Option<[i64; 2]>,
+    last_steps: Option<[i64; 3]>,
 }
 
 impl<W: Write> SvgPlot<W> {
@@ -226,13 +241,14 @@ impl<W: Write> SvgPlot<W> {
             out: Some(out),
             job_name: job_name.to_string(),
             info: None,
-            mm_per_step: [1.0, 1.0],
+            mm_per_step: [1.0; 3],
             start: None,
             commanded: Simplifier::new(),
             stepped: Simplifier::new(),
-            velocity: Velocity::default(),
+            velocity: Series::default(),
+            z: Series::default(),
             last_tick: 0,
-            last_xy_steps: None,
+            last_steps: None,
         }
     }
 
@@ -255,28 +271,34 @@ impl<W: Write> Recorder for SvgPlot<W> {
 
     fn step_event(&mut self, ev: &PinEvent) {
         self.last_tick = self.last_tick.max(ev.tick);
-        let xy = [ev.pos[0], ev.pos[1]];
-        if self.last_xy_steps == Some(xy) {
-            return;
-        }
-        if self.last_xy_steps.is_none() {
-            // Undo this event's own steps to find where the tool started.
-            let back = |axis: usize| -> i64 {
-                if ev.step_mask & (1 << axis) == 0 {
-                    0
-                } else if ev.dir_mask & (1 << axis) != 0 {
-                    1
-                } else {
-                    -1
+        let now = [ev.pos[0], ev.pos[1], ev.pos[2]];
+        let prev = match self.last_steps {
+            Some(p) => p,
+            None => {
+                // Undo this event's own steps to find where the tool started.
+                let mut before = now;
+                for (i, b) in before.iter_mut().enumerate() {
+                    if ev.step_mask & (1 << i) != 0 {
+                        *b += if ev.dir_mask & (1 << i) != 0 { 1 } else { -1 };
+                    }
                 }
-            };
-            let before = self.xy_mm([xy[0] + back(0), xy[1] + back(1)]);
-            self.start = Some(before);
-            self.stepped.push(before, 0);
+                let xy = self.xy_mm([before[0], before[1]]);
+                self.start = Some(xy);
+                self.stepped.push(xy, 0);
+                self.z
+                    .push(ev.tick, before[2] as f32 * self.mm_per_step[2] as f32);
+                before
+            }
+        };
+        self.last_steps = Some(now);
+        if now[2] != prev[2] {
+            self.z
+                .push(ev.tick, (now[2] as f64 * self.mm_per_step[2]) as f32);
         }
-        self.last_xy_steps = Some(xy);
-        let p = self.xy_mm(xy);
-        self.stepped.push(p, 0);
+        if now[..2] != prev[..2] {
+            let p = self.xy_mm([now[0], now[1]]);
+            self.stepped.push(p, 0);
+        }
     }
 
     fn commanded(&mut self, _line: u32, kind: MoveKind, to_mm: [f32; burin::AXES]) {
@@ -304,6 +326,7 @@ impl<W: Write> Recorder for SvgPlot<W> {
             commanded: &self.commanded.kept,
             stepped: &self.stepped.kept,
             velocity: &self.velocity,
+            z: &self.z,
             end_tick: self.last_tick,
         };
         svg::write(out, &plot)

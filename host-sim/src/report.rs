@@ -157,6 +157,10 @@ fn axes_line<T>(info: &RunInfo, vals: &[T], f: impl Fn(&T) -> String) -> String 
     cells.join("   ")
 }
 
+/// Errors listed one per line in the terminal summary; a job that repeats
+/// one unsupported word hundreds of times should not bury the figures.
+pub const MAX_LISTED_ERRORS: usize = 20;
+
 /// The terminal summary `cargo xtask sim` prints.
 pub fn print_summary<W: Write>(
     mut w: W,
@@ -164,7 +168,7 @@ pub fn print_summary<W: Write>(
     s: &Summary,
     job_name: &str,
 ) -> io::Result<()> {
-    let label = |w: &mut W, l: &str, v: &str| writeln!(w, "  {l:<18}{v}");
+    let label = |w: &mut W, l: &str, v: &str| writeln!(w, "  {l:<20}{v}");
     writeln!(w, "burin host-sim: {job_name}")?;
     label(&mut w, "lines", &s.lines.to_string())?;
     label(&mut w, "moves", &s.moves.to_string())?;
@@ -193,12 +197,16 @@ pub fn print_summary<W: Write>(
         label(&mut w, "errors", "none")?;
     } else {
         label(&mut w, "errors", &s.errors.len().to_string())?;
-        for e in &s.errors {
+        for e in s.errors.iter().take(MAX_LISTED_ERRORS) {
             writeln!(
                 w,
                 "    line {:>6}  error {:>3}  {}",
                 e.line, e.code, e.message
             )?;
+        }
+        if s.errors.len() > MAX_LISTED_ERRORS {
+            let more = s.errors.len() - MAX_LISTED_ERRORS;
+            writeln!(w, "    … and {more} more (all of them are in --json)")?;
         }
     }
     w.flush()

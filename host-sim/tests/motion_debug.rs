@@ -18,7 +18,7 @@ fn dbg() {
     sim.input_at(134400000, host_sim::engine::Input::FeedHold);
     sim.input_at(192000000, host_sim::engine::Input::CycleStart);
     let mut last = 0;
-    while !sim.idle() || last == 0 {
+    for _ in 0..6000 {
         let t = sim.now() + 96000;
         sim.run_until(t);
         let u = sim.rt.underruns();

@@ -137,7 +137,7 @@ fn feed_hold_and_resume_mid_arc() {
     // The machine really stopped: a gap in the step stream after the hold.
     let hz = cfg.tick_hz as u64;
     let gap = r.rec.events.windows(2).map(|w| w[1].tick - w[0].tick).max().unwrap();
-    assert!(gap > hz / 2, "expected a standstill, longest gap {gap} ticks");
+    assert!(gap > 3 * hz / 10, "expected a standstill, longest gap {gap} ticks");
     // and the hold point is on the arc (after the line ends at ~1.07 s)
     let stop = r.rec.events.windows(2).find(|w| w[1].tick - w[0].tick == gap).unwrap()[0];
     assert!(stop.tick > 14 * hz / 10 && stop.tick < 2 * hz, "stopped at tick {}", stop.tick);

@@ -411,3 +411,20 @@ fn terminal_summary_lists_everything() {
     assert!(text.contains("line      7  error  33"), "{text}");
     assert!(text.contains(&format!("X {:>10}", s.steps[0])), "{text}");
 }
+
+#[test]
+fn terminal_summary_caps_the_error_list() {
+    let mut s = synth_summary();
+    s.errors = (1..=25)
+        .map(|line| host_sim::record::RunError {
+            line,
+            code: 300,
+            message: "unsupported command M300".into(),
+        })
+        .collect();
+    let mut sink = Vec::new();
+    print_summary(&mut sink, &synth::info(), &s, "many.nc").unwrap();
+    let text = String::from_utf8(sink).unwrap();
+    assert_eq!(text.matches("unsupported command").count(), 20);
+    assert!(text.contains("and 5 more"), "{text}");
+}

@@ -380,7 +380,8 @@ impl<const N: usize> Machine<N> {
             Trip::HardLimit => {
                 let mask = rt.trip_mask();
                 self.position_lost = true;
-                self.raise_alarm(rt, MachineError::HardLimit { mask }, 0, obs);
+                let line = self.prep.line();
+                self.raise_alarm(rt, MachineError::HardLimit { mask }, line, obs);
             }
             Trip::Probe => {
                 let pos = self.steps_to_mm(&rt.trip_position());

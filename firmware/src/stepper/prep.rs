@@ -83,6 +83,7 @@ pub struct Preparer {
     dwell_left: u64,
     last_dir: u8,
     hold: Hold,
+    last_line: u32,
     /// Highest segment speed so far, mm/min.
     pub max_speed_mm_min: f32,
 }
@@ -109,6 +110,7 @@ impl Preparer {
             dwell_left: 0,
             last_dir: 0,
             hold: Hold::Running,
+            last_line: 0,
             max_speed_mm_min: 0.0,
         }
     }
@@ -128,6 +130,10 @@ impl Preparer {
     /// No block in progress.
     pub fn is_idle(&self) -> bool {
         !self.active
+    }
+    /// Source line of the block prepared last.
+    pub fn line(&self) -> u32 {
+        self.last_line
     }
     /// Current planned path speed, mm/s.
     pub fn speed(&self) -> f32 {
@@ -229,6 +235,7 @@ impl Preparer {
     fn start_block<const N: usize>(&mut self, pl: &Planner<N>) -> bool {
         let Some(b) = pl.block(0).copied() else { return false };
         self.block = Some(b);
+        self.last_line = b.line;
         self.active = true;
         self.new_block = true;
         self.steps_done = 0;
@@ -259,9 +266,13 @@ impl Preparer {
 
     fn next_segment<const N: usize>(&mut self, pl: &mut Planner<N>, rt: &Realtime) -> Option<Segment> {
         if rt.hold_requested() && self.hold == Hold::Running {
-            if self.active && self.v > 0.0 {
+            // `v` carries across block boundaries: between two blocks the
+            // tool is still moving and the hold ramp starts in the next one.
+            if self.v > 1e-6 {
                 self.hold = Hold::Decelerating;
-                self.plan_hold();
+                if self.active {
+                    self.plan_hold();
+                }
             } else {
                 self.hold = Hold::Held;
             }
@@ -353,6 +364,12 @@ impl Preparer {
         let n = target.saturating_sub(self.steps_done);
         self.steps_done = target;
         let s_steps = if block_end { b.count as f32 } else { self.s_done / b.length * b.count as f32 };
+        // Past the last known line the profile stops (exit speed 0), even if
+        // the last segment ends a hair before the ramp's end.
+        let next_line = matches!(pl.block(1), Some(n) if n.kind == BlockKind::Line);
+        if block_end && !next_line {
+            self.v = 0.0;
+        }
         let end_speed_zero = stopped || (block_end && self.v <= 1e-3);
         if block_end {
             self.finish_block(pl);

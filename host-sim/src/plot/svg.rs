@@ -7,7 +7,7 @@ use std::io::{self, Write};
 
 use burin::{AXES, AXIS_NAMES};
 
-use super::Velocity;
+use super::Series;
 use crate::record::{AxisInfo, RunInfo, Summary};
 use crate::report::format_duration;
 
@@ -18,7 +18,8 @@ pub(super) struct Plot<'a> {
     pub start: Option<[f64; 2]>,
     pub commanded: &'a [([f64; 2], u8)],
     pub stepped: &'a [([f64; 2], u8)],
-    pub velocity: &'a Velocity,
+    pub velocity: &'a Series,
+    pub z: &'a Series,
     pub end_tick: u64,
 }
 
@@ -44,14 +45,14 @@ const KINDS: [(&str, &str); 6] = [
         "rapid",
         "stroke:#8a8a8a;stroke-width:1;stroke-dasharray:5 3",
     ),
-    ("feed", "stroke:#1f6fb4;stroke-width:1.4"),
-    ("arc", "stroke:#7b3fb5;stroke-width:1.3"),
-    ("spline", "stroke:#d6409c;stroke-width:1.3"),
-    ("probe", "stroke:#d62728;stroke-width:1.3"),
-    ("home", "stroke:#8c564b;stroke-width:1.3"),
+    ("feed", "stroke:#1565c0;stroke-width:1.7"),
+    ("arc", "stroke:#7e3bbf;stroke-width:1.7"),
+    ("spline", "stroke:#e7298a;stroke-width:1.7"),
+    ("probe", "stroke:#d62728;stroke-width:1.7"),
+    ("home", "stroke:#8c564b;stroke-width:1.7"),
 ];
 const STEPPED: &str =
-    "stroke:#ffb52e;stroke-opacity:0.4;stroke-width:4.5;stroke-linejoin:round;stroke-linecap:round";
+    "stroke:#ffc857;stroke-opacity:0.5;stroke-width:6;stroke-linejoin:round;stroke-linecap:round";
 const FONT: &str = "DejaVu Sans, Helvetica, Arial, sans-serif";
 const W: f64 = 1000.0;
 const LEFT: f64 = 80.0;
@@ -278,9 +279,57 @@ fn xy_panel(s: &mut String, p: &Plot, top: f64) -> f64 {
     top + ph
 }
 
-fn velocity_panel(s: &mut String, p: &Plot, top: f64) -> f64 {
+/// A sample holds until the next one ("recorded whenever it changes"), so
+/// a series is drawn as a staircase, not as a line between samples.
+fn staircase(series: &Series, hz: f64, t_end: f64) -> Vec<[f64; 2]> {
+    let mut pts: Vec<[f64; 2]> = Vec::with_capacity(series.samples.len() * 2 + 1);
+    for &(t, v) in &series.samples {
+        let q = [t as f64 / hz, f64::from(v)];
+        if let Some(&[_, held]) = pts.last() {
+            pts.push([q[0], held]);
+        }
+        pts.push(q);
+    }
+    if let Some(&[t, v]) = pts.last() {
+        if t < t_end {
+            pts.push([t_end, v]);
+        }
+    }
+    pts
+}
+
+fn time_span(p: &Plot) -> (f64, f64) {
     let hz = f64::from(p.info.tick_hz.max(1));
     let t_end = (p.end_tick as f64 / hz).max(p.summary.job_time_s).max(1e-3);
+    (hz, t_end)
+}
+
+/// Z over time, when Z moved at all: plunges and retracts at a glance.
+fn z_panel(s: &mut String, p: &Plot, top: f64) -> Option<f64> {
+    let (lo, hi) = (f64::from(p.z.min), f64::from(p.z.max));
+    if !(hi > lo) {
+        return None;
+    }
+    let (hz, t_end) = time_span(p);
+    let pad = ((hi - lo) * 0.12).max(0.2);
+    let f = Frame {
+        left: LEFT,
+        top,
+        w: W - LEFT - RIGHT,
+        h: 130.0,
+        x: (0.0, t_end),
+        y: (lo - pad, hi + pad),
+    };
+    f.axes(s, "time (s)", &format!("{} (machine mm)", AXIS_NAMES[2]));
+    f.clip(s, "zclip");
+    s.push_str("<g clip-path=\"url(#zclip)\">\n");
+    polyline(s, "zline", &f, staircase(p.z, hz, t_end).into_iter());
+    s.push_str("</g>\n");
+    Some(top + f.h)
+}
+
+fn velocity_panel(s: &mut String, p: &Plot, top: f64) -> f64 {
+    let (hz, t_end) = time_span(p);
     let vmax = f64::from(p.velocity.max)
         .max(p.summary.max_feed_mm_min)
         .max(1.0);
@@ -295,12 +344,7 @@ fn velocity_panel(s: &mut String, p: &Plot, top: f64) -> f64 {
     f.axes(s, "time (s)", "path speed (mm/min)");
     f.clip(s, "vclip");
     s.push_str("<g clip-path=\"url(#vclip)\">\n");
-    let pts: Vec<[f64; 2]> = p
-        .velocity
-        .samples
-        .iter()
-        .map(|&(t, v)| [t as f64 / hz, f64::from(v)])
-        .collect();
+    let pts = staircase(p.velocity, hz, t_end);
     if let (Some(a), Some(b)) = (pts.first(), pts.last()) {
         let area = std::iter::once([a[0], 0.0])
             .chain(pts.iter().copied())
@@ -384,7 +428,8 @@ fn subtitle(p: &Plot) -> String {
         steps
     );
     if sm.planner_underruns > 0 {
-        let _ = write!(t, " · {} underruns", sm.planner_underruns);
+        let n = sm.planner_underruns;
+        let _ = write!(t, " · {n} underrun{}", if n == 1 { "" } else { "s" });
     }
     if !sm.errors.is_empty() {
         let n = sm.errors.len();
@@ -407,8 +452,11 @@ pub(super) fn write<W: Write>(mut out: W, p: &Plot) -> io::Result<()> {
     );
     legend(&mut body, p, 84.0);
     let xy_bottom = xy_panel(&mut body, p, 102.0);
-    let v_bottom = velocity_panel(&mut body, p, xy_bottom + 58.0);
-    let h = v_bottom + 52.0;
+    let mut bottom = velocity_panel(&mut body, p, xy_bottom + 58.0);
+    if let Some(b) = z_panel(&mut body, p, bottom + 58.0) {
+        bottom = b;
+    }
+    let h = bottom + 52.0;
     let mut head = String::new();
     let _ = writeln!(
         head,
@@ -425,6 +473,7 @@ pub(super) fn write<W: Write>(mut out: W, p: &Plot) -> io::Result<()> {
          .lab { font-size: 13px; fill: #333; }\n\
          text { fill: #444; }\n\
          .vline { stroke: #1f6fb4; stroke-width: 1.2; fill: none; }\n\
+         .zline { stroke: #16877a; stroke-width: 1.2; fill: none; }\n\
          polyline.varea { fill: #1f6fb4; fill-opacity: 0.12; stroke: none; }\n</style>\n",
     );
     let _ = writeln!(head, r#"<rect width="{W}" height="{h:.0}" fill="white"/>"#);

@@ -1,0 +1,71 @@
+//! The bundled sample jobs run cleanly on the machines they were written for
+//! and stay inside those machines' envelopes.
+
+use std::path::Path;
+
+use burin::AXES;
+use host_sim::config::MachineConfig;
+use host_sim::record::{PinEvent, Recorder};
+
+/// Tracks the extent of the stepped path, in steps.
+struct Extent {
+    lo: [i64; AXES],
+    hi: [i64; AXES],
+}
+
+impl Recorder for Extent {
+    fn step_event(&mut self, ev: &PinEvent) {
+        for i in 0..AXES {
+            self.lo[i] = self.lo[i].min(ev.pos[i]);
+            self.hi[i] = self.hi[i].max(ev.pos[i]);
+        }
+    }
+}
+
+fn run(job: &str, machine: Option<&str>) -> (MachineConfig, host_sim::record::Summary, Extent) {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let cfg = match machine {
+        Some(m) => MachineConfig::load(dir.join("machines").join(m)).unwrap(),
+        None => MachineConfig::default(),
+    };
+    let src = std::fs::read_to_string(dir.join("jobs").join(job)).unwrap();
+    let mut ext = Extent {
+        lo: [i64::MAX; AXES],
+        hi: [i64::MIN; AXES],
+    };
+    let s = host_sim::engine::run_job(&cfg, &src, &mut ext);
+    assert!(s.errors.is_empty(), "{job}: {:?}", s.errors);
+    (cfg, s, ext)
+}
+
+/// Every axis that moved stayed within `[lo_mm, hi_mm]`.
+fn assert_within(cfg: &MachineConfig, ext: &Extent, lo_mm: [f32; 3], hi_mm: [f32; 3]) {
+    for i in 0..3 {
+        let spm = cfg.settings.axes[i].steps_per_mm;
+        let (lo, hi) = (ext.lo[i] as f32 / spm, ext.hi[i] as f32 / spm);
+        assert!(lo >= lo_mm[i] && hi <= hi_mm[i], "axis {i}: [{lo}, {hi}]");
+    }
+}
+
+#[test]
+fn demo_runs_inside_the_default_machine() {
+    let (cfg, s, ext) = run("demo.gcode", None);
+    assert_eq!(s.final_work_position_mm[..3], [0.0, 200.0, 5.0]);
+    assert!(s.moves > 40 && s.distance_mm > 1000.0);
+    // Envelope after homing to + : [-travel, 0].
+    assert_within(&cfg, &ext, [-300.0, -300.0, -100.0], [0.0, 0.0, 0.0]);
+}
+
+#[test]
+fn plotter_job_runs_on_the_plotter() {
+    let (cfg, s, ext) = run("plotter.gcode", Some("plotter.toml"));
+    assert_eq!(s.final_position_mm[..3], [5.0, 5.0, 3.0]);
+    assert_within(&cfg, &ext, [0.0, 0.0, 0.0], [420.0, 297.0, 10.0]);
+}
+
+#[test]
+fn laser_job_runs_on_the_laser() {
+    let (cfg, s, ext) = run("laser.gcode", Some("laser.toml"));
+    assert_eq!(s.final_work_position_mm[..2], [5.0, 5.0]);
+    assert_within(&cfg, &ext, [0.0, -400.0, -40.0], [400.0, 0.0, 0.0]);
+}

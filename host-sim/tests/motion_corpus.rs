@@ -1,0 +1,84 @@
+//! Every corpus job that interprets cleanly simulates to its exact final
+//! position in steps, and its trace keeps the rate, acceleration, path and
+//! pin-timing properties.
+mod common;
+use std::path::PathBuf;
+
+use burin::command::Command;
+use burin::interp::Interpreter;
+use common::*;
+use host_sim::engine::run_job;
+
+fn corpus_dir() -> Option<PathBuf> {
+    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/corpus");
+    d.is_dir().then_some(d)
+}
+
+/// Interprets the whole job; `None` if any line fails or the job's end
+/// depends on the machine (homing, probing).
+fn expected_end(src: &str) -> Option<([f32; 4], usize)> {
+    let mut it = Interpreter::new();
+    let mut end = [0.0f32; 4];
+    let mut n = 0usize;
+    let mut depends = false;
+    for line in src.lines() {
+        let mut ok = true;
+        it.execute_line(line.as_bytes(), &mut |c: Command| {
+            if matches!(c, Command::Home { .. } | Command::VerifyHome { .. } | Command::Probe { .. }) {
+                depends = true;
+            }
+            if let Some(e) = c.end() {
+                end = *e;
+                n += 1;
+            }
+        })
+        .map_err(|_| ok = false)
+        .ok();
+        if !ok {
+            return None;
+        }
+    }
+    (!depends).then_some((end, n))
+}
+
+#[test]
+fn corpus_jobs_end_exactly_and_keep_limits() {
+    let Some(dir) = corpus_dir() else {
+        println!("corpus not found next to the workspace: skipped");
+        return;
+    };
+    let manifest = std::fs::read_to_string(dir.join("MANIFEST.tsv")).unwrap();
+    let cfg = config();
+    let (mut ran, mut skipped) = (0, 0);
+    for row in manifest.lines().skip(1) {
+        let Some(rel) = row.split('\t').next() else { continue };
+        let Ok(src) = std::fs::read_to_string(dir.join(rel)) else { continue };
+        let Some((end, moves)) = expected_end(&src) else {
+            skipped += 1;
+            continue;
+        };
+        if moves == 0 {
+            skipped += 1;
+            continue;
+        }
+        let mut rec = Collect::default();
+        let s = run_job(&cfg, &src, &mut rec);
+        let info = rec.info.clone().unwrap();
+        assert!(s.errors.is_empty(), "{rel}: {:?}", &s.errors[..s.errors.len().min(3)]);
+        assert_eq!(s.final_position_steps, expected_steps(&info, end), "{rel}");
+        assert_eq!(s.planner_underruns, 0, "{rel}");
+        let rate = check_max_rate(&info, &rec.events);
+        let acc = check_max_accel(&info, &rec.events);
+        check_pin_timing(&info, &rec.events);
+        let dev = check_path(&info, cfg.start_position_mm, &rec.path, &rec.events, 0.0);
+        println!(
+            "{rel}: {} moves, {} step events, {:.1} s simulated, rate {rate:.3}, accel {acc:.3}, path dev {dev:.4} mm",
+            s.moves,
+            rec.events.len(),
+            s.job_time_s
+        );
+        ran += 1;
+    }
+    println!("corpus: {ran} jobs simulated, {skipped} skipped (interpreter errors or machine-dependent end)");
+    assert!(ran > 0);
+}
