@@ -12,7 +12,10 @@ fn main() {
     if env::var("CARGO_CFG_TARGET_OS").as_deref() != Ok("none") {
         return;
     }
-    let boards = [("CARGO_FEATURE_BOARD_F411", "memory-f411.x"), ("CARGO_FEATURE_BOARD_F401", "memory-f401.x")];
+    let boards = [
+        ("CARGO_FEATURE_BOARD_F411", "memory-f411.x"),
+        ("CARGO_FEATURE_BOARD_F401", "memory-f401.x"),
+    ];
     let chosen: Vec<&str> = boards
         .iter()
         .filter(|(feature, _)| env::var_os(feature).is_some())
@@ -21,7 +24,8 @@ fn main() {
     // Zero or two boards is reported by the binary's compile_error!, which
     // names the features; here we only avoid a confusing linker error first.
     let Some(memory) = chosen.first() else { return };
-    let manifest = PathBuf::from(env::var("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR"));
+    let manifest =
+        PathBuf::from(env::var("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR"));
     let out = PathBuf::from(env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
     let text = fs::read(manifest.join(memory)).expect("board memory file exists");
     fs::write(out.join("memory.x"), text).expect("OUT_DIR is writable");

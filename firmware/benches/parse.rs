@@ -20,7 +20,10 @@ fn corpus() -> (String, u64) {
             let p = e.path();
             if p.is_dir() {
                 stack.push(p);
-            } else if p.extension().is_some_and(|x| x == "ngc" || x == "gcode" || x == "nc") {
+            } else if p
+                .extension()
+                .is_some_and(|x| x == "ngc" || x == "gcode" || x == "nc")
+            {
                 files.push(p);
             }
         }
@@ -28,13 +31,20 @@ fn corpus() -> (String, u64) {
     files.sort();
     let mut text = String::new();
     for f in files {
-        text.push_str(&String::from_utf8_lossy(&std::fs::read(f).unwrap_or_default()));
+        text.push_str(&String::from_utf8_lossy(
+            &std::fs::read(f).unwrap_or_default(),
+        ));
         text.push('\n');
     }
     if text.trim().is_empty() {
         // No corpus: a synthetic job so the bench still measures something.
         for i in 0..20_000 {
-            text.push_str(&format!("G1 X{:.3} Y{:.3} F1200\nG2 X{:.3} Y0 I5 J0\n", i as f32 * 0.01, i as f32 * 0.02, i as f32 * 0.01));
+            text.push_str(&format!(
+                "G1 X{:.3} Y{:.3} F1200\nG2 X{:.3} Y0 I5 J0\n",
+                i as f32 * 0.01,
+                i as f32 * 0.02,
+                i as f32 * 0.01
+            ));
         }
     }
     let lines = text.lines().count() as u64;

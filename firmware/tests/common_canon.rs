@@ -8,7 +8,10 @@ use burin::command::{ArcDir, Command, Feed, Plane};
 use burin::interp::Interpreter;
 
 fn p(v: &[f32]) -> String {
-    v.iter().map(|x| format!("{:.4}", if x.abs() < 5e-5 { 0.0 } else { *x })).collect::<Vec<_>>().join(", ")
+    v.iter()
+        .map(|x| format!("{:.4}", if x.abs() < 5e-5 { 0.0 } else { *x }))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 fn f(feed: &Feed) -> String {
@@ -35,7 +38,13 @@ pub fn canon(c: &Command) -> String {
             a.turns,
             f(&a.feed)
         ),
-        Command::Spline(s) => format!("SPLINE({}) P1({}) P2({}) {}", p(&s.end), p(&s.p1), p(&s.p2), f(&s.feed)),
+        Command::Spline(s) => format!(
+            "SPLINE({}) P1({}) P2({}) {}",
+            p(&s.end),
+            p(&s.p1),
+            p(&s.p2),
+            f(&s.feed)
+        ),
         Command::Probe { end, feed, kind } => format!("PROBE({}) {} {kind:?}", p(end), f(feed)),
         Command::Dwell { seconds } => format!("DWELL({seconds:.4})"),
         Command::Message(m) => format!("MESSAGE({m:?})"),
@@ -56,7 +65,11 @@ pub fn run(src: &str) -> String {
                     out.push_str(&format!("{n}: {}\n", canon(c)));
                 }
                 if it.needs_sync() {
-                    match cmds.iter().rev().find(|c| matches!(c, Command::Probe { .. })) {
+                    match cmds
+                        .iter()
+                        .rev()
+                        .find(|c| matches!(c, Command::Probe { .. }))
+                    {
                         Some(Command::Probe { end, .. }) => it.probe_finished(*end, true),
                         _ => it.set_machine_position(it.state().pos),
                     }

@@ -10,13 +10,37 @@ use std::path::{Path, PathBuf};
 
 /// (file suffix, expected first error code, why)
 const KNOWN_FAULTS: &[(&str, u16, &str)] = &[
-    ("gcode-rs/_gcodeLexer_samples.ngc", 103, "deliberately broken comments (lexer edge cases)"),
-    ("gcode-rs/plotter_owl.gcode", 100, "a 300-byte comment line; lines are limited to 256 bytes"),
-    ("gcode-rs/reprap_cnc.gcode", 311, "never sets F (RepRap firmware has a default feed; we refuse to guess)"),
-    ("grbl-sim/test.nc", 101, "`$X` is a GRBL system command for the link layer, not G-code"),
-    ("good-arc.big.imperial.center-format.ngc", 321, "radius mismatch beyond issue 3's 0.5 mm / 0.1% rule (LinuxCNC 2.9 is looser)"),
+    (
+        "gcode-rs/_gcodeLexer_samples.ngc",
+        103,
+        "deliberately broken comments (lexer edge cases)",
+    ),
+    (
+        "gcode-rs/plotter_owl.gcode",
+        100,
+        "a 300-byte comment line; lines are limited to 256 bytes",
+    ),
+    (
+        "gcode-rs/reprap_cnc.gcode",
+        311,
+        "never sets F (RepRap firmware has a default feed; we refuse to guess)",
+    ),
+    (
+        "grbl-sim/test.nc",
+        101,
+        "`$X` is a GRBL system command for the link layer, not G-code",
+    ),
+    (
+        "good-arc.big.imperial.center-format.ngc",
+        321,
+        "radius mismatch beyond issue 3's 0.5 mm / 0.1% rule (LinuxCNC 2.9 is looser)",
+    ),
     ("good-arc.big.metric.center-format.ngc", 321, "as above"),
-    ("good-arc.medium.imperial.center-format.ngc", 321, "as above"),
+    (
+        "good-arc.medium.imperial.center-format.ngc",
+        321,
+        "as above",
+    ),
     ("good-arc.medium.metric.center-format.ngc", 321, "as above"),
     ("good-arc.small.imperial.center-format.ngc", 321, "as above"),
     ("good-arc.small.metric.center-format.ngc", 321, "as above"),
@@ -31,12 +55,17 @@ fn corpus_dir() -> Option<PathBuf> {
 }
 
 fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
-    let Ok(rd) = std::fs::read_dir(dir) else { return };
+    let Ok(rd) = std::fs::read_dir(dir) else {
+        return;
+    };
     for e in rd.flatten() {
         let p = e.path();
         if p.is_dir() {
             walk(&p, out);
-        } else if p.extension().is_some_and(|x| x == "ngc" || x == "gcode" || x == "nc") {
+        } else if p
+            .extension()
+            .is_some_and(|x| x == "ngc" || x == "gcode" || x == "nc")
+        {
             out.push(p);
         }
     }

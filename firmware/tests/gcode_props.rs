@@ -14,11 +14,15 @@ fn finite(c: &Command) -> bool {
 }
 
 fn check(it: &mut Interpreter, line: &[u8]) {
-    let before = it.state().clone();
+    let before = *it.state();
     let mut cmds = Vec::new();
     match it.execute_line(line, &mut |c| cmds.push(c)) {
         Ok(()) => {
-            assert!(cmds.iter().all(finite), "non-finite output for {:?}: {cmds:?}", String::from_utf8_lossy(line));
+            assert!(
+                cmds.iter().all(finite),
+                "non-finite output for {:?}: {cmds:?}",
+                String::from_utf8_lossy(line)
+            );
             if it.needs_sync() {
                 it.set_machine_position(it.state().pos);
             }
@@ -26,7 +30,12 @@ fn check(it: &mut Interpreter, line: &[u8]) {
         Err(e) => {
             assert!(cmds.is_empty());
             assert_eq!(*it.state(), before, "state changed by failing line");
-            assert!(usize::from(e.col) <= line.len() + 1, "column {} beyond line {:?}", e.col, line);
+            assert!(
+                usize::from(e.col) <= line.len() + 1,
+                "column {} beyond line {:?}",
+                e.col,
+                line
+            );
             let _ = e.to_string();
         }
     }
@@ -34,11 +43,14 @@ fn check(it: &mut Interpreter, line: &[u8]) {
 }
 
 fn word() -> impl Strategy<Value = String> {
-    let letter = prop::sample::select(vec!["G", "M", "X", "Y", "Z", "A", "I", "J", "K", "R", "P", "Q", "F", "S", "T", "L", "N", "E", "#1=", "#<a>=", "O"]);
+    let letter = prop::sample::select(vec![
+        "G", "M", "X", "Y", "Z", "A", "I", "J", "K", "R", "P", "Q", "F", "S", "T", "L", "N", "E",
+        "#1=", "#<a>=", "O",
+    ]);
     let gnum = prop::sample::select(vec![
-        "0", "1", "2", "3", "4", "5", "5.1", "10", "17", "18", "19", "20", "21", "27", "28", "30", "38.2", "38.5",
-        "53", "54", "59.3", "80", "90", "91", "90.1", "91.1", "92", "92.1", "92.2", "92.3", "93", "94", "41",
-        "3", "5", "7", "8", "9", "17", "42", "62", "106", "117", "220",
+        "0", "1", "2", "3", "4", "5", "5.1", "10", "17", "18", "19", "20", "21", "27", "28", "30",
+        "38.2", "38.5", "53", "54", "59.3", "80", "90", "91", "90.1", "91.1", "92", "92.1", "92.2",
+        "92.3", "93", "94", "41", "3", "5", "7", "8", "9", "17", "42", "62", "106", "117", "220",
     ]);
     let num = prop_oneof![
         (-1000.0f64..1000.0).prop_map(|v| format!("{v:.3}")),
@@ -51,7 +63,12 @@ fn word() -> impl Strategy<Value = String> {
         Just("".to_string()),
         Just("[[1]".to_string()),
     ];
-    (letter, num, prop::sample::select(vec!["", " ", "(c)", "\t"])).prop_map(|(l, n, sep)| format!("{l}{n}{sep}"))
+    (
+        letter,
+        num,
+        prop::sample::select(vec!["", " ", "(c)", "\t"]),
+    )
+        .prop_map(|(l, n, sep)| format!("{l}{n}{sep}"))
 }
 
 proptest! {

@@ -5,7 +5,8 @@ use burin::interp::Interpreter;
 
 fn run(it: &mut Interpreter, line: &str) -> Vec<Command> {
     let mut v = Vec::new();
-    it.execute_line(line.as_bytes(), &mut |c| v.push(c)).unwrap_or_else(|e| panic!("{line}: {e}"));
+    it.execute_line(line.as_bytes(), &mut |c| v.push(c))
+        .unwrap_or_else(|e| panic!("{line}: {e}"));
     v
 }
 
@@ -13,7 +14,10 @@ fn run(it: &mut Interpreter, line: &str) -> Vec<Command> {
 fn size_is_bounded() {
     let n = core::mem::size_of::<Interpreter>();
     println!("size_of::<Interpreter>() = {n} bytes");
-    assert!(n < 4096, "Interpreter grew to {n} bytes (F401 has 64 KiB RAM)");
+    assert!(
+        n < 4096,
+        "Interpreter grew to {n} bytes (F401 has 64 KiB RAM)"
+    );
 }
 
 #[test]
@@ -36,7 +40,10 @@ fn offsets_report_and_wco() {
     assert_eq!(it.wco(), [0.0, 2.0, 3.0, 0.0]);
     let mut s = String::new();
     it.write_offsets(&mut s, "\n").unwrap();
-    assert!(s.starts_with("[G54:0.000,0.000,0.000,0.000]\n[G55:1.000,2.000,3.000,0.000]\n"), "{s}");
+    assert!(
+        s.starts_with("[G54:0.000,0.000,0.000,0.000]\n[G55:1.000,2.000,3.000,0.000]\n"),
+        "{s}"
+    );
     assert!(s.contains("[G59.3:0.000,0.000,0.000,0.000]\n"));
     assert!(s.contains("[G92:-1.000,0.000,0.000,0.000]\n"));
     assert!(s.ends_with("[TLO:0.000]\n[PRB:0.000,0.000,0.000,0.000:0]\n"));
@@ -50,7 +57,12 @@ fn machine_position_feedback() {
     it.set_machine_position([-5.0, -6.0, -1.0, 0.0]);
     assert!(!it.needs_sync());
     let c = run(&mut it, "G91 G0 X1");
-    assert_eq!(c, vec![Command::Rapid { end: [-4.0, -6.0, -1.0, 0.0] }]);
+    assert_eq!(
+        c,
+        vec![Command::Rapid {
+            end: [-4.0, -6.0, -1.0, 0.0]
+        }]
+    );
 }
 
 #[test]
@@ -71,7 +83,11 @@ fn parameter_table_full_is_an_error() {
 #[test]
 fn grbl_codes() {
     let mut it = Interpreter::new();
-    let grbl = |it: &mut Interpreter, l: &str| it.execute_line(l.as_bytes(), &mut |_| {}).unwrap_err().grbl_code();
+    let grbl = |it: &mut Interpreter, l: &str| {
+        it.execute_line(l.as_bytes(), &mut |_| {})
+            .unwrap_err()
+            .grbl_code()
+    };
     assert_eq!(grbl(&mut it, "G1 X1"), 22);
     assert_eq!(grbl(&mut it, "G0 G1 X1"), 21);
     assert_eq!(grbl(&mut it, "G41"), 20);

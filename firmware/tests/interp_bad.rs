@@ -15,17 +15,28 @@ fn bad_cases() {
             continue;
         }
         let (head, line) = raw.split_once(" | ").expect("CODE COL | line");
-        let mut it = head.split_whitespace().map(|x| x.parse::<u16>().expect("number"));
+        let mut it = head
+            .split_whitespace()
+            .map(|x| x.parse::<u16>().expect("number"));
         let (code, col) = (it.next().expect("code"), it.next().expect("col"));
         let mut interp = Interpreter::new();
-        interp.execute_line(b"G21 G90 F100", &mut |_| {}).expect("preamble");
-        let before = interp.state().clone();
+        interp
+            .execute_line(b"G21 G90 F100", &mut |_| {})
+            .expect("preamble");
+        let before = *interp.state();
         let mut emitted = 0;
         let r = interp.execute_line(line.as_bytes(), &mut |_| emitted += 1);
         n += 1;
         match r {
-            Err(e) if e.code() == code && e.col == col && emitted == 0 && *interp.state() == before => {}
-            other => failures.push(format!("line {}: `{line}` want {code}@{col}, got {other:?} (emitted {emitted})", i + 1)),
+            Err(e)
+                if e.code() == code
+                    && e.col == col
+                    && emitted == 0
+                    && *interp.state() == before => {}
+            other => failures.push(format!(
+                "line {}: `{line}` want {code}@{col}, got {other:?} (emitted {emitted})",
+                i + 1
+            )),
         }
     }
     println!("bad set: {n} cases");

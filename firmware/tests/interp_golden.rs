@@ -17,7 +17,11 @@ fn golden_files() {
         .filter(|p| p.extension().is_some_and(|x| x == "ngc"))
         .collect();
     names.sort();
-    assert!(names.len() >= 10, "expected at least 10 golden programs, found {}", names.len());
+    assert!(
+        names.len() >= 10,
+        "expected at least 10 golden programs, found {}",
+        names.len()
+    );
     let mut failed = Vec::new();
     for ngc in &names {
         let src = std::fs::read_to_string(ngc).expect("read ngc");
@@ -29,7 +33,10 @@ fn golden_files() {
         }
         let want = std::fs::read_to_string(&exp_path).unwrap_or_default();
         if got != want {
-            eprintln!("=== {} differs\n--- got\n{got}--- want\n{want}", ngc.display());
+            eprintln!(
+                "=== {} differs\n--- got\n{got}--- want\n{want}",
+                ngc.display()
+            );
             failed.push(ngc.display().to_string());
         }
     }

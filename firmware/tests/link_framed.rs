@@ -4,15 +4,13 @@
 
 mod link_common;
 
-use burin::link::{Link, LinkMode};
+use burin::link::{encode_reply, FramedAction, FramedPort, Link, LinkMode};
 use link_common::{drain, own, rts, run_chunks, Ev, Outcome, Rng};
 use proptest::prelude::*;
 use protocol::client::mem::MemPipe;
 use protocol::client::Client;
 use protocol::frame::{self, MAX_WIRE};
-use protocol::{
-    DeviceInfo, DeviceMsg, FrameError, HostMsg, LineText, LineVerdict, Rt, Session, ShortText,
-};
+use protocol::{DeviceInfo, DeviceMsg, FrameError, HostMsg, LineText, Rt, ShortText};
 use std::collections::VecDeque;
 use std::io::{Read, Write};
 
@@ -23,7 +21,10 @@ fn enc(m: &HostMsg) -> Vec<u8> {
 }
 
 fn line(seq: u32, t: &[u8]) -> HostMsg {
-    HostMsg::Line { seq, text: LineText::from_slice(t).expect("short") }
+    HostMsg::Line {
+        seq,
+        text: LineText::from_slice(t).expect("short"),
+    }
 }
 
 fn sample() -> (Vec<u8>, Outcome) {
@@ -31,7 +32,10 @@ fn sample() -> (Vec<u8>, Outcome) {
     let mut events = vec![Ev::Line(b"G0 X1".to_vec()), Ev::Mode(LinkMode::Framed)];
     let msgs = [
         HostMsg::Hello { version: 1 },
-        line(1, b"G1 X5 ? ! ~ \x18 \x85 \x91 (realtime bytes are data here)"),
+        line(
+            1,
+            b"G1 X5 ? ! ~ \x18 \x85 \x91 (realtime bytes are data here)",
+        ),
         line(2, &[0u8, 1, 2, 0, 0xFF]),
         HostMsg::ListSettings,
     ];
@@ -49,7 +53,13 @@ fn sample() -> (Vec<u8>, Outcome) {
     events.push(Ev::Frame(HostMsg::Bye));
     s.extend_from_slice(b"?G0 X0\n");
     events.push(Ev::Line(b"G0 X0".to_vec()));
-    (s, Outcome { events, realtime: rts(&[Rt::FeedHold, Rt::StatusQuery]) })
+    (
+        s,
+        Outcome {
+            events,
+            realtime: rts(&[Rt::FeedHold, Rt::StatusQuery]),
+        },
+    )
 }
 
 #[test]
@@ -68,7 +78,10 @@ fn framed_sample_in_every_chunking() {
         assert_eq!(run_chunks(&bytes, [cut, usize::MAX]), want, "cut {cut}");
         runs += 1;
     }
-    println!("framed split runs: {runs} over a {}-byte stream", bytes.len());
+    println!(
+        "framed split runs: {runs} over a {}-byte stream",
+        bytes.len()
+    );
 }
 
 #[test]
@@ -96,11 +109,11 @@ fn every_bit_flip_of_line_and_realtime_frames_is_refused() {
     println!("framed bit flips through the link: {count}, all refused");
 }
 
-/// The device side: the firmware link + Session + a queue of `cap` slots.
+/// The device side: the firmware link + FramedPort + a queue of `cap` slots.
 struct Dev {
     io: MemPipe,
     link: Link,
-    session: Session,
+    port: FramedPort,
     queue: VecDeque<Vec<u8>>,
     cap: usize,
     executed: Vec<Vec<u8>>,
@@ -110,8 +123,9 @@ struct Dev {
 impl Dev {
     fn send(&mut self, m: &DeviceMsg) {
         let mut b = [0u8; MAX_WIRE];
-        let n = frame::encode(m, &mut b).expect("encode");
-        let _ = self.io.write_all(&b[..n]);
+        let bytes = encode_reply(m, &mut b);
+        assert!(!bytes.is_empty());
+        let _ = self.io.write_all(bytes);
     }
 
     fn pump(&mut self) {
@@ -130,37 +144,33 @@ impl Dev {
 
     fn handle(&mut self, ev: Ev) {
         let free = (self.cap - self.queue.len()) as u16;
+        let info = DeviceInfo {
+            protocol: protocol::PROTOCOL_VERSION,
+            firmware: ShortText::try_from(burin::VERSION).unwrap_or_default(),
+            board: ShortText::try_from("test").unwrap_or_default(),
+            axes: 4,
+            line_slots: self.cap as u16,
+            planner_blocks: 16,
+            rx_bytes: 128,
+            caps: 0,
+            next_seq: 0,
+            credits: 0,
+        };
+        let mut replies = Vec::new();
+        let mut out = |m: &DeviceMsg| replies.push(m.clone());
         match ev {
-            Ev::Frame(HostMsg::Hello { .. }) => {
-                self.session.advertise(free);
-                let info = DeviceInfo {
-                    protocol: protocol::PROTOCOL_VERSION,
-                    firmware: ShortText::try_from(burin::VERSION).unwrap_or_default(),
-                    board: ShortText::try_from("test").unwrap_or_default(),
-                    axes: 4,
-                    line_slots: self.cap as u16,
-                    planner_blocks: 16,
-                    rx_bytes: 128,
-                    caps: 0,
-                    next_seq: self.session.next_seq(),
-                    credits: free,
-                };
-                self.send(&DeviceMsg::Welcome(info));
-            }
-            Ev::Frame(HostMsg::Line { seq, text }) => {
-                let (v, reply) = self.session.on_line(seq, free);
-                if v == LineVerdict::Execute {
+            Ev::Frame(msg) => {
+                if let Some(FramedAction::Execute { text, .. }) =
+                    self.port.on_frame(msg, free, &info, &mut out)
+                {
                     self.queue.push_back(text.to_vec());
                 }
-                if let Some(r) = reply {
-                    self.send(&r);
-                }
             }
-            Ev::BadFrame(e) => {
-                let m = self.session.on_bad_frame(e);
-                self.send(&m);
-            }
+            Ev::BadFrame(e) => self.port.on_bad_frame(e, &mut out),
             _ => {}
+        }
+        for r in &replies {
+            self.send(r);
         }
     }
 
@@ -168,8 +178,13 @@ impl Dev {
         if let Some(l) = self.queue.pop_front() {
             self.executed.push(l);
         }
-        if let Some(m) = self.session.refresh((self.cap - self.queue.len()) as u16) {
-            self.send(&m);
+        let mut replies = Vec::new();
+        self.port
+            .refresh((self.cap - self.queue.len()) as u16, &mut |m| {
+                replies.push(m.clone())
+            });
+        for r in &replies {
+            self.send(r);
         }
     }
 }
@@ -197,7 +212,7 @@ fn stream_job(seed: u64, one_in: usize, lines: &[Vec<u8>]) -> usize {
     let mut dev = Dev {
         io: dev_io,
         link: Link::new(),
-        session: Session::new(),
+        port: FramedPort::new(),
         queue: VecDeque::new(),
         cap: 5,
         executed: Vec::new(),
@@ -217,7 +232,10 @@ fn stream_job(seed: u64, one_in: usize, lines: &[Vec<u8>]) -> usize {
         dev.execute();
         damaged += relay(&mut wire_d, &mut wire_h, &mut rng, one_in);
         while client.poll().expect("poll").is_some() {}
-        assert!(lines.starts_with(&dev.executed), "duplicate or reordered line");
+        assert!(
+            lines.starts_with(&dev.executed),
+            "duplicate or reordered line"
+        );
         if next == lines.len() && client.in_flight() == 0 && dev.queue.is_empty() {
             assert_eq!(dev.executed, lines);
             return damaged;
@@ -230,7 +248,11 @@ fn stream_job(seed: u64, one_in: usize, lines: &[Vec<u8>]) -> usize {
             idle = 0;
         }
     }
-    panic!("seed {seed}: executed {}/{}", dev.executed.len(), lines.len());
+    panic!(
+        "seed {seed}: executed {}/{}",
+        dev.executed.len(),
+        lines.len()
+    );
 }
 
 #[test]
@@ -275,4 +297,67 @@ proptest! {
         let n = CASES.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
         if n == 5_000 { println!("framed noise: {n} cases"); }
     }
+}
+
+#[test]
+fn port_closed_mid_job_then_reopened_executes_nothing_twice() {
+    let lines: Vec<Vec<u8>> = (0..200)
+        .map(|i| format!("G1 X{i} F900").into_bytes())
+        .collect();
+    let (host, dev_io) = MemPipe::pair();
+    let mut dev = Dev {
+        io: dev_io,
+        link: Link::new(),
+        port: FramedPort::new(),
+        queue: VecDeque::new(),
+        cap: 6,
+        executed: Vec::new(),
+        rng: Rng(77),
+    };
+    let mut client = Client::new(host);
+    client.set_resync_after(None);
+    client.begin().expect("hello");
+    let mut next = 0;
+    let send = |client: &mut Client<MemPipe>, next: &mut usize| {
+        while *next < lines.len() && client.can_send() {
+            client.send_line(&lines[*next]).expect("send");
+            *next += 1;
+        }
+    };
+    while dev.executed.len() < 70 {
+        send(&mut client, &mut next);
+        dev.pump();
+        dev.execute();
+        while client.poll().expect("poll").is_some() {}
+    }
+    assert!(dev.link.flags().is_framed());
+    // Cable pulled with frames in flight: whatever is on the wire is lost.
+    send(&mut client, &mut next);
+    let mut lost = [0u8; 4096];
+    let _ = dev.io.read(&mut lost);
+    dev.io.close();
+    let held = dev.queue.len();
+    // The glue sees the port close: the link goes back to text mode and
+    // the machine holds (here: executes nothing) until the host is back.
+    dev.link.reset();
+    assert!(!dev.link.flags().is_framed());
+    assert_eq!(dev.queue.len(), held);
+
+    let (host2, dev2) = MemPipe::pair();
+    dev.io = dev2;
+    client.reconnect(host2).expect("reconnect");
+    for _ in 0..10_000 {
+        send(&mut client, &mut next);
+        dev.pump();
+        dev.execute();
+        while client.poll().expect("poll").is_some() {}
+        assert!(lines.starts_with(&dev.executed));
+        if next == lines.len() && client.in_flight() == 0 && dev.queue.is_empty() {
+            break;
+        }
+    }
+    assert_eq!(
+        dev.executed, lines,
+        "every line once, in order, across the reconnect"
+    );
 }

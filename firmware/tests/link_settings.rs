@@ -61,21 +61,37 @@ fn text(f: impl FnOnce(&mut ReplyBuf) -> core::fmt::Result) -> String {
 
 #[test]
 fn simple_replies() {
-    assert_eq!(text(|w| reply::ok(w)), "ok\r\n");
+    assert_eq!(text(reply::ok), "ok\r\n");
     assert_eq!(text(|w| reply::error(w, 22)), "error:22\r\n");
     assert_eq!(text(|w| reply::alarm(w, 1)), "ALARM:1\r\n");
-    assert_eq!(text(|w| reply::banner(w)), "\r\nGrbl 1.1h ['$' for help]\r\n");
+    assert_eq!(text(reply::banner), "\r\nGrbl 1.1h ['$' for help]\r\n");
     assert_eq!(text(|w| reply::msg(w, "Pgm End")), "[MSG:Pgm End]\r\n");
-    assert_eq!(text(|w| reply::gc(w, "G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0")),
-        "[GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]\r\n");
-    let info = BuildInfo { firmware: "0.1.0", board: "blackpill-f411", options: "VNMH", planner_blocks: 32 };
+    assert_eq!(
+        text(|w| reply::gc(w, "G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0")),
+        "[GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]\r\n"
+    );
+    let info = BuildInfo {
+        firmware: "0.1.0",
+        board: "blackpill-f411",
+        options: "VNMH",
+        planner_blocks: 32,
+    };
     assert_eq!(
         text(|w| reply::build_info(w, &info)),
         "[VER:1.1h.burin-0.1.0:blackpill-f411]\r\n[OPT:VNMH,32,128]\r\n"
     );
-    let f = Format { axes: 3, inches: false };
-    assert_eq!(text(|w| reply::param(w, "G54", &[1.0, -2.0, 0.0004, 9.0], f)), "[G54:1.000,-2.000,0.000]\r\n");
-    assert_eq!(text(|w| reply::probe(w, &[1.0, 2.0, -0.00001], true, f)), "[PRB:1.000,2.000,0.000:1]\r\n");
+    let f = Format {
+        axes: 3,
+        inches: false,
+    };
+    assert_eq!(
+        text(|w| reply::param(w, "G54", &[1.0, -2.0, 0.0004, 9.0], f)),
+        "[G54:1.000,-2.000,0.000]\r\n"
+    );
+    assert_eq!(
+        text(|w| reply::probe(w, &[1.0, 2.0, -0.00001], true, f)),
+        "[PRB:1.000,2.000,0.000:1]\r\n"
+    );
 }
 
 #[test]
@@ -87,7 +103,10 @@ fn settings_listing() {
         }
         Ok(())
     });
-    assert_eq!(out, "$0=2.000\r\n$1=25\r\n$10=1\r\n$110=5000.000\r\n$206=52\r\n");
+    assert_eq!(
+        out,
+        "$0=2.000\r\n$1=25\r\n$10=1\r\n$110=5000.000\r\n$206=52\r\n"
+    );
     let mut all = String::new();
     reply::settings(&mut all, &Settings::default()).expect("string sink");
     assert_eq!(all.lines().count(), 45);
@@ -111,8 +130,14 @@ fn status() -> Status {
 
 #[test]
 fn status_report_fields_in_grbl_order() {
-    let f = Format { axes: 3, inches: false };
-    let all = Extras { wco: true, ov: true };
+    let f = Format {
+        axes: 3,
+        inches: false,
+    };
+    let all = Extras {
+        wco: true,
+        ov: true,
+    };
     assert_eq!(
         text(|w| reply::status(w, &status(), 3, f, all)),
         "<Run|MPos:10.000,20.500,-1.250|Bf:15,128|Ln:42|FS:1500,12000|Pn:XPH|WCO:5.000,0.500,-1.000|Ov:100,100,100>\r\n"
@@ -123,11 +148,29 @@ fn status_report_fields_in_grbl_order() {
     hold.line = None;
     hold.pins = 0;
     assert_eq!(
-        text(|w| reply::status(w, &hold, 0, Format { axes: 4, inches: false }, Extras::default())),
+        text(|w| reply::status(
+            w,
+            &hold,
+            0,
+            Format {
+                axes: 4,
+                inches: false
+            },
+            Extras::default()
+        )),
         "<Hold:1|WPos:5.000,20.000,-0.250,0.000|FS:1500,12000>\r\n"
     );
     assert_eq!(
-        text(|w| reply::status(w, &hold, 1, Format { axes: 3, inches: true }, Extras::default())),
+        text(|w| reply::status(
+            w,
+            &hold,
+            1,
+            Format {
+                axes: 3,
+                inches: true
+            },
+            Extras::default()
+        )),
         "<Hold:1|MPos:0.3937,0.8071,-0.0492|FS:59,12000>\r\n"
     );
 }
@@ -146,7 +189,10 @@ fn wco_and_overrides_every_tenth_report_or_on_change() {
         ov_count += usize::from(e.ov);
     }
     assert_eq!((wco_count, ov_count), (2, 2));
-    s.overrides = Overrides { feed: 110, ..Overrides::default() };
+    s.overrides = Overrides {
+        feed: 110,
+        ..Overrides::default()
+    };
     assert!(c.next(&s).ov, "a change shows at once");
     s.wco[0] = 1.0;
     assert!(c.next(&s).wco);

@@ -114,7 +114,10 @@ fn realtime_acts_while_the_ring_is_full_and_nobody_reads() {
     drain(&mut link, &mut out);
     link.feed(b"G0 X1\n");
     drain(&mut link, &mut out);
-    assert_eq!(out.events, vec![Ev::Error(Code::RxOverflow), Ev::Line(b"G0 X1".to_vec())]);
+    assert_eq!(
+        out.events,
+        vec![Ev::Error(Code::RxOverflow), Ev::Line(b"G0 X1".to_vec())]
+    );
 }
 
 #[test]
@@ -137,7 +140,10 @@ fn longest_line_passes_and_one_more_byte_is_refused_whole() {
 #[test]
 fn rx_window_holds_128_unread_bytes_for_character_counting() {
     let mut link = Link::new();
-    assert!(link.room() >= RX_WINDOW + 64, "room for the window plus a USB packet");
+    assert!(
+        link.room() >= RX_WINDOW + 64,
+        "room for the window plus a USB packet"
+    );
     // A character-counting sender: at most RX_WINDOW bytes unacknowledged;
     // the device handles one line per tick.
     let lines: Vec<Vec<u8>> = (0..500)
@@ -159,7 +165,10 @@ fn rx_window_holds_128_unread_bytes_for_character_counting() {
         }
     }
     assert!(!link.flags().take_overflow());
-    let want: Vec<Ev> = lines.iter().map(|l| Ev::Line(l[..l.len() - 1].to_vec())).collect();
+    let want: Vec<Ev> = lines
+        .iter()
+        .map(|l| Ev::Line(l[..l.len() - 1].to_vec()))
+        .collect();
     assert_eq!(done, want);
 }
 

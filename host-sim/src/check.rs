@@ -88,14 +88,22 @@ pub fn command_json(c: &Command) -> String {
             )
         }
         Command::Spline(s) => {
-            format!("{},\"p1\":{},\"p2\":{}{}", motion("spline", &s.end), nums(&s.p1), nums(&s.p2), feed(&s.feed))
+            format!(
+                "{},\"p1\":{},\"p2\":{}{}",
+                motion("spline", &s.end),
+                nums(&s.p1),
+                nums(&s.p2),
+                feed(&s.feed)
+            )
         }
         Command::Probe { end, feed: f, kind } => {
             format!("{},\"probe\":\"{kind:?}\"{}", motion("probe", end), feed(f))
         }
         Command::Dwell { seconds } => format!("\"kind\":\"dwell\",\"seconds\":{seconds}"),
         Command::Home { axes: m } => format!("\"kind\":\"home\",\"axes\":{}", axes(*m)),
-        Command::VerifyHome { axes: m } => format!("\"kind\":\"verify_home\",\"axes\":{}", axes(*m)),
+        Command::VerifyHome { axes: m } => {
+            format!("\"kind\":\"verify_home\",\"axes\":{}", axes(*m))
+        }
         Command::Spindle { dir, speed } => {
             let d = match dir {
                 SpindleDir::Off => "off",
@@ -104,12 +112,17 @@ pub fn command_json(c: &Command) -> String {
             };
             format!("\"kind\":\"spindle\",\"dir\":\"{d}\",\"speed\":{speed}")
         }
-        Command::Coolant { mist, flood } => format!("\"kind\":\"coolant\",\"mist\":{mist},\"flood\":{flood}"),
+        Command::Coolant { mist, flood } => {
+            format!("\"kind\":\"coolant\",\"mist\":{mist},\"flood\":{flood}")
+        }
         Command::Aux { pin, value, synced } => {
             format!("\"kind\":\"aux\",\"pin\":{pin},\"value\":{value},\"synced\":{synced}")
         }
         Command::Motors { enable, axes: m } => {
-            format!("\"kind\":\"motors\",\"enable\":{enable},\"axes\":{}", axes(*m))
+            format!(
+                "\"kind\":\"motors\",\"enable\":{enable},\"axes\":{}",
+                axes(*m)
+            )
         }
         Command::Pause { optional } => format!("\"kind\":\"pause\",\"optional\":{optional}"),
         Command::ProgramEnd => "\"kind\":\"program_end\"".into(),
@@ -123,7 +136,9 @@ pub fn command_json(c: &Command) -> String {
             };
             format!("\"kind\":\"report\",\"what\":\"{w}\"")
         }
-        Command::FeedOverride { percent } => format!("\"kind\":\"feed_override\",\"percent\":{percent}"),
+        Command::FeedOverride { percent } => {
+            format!("\"kind\":\"feed_override\",\"percent\":{percent}")
+        }
         Command::Tool { number } => format!("\"kind\":\"tool\",\"number\":{number}"),
         Command::SaveSettings => "\"kind\":\"save_settings\"".into(),
         Command::LoadSettings => "\"kind\":\"load_settings\"".into(),
@@ -133,7 +148,12 @@ pub fn command_json(c: &Command) -> String {
 
 /// Interprets `source` line by line; prints errors (and with `dump` the
 /// commands) to `out`; returns how many lines failed.
-pub fn check_file(path_label: &str, source: &str, dump: bool, out: &mut dyn Write) -> io::Result<usize> {
+pub fn check_file(
+    path_label: &str,
+    source: &str,
+    dump: bool,
+    out: &mut dyn Write,
+) -> io::Result<usize> {
     let mut interp = Interpreter::new();
     let mut errors = 0;
     for (i, line) in source.split('\n').enumerate() {
@@ -147,7 +167,11 @@ pub fn check_file(path_label: &str, source: &str, dump: bool, out: &mut dyn Writ
                     }
                 }
                 if interp.needs_sync() {
-                    match cmds.iter().rev().find(|c| matches!(c, Command::Probe { .. })) {
+                    match cmds
+                        .iter()
+                        .rev()
+                        .find(|c| matches!(c, Command::Probe { .. }))
+                    {
                         Some(Command::Probe { end, .. }) => interp.probe_finished(*end, true),
                         _ => interp.set_machine_position(interp.state().pos),
                     }

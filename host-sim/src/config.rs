@@ -10,7 +10,10 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 
 use burin::settings::{AxisSettings, Settings};
-use burin::AXES;
+use burin::stepper::StepConfig;
+use burin::{AXES, AXIS_NAMES};
+
+use crate::record::{AxisInfo, RunInfo};
 
 /// A limit switch that closes when the axis reaches `trip_mm` (machine
 /// coordinates) going in its homing direction, and opens again `hysteresis_mm`
@@ -137,14 +140,30 @@ impl MachineConfig {
         })
     }
 
-    /// Step pulse width and direction setup time in timer ticks (rounded up,
-    /// so a driver never sees less than the configured time).
+    /// Step pulse width and direction setup time in timer ticks, exactly as
+    /// the core's step generator rounds them.
     pub fn pulse_ticks(&self) -> (u32, u32) {
-        let t = |us: f32| (f64::from(us) * f64::from(self.tick_hz) / 1e6).ceil() as u32;
-        (
-            t(self.settings.step_pulse_us),
-            t(self.settings.dir_setup_us),
-        )
+        let sc = StepConfig::new(&self.settings, self.tick_hz);
+        (sc.pulse_ticks, sc.dir_setup_ticks)
+    }
+
+    /// The static facts recorders are started with (and the terminal
+    /// summary prints axis names from).
+    pub fn run_info(&self) -> RunInfo {
+        let (pulse_ticks, dir_setup_ticks) = self.pulse_ticks();
+        let s = &self.settings;
+        RunInfo {
+            tick_hz: self.tick_hz,
+            axes: std::array::from_fn(|i| AxisInfo {
+                name: AXIS_NAMES[i],
+                steps_per_mm: s.axes[i].steps_per_mm,
+                max_rate_mm_min: s.axes[i].max_rate,
+                max_accel_mm_s2: s.axes[i].max_accel,
+                travel_mm: s.axes[i].max_travel,
+            }),
+            pulse_ticks,
+            dir_setup_ticks,
+        }
     }
 
     /// Refuses values the core cannot run with; the error names the TOML key.

@@ -12,6 +12,7 @@
 //! whenever a path grows past its point budget: the file stays under ~100k
 //! points while every shape wider than a pixel survives.
 
+mod frame;
 mod svg;
 
 use std::io::{self, Write};
@@ -266,6 +267,10 @@ impl<W: Write> Recorder for SvgPlot<W> {
             let spm = f64::from(info.axes[i].steps_per_mm);
             *m = if spm > 0.0 { 1.0 / spm } else { 1.0 };
         }
+        // Bresenham staircases wander up to a step off the line they follow;
+        // detail finer than one step is quantisation, not shape.
+        let step = self.mm_per_step[0].max(self.mm_per_step[1]);
+        self.stepped.tol = self.stepped.tol.max(step);
         self.info = Some(info.clone());
     }
 

@@ -96,7 +96,7 @@ fn dir_id(axis: usize) -> u8 {
 }
 
 pub struct Vcd<W: Write> {
-    out: W,
+    out: Option<W>,
     buf: Vec<u8>,
     error: Option<io::Error>,
     scale: TimeScale,
@@ -116,7 +116,7 @@ impl<W: Write> Vcd<W> {
     /// The header is written by [`Recorder::start`], which knows the tick rate.
     pub fn new(out: W) -> Self {
         Vcd {
-            out,
+            out: Some(out),
             buf: Vec::with_capacity(BLOCK + 256),
             error: None,
             scale: TimeScale::for_tick_hz(1),
@@ -245,7 +245,8 @@ impl<W: Write> Vcd<W> {
 
     fn drain(&mut self) {
         if self.error.is_none() {
-            if let Err(e) = self.out.write_all(&self.buf) {
+            let r = self.out.as_mut().map_or(Ok(()), |o| o.write_all(&self.buf));
+            if let Err(e) = r {
                 self.error = Some(e);
             }
         }
@@ -260,11 +261,17 @@ impl<W: Write> Vcd<W> {
         if let Some(e) = self.error.take() {
             return Err(e);
         }
-        self.out.flush()
+        self.out.as_mut().map_or(Ok(()), |o| o.flush())
     }
 
-    pub fn into_inner(self) -> W {
-        self.out
+    /// Gives the writer back, with everything buffered written to it (call
+    /// `close` or `finish` first to end pending pulses).
+    pub fn into_inner(mut self) -> W {
+        self.drain();
+        match self.out.take() {
+            Some(out) => out,
+            None => unreachable!("the writer is only taken here"),
+        }
     }
 }
 
@@ -285,5 +292,18 @@ impl<W: Write> Recorder for Vcd<W> {
         }
         let end = (summary.job_time_s.max(0.0) * f64::from(self.scale.tick_hz)) as u64;
         self.close(end)
+    }
+}
+
+impl<W: Write> Drop for Vcd<W> {
+    /// A run that ends without `finish` still leaves the edges written so
+    /// far; errors here have nowhere to go.
+    fn drop(&mut self) {
+        if self.out.is_some() && !self.buf.is_empty() {
+            self.drain();
+            if let Some(o) = self.out.as_mut() {
+                let _ = o.flush();
+            }
+        }
     }
 }

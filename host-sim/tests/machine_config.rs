@@ -172,3 +172,16 @@ fn missing_file_names_the_path() {
     let e = MachineConfig::load("/nonexistent/burin.toml").unwrap_err();
     assert!(e.to_string().contains("/nonexistent/burin.toml"));
 }
+
+#[test]
+fn run_info_matches_the_settings() {
+    let cfg = MachineConfig::load(machine("plotter.toml")).unwrap();
+    let info = cfg.run_info();
+    assert_eq!(
+        (info.tick_hz, info.pulse_ticks, info.dir_setup_ticks),
+        (96_000_000, 192, 96)
+    );
+    assert_eq!(info.axes[1].name, 'Y');
+    assert_eq!(info.axes[1].max_accel_mm_s2, 2500.0);
+    assert_eq!(info.axes[2].travel_mm, 10.0);
+}

@@ -68,9 +68,9 @@ fn corpus_jobs_end_exactly_and_keep_limits() {
         assert_eq!(s.final_position_steps, expected_steps(&info, end), "{rel}");
         assert_eq!(s.planner_underruns, 0, "{rel}");
         let rate = check_max_rate(&info, &rec.events);
-        let acc = check_max_accel(&info, &rec.events);
+        let (dev, corners) = check_path(&info, cfg.start_position_mm, &rec.path, &rec.events, 0.0);
+        let acc = check_max_accel(&info, &rec.events, &corners, cfg.settings.junction_deviation as f64);
         check_pin_timing(&info, &rec.events);
-        let dev = check_path(&info, cfg.start_position_mm, &rec.path, &rec.events, 0.0);
         println!(
             "{rel}: {} moves, {} step events, {:.1} s simulated, rate {rate:.3}, accel {acc:.3}, path dev {dev:.4} mm",
             s.moves,

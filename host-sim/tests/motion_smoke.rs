@@ -18,7 +18,8 @@ fn single_line_exact() {
     assert_eq!(s.steps, [1600, 800, 800, 0]);
     let info = rec.info.clone().unwrap();
     println!("rate {}", check_max_rate(&info, &rec.events));
-    println!("accel {}", check_max_accel(&info, &rec.events));
+    let (dev, corners) = check_path(&info, [0.0; 4], &rec.path, &rec.events, 0.0);
+    println!("accel {}", check_max_accel(&info, &rec.events, &corners, 0.01));
     check_pin_timing(&info, &rec.events);
-    println!("path {}", check_path(&info, [0.0; 4], &rec.path, &rec.events, 0.0));
+    println!("path {dev}");
 }

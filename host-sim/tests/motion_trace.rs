@@ -14,9 +14,6 @@ fn arc(end: [f32; 4], center: [f32; 2], plane: Plane, dir: ArcDir, turns: u16, f
 
 /// A job touching every motion kind: lines, rapids, arcs in all planes,
 /// helix, full circle, multi-turn, spline, G93, dwell, a reversal.
-pub fn mixed_job_pub() -> Vec<Command> {
-    mixed_job()
-}
 
 fn mixed_job() -> Vec<Command> {
     vec![
@@ -66,9 +63,9 @@ fn check_all(cfg: &MachineConfig, r: &Run, cmds: &[Command], label: &str) {
     assert!(r.summary.errors.is_empty(), "{label}: {:?}", r.summary.errors);
     assert_eq!(r.summary.final_position_steps, expected_steps(info, last_end(cmds)), "{label}");
     let rate = check_max_rate(info, &r.rec.events);
-    let acc = check_max_accel(info, &r.rec.events);
+    let (dev, corners) = check_path(info, cfg.start_position_mm, &r.rec.path, &r.rec.events, 0.0);
+    let acc = check_max_accel(info, &r.rec.events, &corners, cfg.settings.junction_deviation as f64);
     check_pin_timing(info, &r.rec.events);
-    let dev = check_path(info, cfg.start_position_mm, &r.rec.path, &r.rec.events, 0.0);
     println!(
         "{label}: {} step events, {:.3} s, worst rate {:.3}, worst accel {:.3}, worst path dev {:.4} mm, underruns {}",
         r.rec.events.len(),

@@ -161,7 +161,10 @@ mod tests {
     #[test]
     fn longest_line_fits_the_limits() {
         let text = LineText::from_slice(&[0xFF; crate::MAX_LINE]).unwrap_or_default();
-        let msg = HostMsg::Line { seq: u32::MAX, text };
+        let msg = HostMsg::Line {
+            seq: u32::MAX,
+            text,
+        };
         let mut out = [0u8; MAX_WIRE];
         let n = encode(&msg, &mut out).expect("fits");
         assert!(n <= MAX_WIRE);

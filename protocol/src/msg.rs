@@ -53,7 +53,11 @@ pub enum DeviceMsg {
     Status(Status),
     /// A queued line failed when parsed or executed. `seq` is its sequence
     /// number (None for requests outside the job stream), `line` its N word.
-    Error { seq: Option<u32>, line: Option<u32>, code: u16 },
+    Error {
+        seq: Option<u32>,
+        line: Option<u32>,
+        code: u16,
+    },
     /// Alarm: the machine stopped; [`crate::codes::alarm`] numbers.
     Alarm { code: u16 },
     /// One setting's value.

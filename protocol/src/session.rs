@@ -159,14 +159,34 @@ mod tests {
         assert_eq!(s.on_line(1, 3).0, LineVerdict::Duplicate);
         let (v, m) = s.on_line(3, 3);
         assert_eq!(v, LineVerdict::Reject(Code::SeqGap));
-        assert_eq!(m, Some(DeviceMsg::Nak { expected: 2, code: 104 }));
+        assert_eq!(
+            m,
+            Some(DeviceMsg::Nak {
+                expected: 2,
+                code: 104
+            })
+        );
         // The rest of the burst is dropped without another Nak.
         assert_eq!(s.on_line(4, 3), (LineVerdict::Reject(Code::SeqGap), None));
         assert_eq!(s.on_line(2, 0).0, LineVerdict::Reject(Code::FlowOverrun));
         let (v, m) = s.on_line(2, 1);
         assert_eq!(v, LineVerdict::Execute);
-        assert_eq!(m, Some(DeviceMsg::Ack { seq: 2, next: 3, credits: 0 }));
+        assert_eq!(
+            m,
+            Some(DeviceMsg::Ack {
+                seq: 2,
+                next: 3,
+                credits: 0
+            })
+        );
         assert!(s.refresh(0).is_none());
-        assert!(matches!(s.refresh(2), Some(DeviceMsg::Ack { seq: 2, next: 3, credits: 2 })));
+        assert!(matches!(
+            s.refresh(2),
+            Some(DeviceMsg::Ack {
+                seq: 2,
+                next: 3,
+                credits: 2
+            })
+        ));
     }
 }

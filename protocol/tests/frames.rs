@@ -12,10 +12,19 @@ fn samples() -> Vec<HostMsg> {
     let line = |s: &str| LineText::from_slice(s.as_bytes()).expect("short");
     vec![
         HostMsg::Hello { version: 1 },
-        HostMsg::Line { seq: 7, text: line("G1 X10.5 Y-3 F1200") },
-        HostMsg::Line { seq: u32::MAX, text: LineText::from_slice(&[0u8; 256]).expect("fits") },
+        HostMsg::Line {
+            seq: 7,
+            text: line("G1 X10.5 Y-3 F1200"),
+        },
+        HostMsg::Line {
+            seq: u32::MAX,
+            text: LineText::from_slice(&[0u8; 256]).expect("fits"),
+        },
         HostMsg::Realtime(Rt::FeedHold),
-        HostMsg::SetSetting { n: 110, value: 5000.0 },
+        HostMsg::SetSetting {
+            n: 110,
+            value: 5000.0,
+        },
         HostMsg::ListSettings,
         HostMsg::Bye,
     ]
@@ -26,14 +35,29 @@ fn device_samples() -> Vec<DeviceMsg> {
         state: MachineState::Run,
         mpos: [1.0, -2.5, 3.25, 90.0],
         line: Some(42),
-        overrides: Overrides { feed: 120, rapid: 50, spindle: 100 },
+        overrides: Overrides {
+            feed: 120,
+            rapid: 50,
+            spindle: 100,
+        },
         ..Status::default()
     };
     vec![
-        DeviceMsg::Ack { seq: 1, next: 2, credits: 15 },
-        DeviceMsg::Nak { expected: 9, code: 101 },
+        DeviceMsg::Ack {
+            seq: 1,
+            next: 2,
+            credits: 15,
+        },
+        DeviceMsg::Nak {
+            expected: 9,
+            code: 101,
+        },
         DeviceMsg::Status(status),
-        DeviceMsg::Error { seq: Some(3), line: Some(30), code: 22 },
+        DeviceMsg::Error {
+            seq: Some(3),
+            line: Some(30),
+            code: 22,
+        },
         DeviceMsg::Alarm { code: 1 },
         DeviceMsg::Msg(MsgText::try_from("Pgm End").expect("short")),
         DeviceMsg::Welcome(DeviceInfo {
@@ -109,7 +133,10 @@ fn truncated_frames_are_rejected() {
             let out = decode_all::<HostMsg>(&bad);
             assert_eq!(out.len(), 1);
             let e = out[0].as_ref().expect_err("truncated frame must fail");
-            assert!(matches!(e, FrameError::Corrupt | FrameError::Crc | FrameError::Decode));
+            assert!(matches!(
+                e,
+                FrameError::Corrupt | FrameError::Crc | FrameError::Decode
+            ));
         }
     }
 }
@@ -123,7 +150,10 @@ fn oversized_frame_is_too_long_then_resync() {
     let out = decode_all::<HostMsg>(&bytes);
     assert_eq!(
         out,
-        vec![Err(FrameError::TooLong), Ok(HostMsg::Realtime(Rt::StatusQuery))]
+        vec![
+            Err(FrameError::TooLong),
+            Ok(HostMsg::Realtime(Rt::StatusQuery))
+        ]
     );
     assert_eq!(FrameError::TooLong.code().code(), 102);
     // A message too big to encode is refused, not truncated.

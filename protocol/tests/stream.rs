@@ -160,7 +160,11 @@ fn host_disconnect_mid_job_then_reconnect_executes_nothing_twice() {
         run.dev.execute(1);
     }
     assert!(run.dev.held, "device notices the host is gone");
-    assert_eq!(run.dev.queue.len(), queued, "device holds: runs nothing while held");
+    assert_eq!(
+        run.dev.queue.len(),
+        queued,
+        "device holds: runs nothing while held"
+    );
     let noticed = (0..100).any(|_| run.client.poll().is_err());
     assert!(noticed, "client notices the disconnect");
 
@@ -182,7 +186,10 @@ fn overrunning_the_credits_is_refused_and_loses_nothing() {
     std::io::Write::write_all(&mut host, &[0]).expect("write");
     for (i, l) in lines.iter().enumerate() {
         let text = LineText::from_slice(l).expect("short line");
-        let msg = HostMsg::Line { seq: i as u32 + 1, text };
+        let msg = HostMsg::Line {
+            seq: i as u32 + 1,
+            text,
+        };
         let n = frame::encode(&msg, &mut buf).expect("encode");
         std::io::Write::write_all(&mut host, &buf[..n]).expect("write");
     }

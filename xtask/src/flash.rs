@@ -37,8 +37,13 @@ pub fn run(a: &FlashArgs) -> Result<i32> {
         std::fs::write(&path, &bin).with_context(|| format!("writing {}", path.display()))?;
         println!("  raw image: {} ({} B)", path.display(), bin.len());
         let mut c = Command::new("dfu-util");
-        c.args(["-a", "0", "-s", &format!("{FLASH_BASE:#010x}:leave"), "-D"]).arg(&path);
-        ("dfu-util", "apt-get install dfu-util (or your OS's dfu-util package)", c)
+        c.args(["-a", "0", "-s", &format!("{FLASH_BASE:#010x}:leave"), "-D"])
+            .arg(&path);
+        (
+            "dfu-util",
+            "apt-get install dfu-util (or your OS's dfu-util package)",
+            c,
+        )
     } else {
         // `probe-rs run` flashes, resets and then streams the defmt log;
         // Ctrl-C detaches and the board keeps running.

@@ -63,7 +63,11 @@ impl Board {
             Board::F411 => 64 * KIB,
             Board::F401 => 48 * KIB,
         };
-        Sizes { flash: 128 * KIB, ram, ..Sizes::default() }
+        Sizes {
+            flash: 128 * KIB,
+            ram,
+            ..Sizes::default()
+        }
     }
 }
 
@@ -84,7 +88,11 @@ pub struct BuildArgs {
 }
 
 pub fn run(a: &BuildArgs) -> Result<i32> {
-    let boards: &[Board] = if a.all { &Board::ALL } else { std::slice::from_ref(&a.board) };
+    let boards: &[Board] = if a.all {
+        &Board::ALL
+    } else {
+        std::slice::from_ref(&a.board)
+    };
     for &board in boards {
         build_and_check(board)?;
     }
@@ -113,7 +121,14 @@ pub fn build_and_check(board: Board) -> Result<Sizes> {
 pub fn build_board(board: Board) -> Result<PathBuf> {
     util::ensure_target()?;
     let mut cmd = util::cargo();
-    cmd.args(["build", "--package", "firmware", "--bin", "burin-fw", "--release"]);
+    cmd.args([
+        "build",
+        "--package",
+        "firmware",
+        "--bin",
+        "burin-fw",
+        "--release",
+    ]);
     cmd.args(["--target", util::TARGET]);
     cmd.args(board.cargo_features());
     util::run(&mut cmd)?;
@@ -156,12 +171,18 @@ pub fn size_report(elf: &Path) -> Result<Sizes> {
 
 fn sizes_of(file: &ElfFile32<'_>) -> Result<Sizes> {
     let endian = file.endian();
-    let mut s = Sizes { flash: image_len(&load_segments(file)?)?, ..Sizes::default() };
+    let mut s = Sizes {
+        flash: image_len(&load_segments(file)?)?,
+        ..Sizes::default()
+    };
     for section in file.elf_section_table().iter() {
         if section.sh_flags(endian) & SHF_ALLOC == 0 {
             continue;
         }
-        let name = file.elf_section_table().section_name(endian, section).unwrap_or_default();
+        let name = file
+            .elf_section_table()
+            .section_name(endian, section)
+            .unwrap_or_default();
         let (addr, size) = (section.sh_addr(endian), section.sh_size(endian));
         match name {
             b".vector_table" => s.vector_table += size,
@@ -189,7 +210,12 @@ fn pct(part: u32, whole: u32) -> f64 {
 
 pub fn print_sizes(board: Board, elf: &Path, s: &Sizes) {
     let b = board.budget();
-    println!("burin-fw for {} ({}): {}", board.name(), board.chip(), elf.display());
+    println!(
+        "burin-fw for {} ({}): {}",
+        board.name(),
+        board.chip(),
+        elf.display()
+    );
     println!(
         "  flash {:>7} B = {:>9}  ({:4.1}% of the {} budget, chip {})",
         s.flash,
@@ -223,10 +249,20 @@ pub fn print_sizes(board: Board, elf: &Path, s: &Sizes) {
 pub fn check_budget(board: Board, s: &Sizes) -> Result<()> {
     let b = board.budget();
     if s.flash > b.flash {
-        bail!("{}: flash {} B is over the {} budget", board.name(), s.flash, kib(b.flash));
+        bail!(
+            "{}: flash {} B is over the {} budget",
+            board.name(),
+            s.flash,
+            kib(b.flash)
+        );
     }
     if s.ram > b.ram {
-        bail!("{}: static RAM {} B is over the {} budget", board.name(), s.ram, kib(b.ram));
+        bail!(
+            "{}: static RAM {} B is over the {} budget",
+            board.name(),
+            s.ram,
+            kib(b.ram)
+        );
     }
     Ok(())
 }
@@ -240,11 +276,14 @@ pub fn check_vectors(elf: &Path) -> Result<()> {
     let bytes = read(elf)?;
     let file = parse(&bytes)?;
     let default = symbol(&file, "DefaultHandler")?;
-    let table = file.section_by_name(".vector_table").context("no .vector_table section")?;
+    let table = file
+        .section_by_name(".vector_table")
+        .context("no .vector_table section")?;
     let data = table.data().context("reading .vector_table")?;
     for (name, irq) in RTIC_IRQS {
         let at = 4 * (16 + irq as usize);
-        let entry = word(data, at).with_context(|| format!("vector table too short for IRQ {irq}"))?;
+        let entry =
+            word(data, at).with_context(|| format!("vector table too short for IRQ {irq}"))?;
         if entry & !1 == default & !1 {
             bail!("IRQ {irq} ({name}) points at DefaultHandler: the RTIC task is not bound");
         }
@@ -258,7 +297,9 @@ pub fn check_vectors(elf: &Path) -> Result<()> {
 }
 
 fn symbol(file: &ElfFile32<'_>, name: &str) -> Result<u32> {
-    let sym = file.symbol_by_name(name).with_context(|| format!("no symbol `{name}` in the ELF"))?;
+    let sym = file
+        .symbol_by_name(name)
+        .with_context(|| format!("no symbol `{name}` in the ELF"))?;
     u32::try_from(sym.address()).context("symbol address beyond 32 bits")
 }
 
@@ -280,8 +321,14 @@ pub fn load_segments<'a>(file: &ElfFile32<'a>) -> Result<Vec<Segment<'a>>> {
         if ph.p_type(endian) != PT_LOAD || ph.p_filesz(endian) == 0 {
             continue;
         }
-        let data = ph.data(endian, file.data()).ok().context("PT_LOAD segment outside the file")?;
-        out.push(Segment { paddr: ph.p_paddr(endian), data });
+        let data = ph
+            .data(endian, file.data())
+            .ok()
+            .context("PT_LOAD segment outside the file")?;
+        out.push(Segment {
+            paddr: ph.p_paddr(endian),
+            data,
+        });
     }
     Ok(out)
 }
@@ -294,7 +341,11 @@ fn image_len(segments: &[Segment<'_>]) -> Result<u32> {
             bail!("segment loads at {:#010x}, outside flash", s.paddr);
         }
         let len = u32::try_from(s.data.len()).context("segment too large")?;
-        end = end.max(s.paddr.checked_add(len).context("segment wraps the address space")?);
+        end = end.max(
+            s.paddr
+                .checked_add(len)
+                .context("segment wraps the address space")?,
+        );
     }
     Ok(end - FLASH_BASE)
 }
@@ -343,9 +394,17 @@ pub fn check_boot(bin: &[u8], board: Board) -> Result<BootInfo> {
         bail!("reset vector {reset:#010x} is outside the image");
     }
     if len > board.flash_bytes() {
-        bail!("image is {len} B; the {} has {} B of flash", board.chip(), board.flash_bytes());
+        bail!(
+            "image is {len} B; the {} has {} B of flash",
+            board.chip(),
+            board.flash_bytes()
+        );
     }
-    Ok(BootInfo { initial_sp, reset, len })
+    Ok(BootInfo {
+        initial_sp,
+        reset,
+        len,
+    })
 }
 
 /// Builds the raw image of `elf` and checks it boots on `board`; also checks
@@ -353,9 +412,14 @@ pub fn check_boot(bin: &[u8], board: Board) -> Result<BootInfo> {
 pub fn boot_image(elf: &Path, board: Board) -> Result<(Vec<u8>, BootInfo)> {
     let bytes = read(elf)?;
     let file = parse(&bytes)?;
-    let table = file.section_by_name(".vector_table").context("no .vector_table section")?;
+    let table = file
+        .section_by_name(".vector_table")
+        .context("no .vector_table section")?;
     if table.address() != u64::from(FLASH_BASE) {
-        bail!("vector table at {:#010x}, not at {FLASH_BASE:#010x}", table.address());
+        bail!(
+            "vector table at {:#010x}, not at {FLASH_BASE:#010x}",
+            table.address()
+        );
     }
     let bin = raw_image(&load_segments(&file)?, board.flash_bytes())?;
     let info = check_boot(&bin, board)?;
@@ -378,8 +442,14 @@ mod tests {
         let a = [1u8, 2, 3, 4];
         let b = [9u8, 8];
         let segs = [
-            Segment { paddr: FLASH_BASE, data: &a },
-            Segment { paddr: FLASH_BASE + 8, data: &b },
+            Segment {
+                paddr: FLASH_BASE,
+                data: &a,
+            },
+            Segment {
+                paddr: FLASH_BASE + 8,
+                data: &b,
+            },
         ];
         let bin = raw_image(&segs, 512 * KIB).unwrap();
         assert_eq!(bin, [1, 2, 3, 4, 0xFF, 0xFF, 0xFF, 0xFF, 9, 8]);
@@ -388,9 +458,15 @@ mod tests {
     #[test]
     fn raw_image_rejects_ram_segments_and_oversize() {
         let a = [0u8; 16];
-        let in_ram = [Segment { paddr: RAM_BASE, data: &a }];
+        let in_ram = [Segment {
+            paddr: RAM_BASE,
+            data: &a,
+        }];
         assert!(raw_image(&in_ram, 512 * KIB).is_err());
-        let far = [Segment { paddr: FLASH_BASE + 256 * KIB, data: &a }];
+        let far = [Segment {
+            paddr: FLASH_BASE + 256 * KIB,
+            data: &a,
+        }];
         assert!(raw_image(&far, 256 * KIB).is_err());
         assert!(raw_image(&far, 512 * KIB).is_ok());
     }
@@ -415,10 +491,17 @@ mod tests {
 
     #[test]
     fn budgets_fail_when_exceeded() {
-        let ok = Sizes { flash: 128 * KIB, ram: 64 * KIB, ..Sizes::default() };
+        let ok = Sizes {
+            flash: 128 * KIB,
+            ram: 64 * KIB,
+            ..Sizes::default()
+        };
         assert!(check_budget(Board::F411, &ok).is_ok());
         assert!(check_budget(Board::F401, &ok).is_err());
-        let big = Sizes { flash: 128 * KIB + 1, ..ok };
+        let big = Sizes {
+            flash: 128 * KIB + 1,
+            ..ok
+        };
         assert!(check_budget(Board::F411, &big).is_err());
     }
 }

@@ -56,7 +56,13 @@ pub fn ensure_target() -> Result<()> {
         .current_dir(root())
         .output();
     match out {
-        Ok(o) if String::from_utf8_lossy(&o.stdout).lines().any(|l| l.trim() == TARGET) => Ok(()),
+        Ok(o)
+            if String::from_utf8_lossy(&o.stdout)
+                .lines()
+                .any(|l| l.trim() == TARGET) =>
+        {
+            Ok(())
+        }
         Ok(_) => run(Command::new("rustup")
             .args(["target", "add", TARGET])
             .current_dir(root())),

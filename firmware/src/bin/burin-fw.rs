@@ -109,7 +109,10 @@ mod app {
         // Step timer: TIM5 at the timer clock, first event one half period
         // from now. Its interrupt is unmasked by RTIC when init returns.
         let mut timer = Tim5::new(dp.TIM5, &mut rcc);
-        let pulses = FixedRate::new(crate::DEMO_STEP_HZ, burin::seams::StepTimer::tick_hz(&timer));
+        let pulses = FixedRate::new(
+            crate::DEMO_STEP_HZ,
+            burin::seams::StepTimer::tick_hz(&timer),
+        );
         timer.start(pulses.first());
 
         // Channels between the USB interrupt and the parse task.
@@ -123,13 +126,18 @@ mod app {
             pins.usb_pins,
             &rcc.clocks,
         );
-        let bus = &*cx.local.usb_bus.insert(UsbBus::new(usb, cx.local.ep_memory));
+        let bus = &*cx
+            .local
+            .usb_bus
+            .insert(UsbBus::new(usb, cx.local.ep_memory));
         let link = UsbLink::new(bus, serial, rx_send, tx_recv);
 
         // Heartbeat: SysTick at HEARTBEAT_HZ from the core clock.
         let sysclk = rcc.clocks.sysclk().raw();
         core.SYST.set_clock_source(SystClkSource::Core);
-        core.SYST.set_reload(sysclk / crate::HEARTBEAT_HZ - 1);
+        // The reload register has 24 bits (16.7 M cycles, 0.17 s at 96 MHz).
+        core.SYST
+            .set_reload((sysclk / crate::HEARTBEAT_HZ - 1).min(0x00FF_FFFF));
         core.SYST.clear_current();
         core.SYST.enable_interrupt();
         core.SYST.enable_counter();
@@ -143,7 +151,13 @@ mod app {
         let mut watchdog = watchdog;
         watchdog.start(crate::WATCHDOG_MS.millis());
 
-        defmt::info!("burin {} on {} at {} Hz, USB serial {}", burin::VERSION, board::NAME, sysclk, serial);
+        defmt::info!(
+            "burin {} on {} at {} Hz, USB serial {}",
+            burin::VERSION,
+            board::NAME,
+            sysclk,
+            serial
+        );
         (
             Shared {},
             Local {
@@ -173,7 +187,12 @@ mod app {
     /// task only acknowledges the timer and lends it the two seams.
     #[task(binds = TIM5, priority = 3, local = [timer, steppers, pulses])]
     fn step(cx: step::Context) {
-        let step::LocalResources { timer, steppers, pulses, .. } = cx.local;
+        let step::LocalResources {
+            timer,
+            steppers,
+            pulses,
+            ..
+        } = cx.local;
         timer.clear_update();
         pulses.on_event(steppers, timer);
     }
@@ -202,14 +221,23 @@ mod app {
     /// changes, so the wiring can be checked switch by switch with a probe.
     #[task(binds = SysTick, priority = 1, local = [led, inputs, ticks: u32 = 0, last: u8 = 0])]
     fn heartbeat(cx: heartbeat::Context) {
-        let heartbeat::LocalResources { led, inputs, ticks, last, .. } = cx.local;
+        let heartbeat::LocalResources {
+            led,
+            inputs,
+            ticks,
+            last,
+            ..
+        } = cx.local;
         *ticks = ticks.wrapping_add(1);
         if *ticks % (crate::HEARTBEAT_HZ / 2) == 0 {
             led.toggle();
         }
         let closed = inputs.closed();
         if closed != *last {
-            defmt::info!("inputs closed: {=u8:07b} (bit 0 X limit .. 6 e-stop)", closed);
+            defmt::info!(
+                "inputs closed: {=u8:07b} (bit 0 X limit .. 6 e-stop)",
+                closed
+            );
             *last = closed;
         }
     }
@@ -219,6 +247,12 @@ mod app {
         const UID: *const u32 = 0x1FFF_7A10 as *const u32;
         // SAFETY: 0x1FFF_7A10..0x1FFF_7A1C is the factory-programmed,
         // always-readable unique device ID of every STM32F4 (RM0383 §24.1).
-        unsafe { [UID.read_volatile(), UID.add(1).read_volatile(), UID.add(2).read_volatile()] }
+        unsafe {
+            [
+                UID.read_volatile(),
+                UID.add(1).read_volatile(),
+                UID.add(2).read_volatile(),
+            ]
+        }
     }
 }

@@ -47,7 +47,10 @@ pub enum ErrorKind {
     /// `(` inside a comment.
     NestedComment,
     /// RepRap `*nn` checksum does not match the XOR of the bytes before it.
-    ChecksumMismatch { expected: u8, computed: u8 },
+    ChecksumMismatch {
+        expected: u8,
+        computed: u8,
+    },
     /// `*` not followed by a 0-255 number at the end of the line.
     BadChecksum,
     /// `N` after other words.
@@ -234,10 +237,9 @@ fn letter(c: u8) -> char {
 
 /// Writes `G59.1` / `M3` from a letter and a number in tenths.
 pub(crate) fn write_code(f: &mut dyn fmt::Write, l: u8, tenths: u16) -> fmt::Result {
-    if tenths % 10 == 0 {
-        write!(f, "{}{}", letter(l), tenths / 10)
-    } else {
-        write!(f, "{}{}.{}", letter(l), tenths / 10, tenths % 10)
+    match tenths % 10 {
+        0 => write!(f, "{}{}", letter(l), tenths / 10),
+        d => write!(f, "{}{}.{}", letter(l), tenths / 10, d),
     }
 }
 
@@ -268,7 +270,10 @@ impl fmt::Display for ErrorKind {
             UnclosedComment => f.write_str("comment not closed with ')'"),
             NestedComment => f.write_str("'(' inside a comment"),
             ChecksumMismatch { expected, computed } => {
-                write!(f, "checksum mismatch: line says {expected}, bytes give {computed}")
+                write!(
+                    f,
+                    "checksum mismatch: line says {expected}, bytes give {computed}"
+                )
             }
             BadChecksum => f.write_str("'*' checksum must be 0-255 at the end of the line"),
             LineNumberMisplaced => f.write_str("N word must come first on the line"),

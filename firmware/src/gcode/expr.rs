@@ -62,7 +62,8 @@ impl Cursor<'_> {
             } else {
                 break;
             }
-            *buf.get_mut(n).ok_or_else(|| self.err_at(ErrorKind::BadNumber, start))? = b;
+            *buf.get_mut(n)
+                .ok_or_else(|| self.err_at(ErrorKind::BadNumber, start))? = b;
             n += 1;
             self.bump();
         }
@@ -133,7 +134,10 @@ impl Cursor<'_> {
                             self.bump();
                             let n = name.as_bytes();
                             if n.len() == 5 && (n == b"_hal[" || n == b"_ini[") {
-                                return Err(self.err_at(ErrorKind::Unsupported(Unsupported::SystemParam), col));
+                                return Err(self.err_at(
+                                    ErrorKind::Unsupported(Unsupported::SystemParam),
+                                    col,
+                                ));
                             }
                         }
                         _ => return Err(self.err(ErrorKind::BadNumber)),
@@ -329,7 +333,13 @@ impl Cursor<'_> {
         }
         self.bump();
         let a = self.bracket(p, depth + 1)?;
-        let dom = |ok: bool| if ok { Ok(()) } else { Err(self.err_at(ErrorKind::DomainError, col)) };
+        let dom = |ok: bool| {
+            if ok {
+                Ok(())
+            } else {
+                Err(self.err_at(ErrorKind::DomainError, col))
+            }
+        };
         let v = match &w {
             b"ABS\0\0" => a.abs(),
             b"ACOS\0" => {

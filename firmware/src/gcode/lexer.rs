@@ -51,7 +51,11 @@ impl<'a> Cursor<'a> {
     /// The non-blank byte after the one [`Cursor::peek`] returns.
     pub(crate) fn peek2(&mut self) -> Option<u8> {
         self.peek()?;
-        self.line.get(self.pos + 1..)?.iter().copied().find(|&b| !blank(b))
+        self.line
+            .get(self.pos + 1..)?
+            .iter()
+            .copied()
+            .find(|&b| !blank(b))
     }
     pub(crate) fn bump(&mut self) {
         self.pos += 1;
@@ -69,7 +73,10 @@ impl<'a> Cursor<'a> {
 pub enum Token<'a> {
     Word(Word),
     /// `(MSG, text)`: the text after the comma, leading blanks removed.
-    Message { text: &'a [u8], col: u16 },
+    Message {
+        text: &'a [u8],
+        col: u16,
+    },
 }
 
 /// Lexer over one line (without its line terminator).
@@ -87,8 +94,22 @@ pub struct Lexer<'a> {
 }
 
 const KEYWORDS: [&[u8]; 16] = [
-    b"if", b"else", b"elseif", b"endif", b"while", b"endwhile", b"do", b"repeat",
-    b"endrepeat", b"sub", b"endsub", b"call", b"return", b"break", b"continue", b"end",
+    b"if",
+    b"else",
+    b"elseif",
+    b"endif",
+    b"while",
+    b"endwhile",
+    b"do",
+    b"repeat",
+    b"endrepeat",
+    b"sub",
+    b"endsub",
+    b"call",
+    b"return",
+    b"break",
+    b"continue",
+    b"end",
 ];
 
 impl<'a> Lexer<'a> {
@@ -103,7 +124,14 @@ impl<'a> Lexer<'a> {
         if line.len() > MAX_LINE {
             return Err(cur.err_at(ErrorKind::LineTooLong, MAX_LINE));
         }
-        let mut lx = Lexer { cur: Cursor { line, pos: 0 }, block_delete: false, percent: false, line_number: None, done: false, seen_word: false };
+        let mut lx = Lexer {
+            cur: Cursor { line, pos: 0 },
+            block_delete: false,
+            percent: false,
+            line_number: None,
+            done: false,
+            seen_word: false,
+        };
         match cur.peek() {
             Some(b'/') => {
                 cur.bump();
@@ -148,10 +176,14 @@ impl<'a> Lexer<'a> {
                     let l = b.to_ascii_uppercase();
                     self.cur.bump();
                     if l == b'O' {
-                        return Err(self.cur.err_at(ErrorKind::Unsupported(Unsupported::OWord), col));
+                        return Err(self
+                            .cur
+                            .err_at(ErrorKind::Unsupported(Unsupported::OWord), col));
                     }
                     if self.keyword_at(col) {
-                        return Err(self.cur.err_at(ErrorKind::Unsupported(Unsupported::ControlFlow), col));
+                        return Err(self
+                            .cur
+                            .err_at(ErrorKind::Unsupported(Unsupported::ControlFlow), col));
                     }
                     let value = self.cur.real(p, 0)?;
                     if !value.is_finite() {
@@ -162,14 +194,18 @@ impl<'a> Lexer<'a> {
                         if self.seen_word || self.line_number.is_some() {
                             return Err(self.cur.err_at(ErrorKind::LineNumberMisplaced, col));
                         }
-                        if value < 0.0 || value > 99_999_999.0 || libm::floorf(value) != value {
+                        if !(0.0..=99_999_999.0).contains(&value) || libm::floorf(value) != value {
                             return Err(self.cur.err_at(ErrorKind::InvalidLineNumber, col));
                         }
                         self.line_number = Some(value as u32);
                         continue;
                     }
                     self.seen_word = true;
-                    return Ok(Some(Token::Word(Word { letter: l, value, col: col16 })));
+                    return Ok(Some(Token::Word(Word {
+                        letter: l,
+                        value,
+                        col: col16,
+                    })));
                 }
                 _ if !b.is_ascii() => return Err(self.cur.err(ErrorKind::NonAscii)),
                 _ => return Err(self.cur.err(ErrorKind::ExpectedLetter(b))),
@@ -181,7 +217,10 @@ impl<'a> Lexer<'a> {
     fn keyword_at(&self, col: usize) -> bool {
         let rest = self.cur.line.get(col..).unwrap_or(&[]);
         let n = rest.iter().take_while(|b| b.is_ascii_alphabetic()).count();
-        n >= 2 && rest.get(..n).is_some_and(|w| KEYWORDS.iter().any(|k| k.eq_ignore_ascii_case(w)))
+        n >= 2
+            && rest
+                .get(..n)
+                .is_some_and(|w| KEYWORDS.iter().any(|k| k.eq_ignore_ascii_case(w)))
     }
 
     fn assignment(&mut self, p: &mut dyn ParamStore, col: usize) -> LexResult<()> {
@@ -189,7 +228,9 @@ impl<'a> Lexer<'a> {
         match self.cur.peek() {
             Some(b'=') => self.cur.bump(),
             Some(b'+' | b'-' | b'*' | b'/') if self.cur.peek2() == Some(b'=') => {
-                return Err(self.cur.err(ErrorKind::Unsupported(Unsupported::ControlFlow)));
+                return Err(self
+                    .cur
+                    .err(ErrorKind::Unsupported(Unsupported::ControlFlow)));
             }
             _ => return Err(self.cur.err(ErrorKind::BadNumber)),
         }
@@ -221,7 +262,10 @@ impl<'a> Lexer<'a> {
         if t.len() >= 3 && t.get(..3).is_some_and(|m| m.eq_ignore_ascii_case(b"msg")) {
             let after = trim_start(t.get(3..).unwrap_or(&[]));
             if let Some(text) = after.strip_prefix(b",") {
-                return Ok(Some(Token::Message { text: trim_end(trim_start(text)), col: (start + 1) as u16 }));
+                return Ok(Some(Token::Message {
+                    text: trim_end(trim_start(text)),
+                    col: (start + 1) as u16,
+                }));
             }
         }
         Ok(None)
@@ -231,7 +275,13 @@ impl<'a> Lexer<'a> {
     fn checksum(&mut self) -> LexResult<()> {
         let star = self.cur.pos;
         self.cur.bump();
-        let computed = self.cur.line.get(..star).unwrap_or(&[]).iter().fold(0u8, |a, &b| a ^ b);
+        let computed = self
+            .cur
+            .line
+            .get(..star)
+            .unwrap_or(&[])
+            .iter()
+            .fold(0u8, |a, &b| a ^ b);
         let mut v: u32 = 0;
         let mut digits = 0;
         while let Some(b) = self.cur.peek() {
@@ -246,7 +296,13 @@ impl<'a> Lexer<'a> {
             return Err(self.cur.err_at(ErrorKind::BadChecksum, star));
         }
         if v as u8 != computed {
-            return Err(self.cur.err_at(ErrorKind::ChecksumMismatch { expected: v as u8, computed }, star));
+            return Err(self.cur.err_at(
+                ErrorKind::ChecksumMismatch {
+                    expected: v as u8,
+                    computed,
+                },
+                star,
+            ));
         }
         self.done = true;
         Ok(())
@@ -262,7 +318,13 @@ impl<'a> Lexer<'a> {
         while end > start && line.get(end - 1).is_some_and(|&b| blank(b)) {
             end -= 1;
         }
-        let digits = line.get(start..end).unwrap_or(&[]).iter().rev().take_while(|b| b.is_ascii_digit()).count();
+        let digits = line
+            .get(start..end)
+            .unwrap_or(&[])
+            .iter()
+            .rev()
+            .take_while(|b| b.is_ascii_digit())
+            .count();
         if digits > 0 && end - digits > start && line.get(end - digits - 1) == Some(&b'*') {
             self.cur.pos = end - digits - 1;
             self.checksum()?;

@@ -32,11 +32,17 @@ pub struct Name {
 
 impl Name {
     pub const fn empty() -> Self {
-        Name { bytes: [0; NAME_MAX], len: 0 }
+        Name {
+            bytes: [0; NAME_MAX],
+            len: 0,
+        }
     }
     /// Appends one byte, lowercased.
     pub fn push(&mut self, b: u8) -> Result<(), ErrorKind> {
-        let slot = self.bytes.get_mut(self.len as usize).ok_or(ErrorKind::ParamNameTooLong)?;
+        let slot = self
+            .bytes
+            .get_mut(self.len as usize)
+            .ok_or(ErrorKind::ParamNameTooLong)?;
         *slot = b.to_ascii_lowercase();
         self.len += 1;
         Ok(())
@@ -79,7 +85,11 @@ impl Default for Params {
 
 impl Params {
     pub const fn new() -> Self {
-        Params { numbered: heapless::Vec::new(), named: heapless::Vec::new(), undo: heapless::Vec::new() }
+        Params {
+            numbered: heapless::Vec::new(),
+            named: heapless::Vec::new(),
+            undo: heapless::Vec::new(),
+        }
     }
 
     /// Starts a line: forget the previous line's undo log (it committed).
@@ -131,7 +141,9 @@ impl Params {
             Ok(i) => {
                 let e = self.numbered.get_mut(i).ok_or(ErrorKind::ParamTableFull)?;
                 let old = e.1;
-                self.undo.push(Undo::Num(n, Some(old))).map_err(|_| ErrorKind::TooManyAssignments)?;
+                self.undo
+                    .push(Undo::Num(n, Some(old)))
+                    .map_err(|_| ErrorKind::TooManyAssignments)?;
                 if let Some(e) = self.numbered.get_mut(i) {
                     e.1 = v;
                 }
@@ -140,21 +152,31 @@ impl Params {
                 if self.numbered.is_full() {
                     return Err(ErrorKind::ParamTableFull);
                 }
-                self.undo.push(Undo::Num(n, None)).map_err(|_| ErrorKind::TooManyAssignments)?;
-                self.numbered.insert(i, (n, v)).map_err(|_| ErrorKind::ParamTableFull)?;
+                self.undo
+                    .push(Undo::Num(n, None))
+                    .map_err(|_| ErrorKind::TooManyAssignments)?;
+                self.numbered
+                    .insert(i, (n, v))
+                    .map_err(|_| ErrorKind::ParamTableFull)?;
             }
         }
         Ok(())
     }
 
     pub fn get_name(&self, name: &Name) -> Result<f32, ErrorKind> {
-        self.named.iter().find(|e| e.0 == *name).map(|e| e.1).ok_or(ErrorKind::UndefinedParam)
+        self.named
+            .iter()
+            .find(|e| e.0 == *name)
+            .map(|e| e.1)
+            .ok_or(ErrorKind::UndefinedParam)
     }
 
     pub fn set_name(&mut self, name: &Name, v: f32) -> Result<(), ErrorKind> {
         if let Some(i) = self.named.iter().position(|e| e.0 == *name) {
             let old = self.named.get(i).map(|e| e.1);
-            self.undo.push(Undo::Named(i as u8, old)).map_err(|_| ErrorKind::TooManyAssignments)?;
+            self.undo
+                .push(Undo::Named(i as u8, old))
+                .map_err(|_| ErrorKind::TooManyAssignments)?;
             if let Some(e) = self.named.get_mut(i) {
                 e.1 = v;
             }
@@ -163,8 +185,12 @@ impl Params {
         if self.named.is_full() {
             return Err(ErrorKind::ParamTableFull);
         }
-        self.undo.push(Undo::Named(self.named.len() as u8, None)).map_err(|_| ErrorKind::TooManyAssignments)?;
-        self.named.push((*name, v)).map_err(|_| ErrorKind::ParamTableFull)
+        self.undo
+            .push(Undo::Named(self.named.len() as u8, None))
+            .map_err(|_| ErrorKind::TooManyAssignments)?;
+        self.named
+            .push((*name, v))
+            .map_err(|_| ErrorKind::ParamTableFull)
     }
 
     /// Numbered parameters currently stored (for tests and `$#`-style dumps).

@@ -58,8 +58,22 @@ fn m_group(n: u16) -> Option<MGroup> {
         0 | 1 | 2 | 30 => Stop,
         3..=5 => Spindle,
         7..=9 => Coolant,
-        17 | 18 | 84 | 42 | 62..=65 | 106 | 107 | 114 | 115 | 117 | 119 | 220 | 400 | 500
-        | 501 | 999 => Misc,
+        17
+        | 18
+        | 84
+        | 42
+        | 62..=65
+        | 106
+        | 107
+        | 114
+        | 115
+        | 117
+        | 119
+        | 220
+        | 400
+        | 500
+        | 501
+        | 999 => Misc,
         _ => return None,
     })
 }
@@ -113,18 +127,26 @@ impl<'a> Block<'a> {
 
     pub fn get(&self, letter: u8) -> Option<f32> {
         if self.has(letter) {
-            self.val.get(usize::from(letter.wrapping_sub(b'A'))).copied()
+            self.val
+                .get(usize::from(letter.wrapping_sub(b'A')))
+                .copied()
         } else {
             None
         }
     }
 
     pub fn col_of(&self, letter: u8) -> u16 {
-        self.col.get(usize::from(letter.wrapping_sub(b'A'))).copied().unwrap_or(0)
+        self.col
+            .get(usize::from(letter.wrapping_sub(b'A')))
+            .copied()
+            .unwrap_or(0)
     }
 
     pub fn axis_mask(&self) -> u8 {
-        AXIS_LETTERS.iter().enumerate().fold(0, |m, (i, &l)| if self.has(l) { m | 1 << i } else { m })
+        AXIS_LETTERS
+            .iter()
+            .enumerate()
+            .fold(0, |m, (i, &l)| if self.has(l) { m | 1 << i } else { m })
     }
 
     pub fn g_of(&self, grp: GGroup) -> Option<(u16, u16)> {
@@ -146,14 +168,22 @@ impl<'a> Block<'a> {
         let err = |k| Err(GcodeError::new(k, w.col));
         match w.letter {
             b'G' => {
-                let Some(t) = w.tenths() else { return err(ErrorKind::NotInteger(b'G')) };
+                let Some(t) = w.tenths() else {
+                    return err(ErrorKind::NotInteger(b'G'));
+                };
                 let Some(grp) = g_group(t) else {
-                    return err(ErrorKind::Unsupported(Unsupported::Code { letter: b'G', tenths: t }));
+                    return err(ErrorKind::Unsupported(Unsupported::Code {
+                        letter: b'G',
+                        tenths: t,
+                    }));
                 };
                 if grp == GGroup::Motion && self.axis_mask() != 0 {
                     return Ok(Added::Split);
                 }
-                let slot = self.g.get_mut(grp as usize).ok_or(GcodeError::new(ErrorKind::ModalGroupViolation, w.col))?;
+                let slot = self
+                    .g
+                    .get_mut(grp as usize)
+                    .ok_or(GcodeError::new(ErrorKind::ModalGroupViolation, w.col))?;
                 match *slot {
                     // LinuxCNC lets G80 share a block with another motion code
                     // (CAM preambles write `G0 ... G80`); the other one wins.
@@ -164,13 +194,21 @@ impl<'a> Block<'a> {
                 }
             }
             b'M' => {
-                let t = match w.tenths() {
-                    Some(t) if t % 10 == 0 => t / 10,
-                    Some(t) => return err(ErrorKind::Unsupported(Unsupported::Code { letter: b'M', tenths: t })),
+                let t = match w.tenths().map(|t| (t, t % 10)) {
+                    Some((t, 0)) => t / 10,
+                    Some((t, _)) => {
+                        return err(ErrorKind::Unsupported(Unsupported::Code {
+                            letter: b'M',
+                            tenths: t,
+                        }))
+                    }
                     None => return err(ErrorKind::NotInteger(b'M')),
                 };
                 let Some(grp) = m_group(t) else {
-                    return err(ErrorKind::Unsupported(Unsupported::Code { letter: b'M', tenths: t * 10 }));
+                    return err(ErrorKind::Unsupported(Unsupported::Code {
+                        letter: b'M',
+                        tenths: t * 10,
+                    }));
                 };
                 if grp == MGroup::Coolant {
                     let b = match t {
@@ -178,18 +216,25 @@ impl<'a> Block<'a> {
                         8 => 2,
                         _ => 4,
                     };
-                    if self.coolant & b != 0 || (b == 4 && self.coolant != 0) || (b != 4 && self.coolant & 4 != 0) {
+                    if self.coolant & b != 0
+                        || (b == 4 && self.coolant != 0)
+                        || (b != 4 && self.coolant & 4 != 0)
+                    {
                         return err(ErrorKind::ModalGroupViolation);
                     }
                     self.coolant |= b;
                 }
-                let slot = self.m.get_mut(grp as usize).ok_or(GcodeError::new(ErrorKind::ModalGroupViolation, w.col))?;
+                let slot = self
+                    .m
+                    .get_mut(grp as usize)
+                    .ok_or(GcodeError::new(ErrorKind::ModalGroupViolation, w.col))?;
                 if slot.is_some() && grp != MGroup::Coolant {
                     return err(ErrorKind::ModalGroupViolation);
                 }
                 *slot = Some((t, w.col));
             }
-            b'X' | b'Y' | b'Z' | b'A' | b'F' | b'I' | b'J' | b'K' | b'L' | b'P' | b'Q' | b'R' | b'S' | b'T' => {
+            b'X' | b'Y' | b'Z' | b'A' | b'F' | b'I' | b'J' | b'K' | b'L' | b'P' | b'Q' | b'R'
+            | b'S' | b'T' => {
                 if self.has(w.letter) {
                     return err(ErrorKind::RepeatedWord(w.letter));
                 }

@@ -47,7 +47,9 @@ impl Ctx<'_, '_> {
     }
     /// A required integer word in `lo..=hi`.
     fn int(&mut self, l: u8, lo: f32, hi: f32) -> Result<u32, GcodeError> {
-        let v = self.take(l).ok_or_else(|| self.err(ErrorKind::ValueWordMissing(l), l))?;
+        let v = self
+            .take(l)
+            .ok_or_else(|| self.err(ErrorKind::ValueWordMissing(l), l))?;
         if libm::floorf(v) != v {
             return Err(self.err(ErrorKind::NotInteger(l), l));
         }
@@ -59,7 +61,8 @@ impl Ctx<'_, '_> {
 }
 
 fn push(out: &mut Out, c: Command, col: u16) -> Result<(), GcodeError> {
-    out.push(c).map_err(|_| GcodeError::new(ErrorKind::TooManyCommands, col))
+    out.push(c)
+        .map_err(|_| GcodeError::new(ErrorKind::TooManyCommands, col))
 }
 
 fn all_axes() -> u8 {
@@ -128,7 +131,14 @@ pub(crate) fn execute(st: &mut State, b: &Block, out: &mut Out) -> Result<(), Gc
             }
             st.speed = s;
             if spindle_m.is_none() && st.spindle != SpindleDir::Off {
-                push(out, Command::Spindle { dir: st.spindle, speed: s }, b.col_of(b'S'))?;
+                push(
+                    out,
+                    Command::Spindle {
+                        dir: st.spindle,
+                        speed: s,
+                    },
+                    b.col_of(b'S'),
+                )?;
             }
         }
     }
@@ -143,7 +153,14 @@ pub(crate) fn execute(st: &mut State, b: &Block, out: &mut Out) -> Result<(), Gc
             4 => SpindleDir::Ccw,
             _ => SpindleDir::Off,
         };
-        push(out, Command::Spindle { dir: st.spindle, speed: st.speed }, col)?;
+        push(
+            out,
+            Command::Spindle {
+                dir: st.spindle,
+                speed: st.speed,
+            },
+            col,
+        )?;
     }
     if let Some((_, col)) = b.m_of(MGroup::Coolant) {
         if b.coolant & 4 != 0 {
@@ -152,7 +169,14 @@ pub(crate) fn execute(st: &mut State, b: &Block, out: &mut Out) -> Result<(), Gc
         }
         st.mist |= b.coolant & 1 != 0;
         st.flood |= b.coolant & 2 != 0;
-        push(out, Command::Coolant { mist: st.mist, flood: st.flood }, col)?;
+        push(
+            out,
+            Command::Coolant {
+                mist: st.mist,
+                flood: st.flood,
+            },
+            col,
+        )?;
     }
 
     // Which command owns the axis words.
@@ -161,7 +185,10 @@ pub(crate) fn execute(st: &mut State, b: &Block, out: &mut Out) -> Result<(), Gc
     let axis_nm = matches!(nm, Some(100 | 270 | 280 | 300 | 920));
     let motion_word = b.g_of(GGroup::Motion);
     if axis_nm && motion_word.is_some() {
-        return Err(GcodeError::new(ErrorKind::AxisCommandConflict, gcol(GGroup::Motion)));
+        return Err(GcodeError::new(
+            ErrorKind::AxisCommandConflict,
+            gcol(GGroup::Motion),
+        ));
     }
     let axes = b.axis_mask();
     let motors_take_axes = matches!(misc, Some(17 | 18 | 84)) && !axis_nm && motion_word.is_none();
@@ -177,10 +204,21 @@ pub(crate) fn execute(st: &mut State, b: &Block, out: &mut Out) -> Result<(), Gc
         st.motion = Motion::from_tenths(t).unwrap_or(Motion::Cancel);
     }
     if g53 && (st.incremental || !matches!(st.motion, Motion::Rapid | Motion::Linear)) {
-        return Err(GcodeError::new(ErrorKind::G53Invalid, non_modal.map_or(col0, |x| x.1)));
+        return Err(GcodeError::new(
+            ErrorKind::G53Invalid,
+            non_modal.map_or(col0, |x| x.1),
+        ));
     }
     if !axis_nm && !motors_take_axes {
-        motion(&mut cx, st, g53, inverse_f, motion_word.map(|x| x.1), axes != 0, out)?;
+        motion(
+            &mut cx,
+            st,
+            g53,
+            inverse_f,
+            motion_word.map(|x| x.1),
+            axes != 0,
+            out,
+        )?;
     }
     if let Some((m, col)) = b.m_of(MGroup::Stop) {
         match m {
@@ -196,8 +234,22 @@ pub(crate) fn execute(st: &mut State, b: &Block, out: &mut Out) -> Result<(), Gc
                 st.wcs = 0;
                 st.g92_active = false;
                 st.last_g5 = None;
-                push(out, Command::Spindle { dir: SpindleDir::Off, speed: st.speed }, col)?;
-                push(out, Command::Coolant { mist: false, flood: false }, col)?;
+                push(
+                    out,
+                    Command::Spindle {
+                        dir: SpindleDir::Off,
+                        speed: st.speed,
+                    },
+                    col,
+                )?;
+                push(
+                    out,
+                    Command::Coolant {
+                        mist: false,
+                        flood: false,
+                    },
+                    col,
+                )?;
                 push(out, Command::ProgramEnd, col)?;
             }
         }
@@ -206,7 +258,10 @@ pub(crate) fn execute(st: &mut State, b: &Block, out: &mut Out) -> Result<(), Gc
     let unused = b.present & !cx.used;
     if unused != 0 {
         let axes_bits = AXIS_LETTERS.iter().fold(0, |m, &l| m | bit(l));
-        let l = (0..26u8).map(|i| b'A' + i).find(|&l| unused & bit(l) != 0).unwrap_or(b'A');
+        let l = (0..26u8)
+            .map(|i| b'A' + i)
+            .find(|&l| unused & bit(l) != 0)
+            .unwrap_or(b'A');
         let kind = if unused & axes_bits != 0 && unused & !axes_bits == 0 {
             ErrorKind::AxisWordsUnused
         } else {
@@ -232,7 +287,14 @@ pub(crate) fn message(text: &[u8]) -> crate::command::Message {
     m
 }
 
-fn misc_m(cx: &mut Ctx, st: &mut State, m: u16, col: u16, motors_take_axes: bool, out: &mut Out) -> Result<(), GcodeError> {
+fn misc_m(
+    cx: &mut Ctx,
+    st: &mut State,
+    m: u16,
+    col: u16,
+    motors_take_axes: bool,
+    out: &mut Out,
+) -> Result<(), GcodeError> {
     let cmd = match m {
         17 | 18 | 84 => {
             let mut axes = all_axes();
@@ -242,28 +304,53 @@ fn misc_m(cx: &mut Ctx, st: &mut State, m: u16, col: u16, motors_take_axes: bool
                     cx.take(l);
                 }
             }
-            Command::Motors { enable: m == 17, axes }
+            Command::Motors {
+                enable: m == 17,
+                axes,
+            }
         }
         42 => {
             let pin = cx.int(b'P', 0.0, 255.0)? as u8;
-            let s = cx.take(b'S').ok_or_else(|| cx.err(ErrorKind::ValueWordMissing(b'S'), b'P'))?;
+            let s = cx
+                .take(b'S')
+                .ok_or_else(|| cx.err(ErrorKind::ValueWordMissing(b'S'), b'P'))?;
             if !(0.0..=255.0).contains(&s) {
                 return Err(cx.err(ErrorKind::ValueOutOfRange(b'S'), b'S'));
             }
-            Command::Aux { pin, value: s / 255.0, synced: false }
+            Command::Aux {
+                pin,
+                value: s / 255.0,
+                synced: false,
+            }
         }
         62..=65 => {
             let pin = cx.int(b'P', 0.0, 255.0)? as u8;
             let value = if m == 62 || m == 64 { 1.0 } else { 0.0 };
-            Command::Aux { pin, value, synced: m <= 63 }
+            Command::Aux {
+                pin,
+                value,
+                synced: m <= 63,
+            }
         }
         106 | 107 => {
-            let pin = if cx.b.has(b'P') { cx.int(b'P', 0.0, 255.0)? as u8 } else { 0 };
-            let s = if m == 106 { cx.take(b'S').unwrap_or(255.0) } else { 0.0 };
+            let pin = if cx.b.has(b'P') {
+                cx.int(b'P', 0.0, 255.0)? as u8
+            } else {
+                0
+            };
+            let s = if m == 106 {
+                cx.take(b'S').unwrap_or(255.0)
+            } else {
+                0.0
+            };
             if !(0.0..=255.0).contains(&s) {
                 return Err(cx.err(ErrorKind::ValueOutOfRange(b'S'), b'S'));
             }
-            Command::Aux { pin, value: s / 255.0, synced: true }
+            Command::Aux {
+                pin,
+                value: s / 255.0,
+                synced: true,
+            }
         }
         114 => Command::Report(ReportKind::Position),
         115 => Command::Report(ReportKind::Firmware),
@@ -285,7 +372,13 @@ fn misc_m(cx: &mut Ctx, st: &mut State, m: u16, col: u16, motors_take_axes: bool
 }
 
 /// Group 0. Returns whether G53 is in effect.
-fn non_modal_g(cx: &mut Ctx, st: &mut State, t: u16, col: u16, out: &mut Out) -> Result<bool, GcodeError> {
+fn non_modal_g(
+    cx: &mut Ctx,
+    st: &mut State,
+    t: u16,
+    col: u16,
+    out: &mut Out,
+) -> Result<bool, GcodeError> {
     let b = cx.b;
     let u = st.unit();
     let axis_vals = |cx: &mut Ctx| {
@@ -299,7 +392,9 @@ fn non_modal_g(cx: &mut Ctx, st: &mut State, t: u16, col: u16, out: &mut Out) ->
     };
     match t {
         40 => {
-            let p = cx.take(b'P').ok_or_else(|| GcodeError::new(ErrorKind::ValueWordMissing(b'P'), col))?;
+            let p = cx
+                .take(b'P')
+                .ok_or_else(|| GcodeError::new(ErrorKind::ValueWordMissing(b'P'), col))?;
             if p < 0.0 {
                 return Err(cx.err(ErrorKind::ValueOutOfRange(b'P'), b'P'));
             }
@@ -308,7 +403,13 @@ fn non_modal_g(cx: &mut Ctx, st: &mut State, t: u16, col: u16, out: &mut Out) ->
         100 => {
             let l = cx.int(b'L', 0.0, 100.0)?;
             if l != 2 && l != 20 {
-                return Err(GcodeError::new(ErrorKind::Unsupported(Unsupported::Code { letter: b'G', tenths: 100 }), col));
+                return Err(GcodeError::new(
+                    ErrorKind::Unsupported(Unsupported::Code {
+                        letter: b'G',
+                        tenths: 100,
+                    }),
+                    col,
+                ));
             }
             let p = cx.int(b'P', 0.0, WCS_COUNT as f32)? as usize;
             if cx.take(b'R').is_some_and(|r| r != 0.0) {
@@ -319,10 +420,17 @@ fn non_modal_g(cx: &mut Ctx, st: &mut State, t: u16, col: u16, out: &mut Out) ->
             let pos = st.pos;
             let g92 = if st.g92_active { st.g92 } else { [0.0; AXES] };
             let inc = st.incremental;
-            let Some(off) = st.wcs_offsets.get_mut(k) else { return Ok(false) };
+            let Some(off) = st.wcs_offsets.get_mut(k) else {
+                return Ok(false);
+            };
             for i in 0..AXES {
-                let (Some(Some(v)), Some(o)) = (vals.get(i), off.get_mut(i)) else { continue };
-                let (p_i, g_i) = (pos.get(i).copied().unwrap_or(0.0), g92.get(i).copied().unwrap_or(0.0));
+                let (Some(Some(v)), Some(o)) = (vals.get(i), off.get_mut(i)) else {
+                    continue;
+                };
+                let (p_i, g_i) = (
+                    pos.get(i).copied().unwrap_or(0.0),
+                    g92.get(i).copied().unwrap_or(0.0),
+                );
                 *o = match (l, inc) {
                     (2, false) => *v,
                     (2, true) => *o + v,
@@ -344,7 +452,11 @@ fn non_modal_g(cx: &mut Ctx, st: &mut State, t: u16, col: u16, out: &mut Out) ->
             }
             st.needs_sync = true;
             st.last_g5 = None;
-            let c = if t == 280 { Command::Home { axes } } else { Command::VerifyHome { axes } };
+            let c = if t == 280 {
+                Command::Home { axes }
+            } else {
+                Command::VerifyHome { axes }
+            };
             push(out, c, col)?;
         }
         281 => st.g28 = st.pos,
@@ -354,7 +466,13 @@ fn non_modal_g(cx: &mut Ctx, st: &mut State, t: u16, col: u16, out: &mut Out) ->
                 return Err(GcodeError::new(ErrorKind::UndefinedFeed, col));
             }
             if b.axis_mask() & !0b100 != 0 {
-                let l = if b.has(b'X') { b'X' } else if b.has(b'Y') { b'Y' } else { b'A' };
+                let l = if b.has(b'X') {
+                    b'X'
+                } else if b.has(b'Y') {
+                    b'Y'
+                } else {
+                    b'A'
+                };
                 return Err(cx.err(ErrorKind::AxisWordsUnused, l));
             }
             st.pending_probe_z = cx.take(b'Z').map(|z| z * u);
@@ -362,7 +480,15 @@ fn non_modal_g(cx: &mut Ctx, st: &mut State, t: u16, col: u16, out: &mut Out) ->
             if let Some(z) = end.get_mut(2) {
                 *z -= G30_PROBE_TRAVEL;
             }
-            push(out, Command::Probe { end, feed: Feed::PerMin(st.feed), kind: crate::command::ProbeKind::Toward }, col)?;
+            push(
+                out,
+                Command::Probe {
+                    end,
+                    feed: Feed::PerMin(st.feed),
+                    kind: crate::command::ProbeKind::Toward,
+                },
+                col,
+            )?;
             st.pos = end;
             st.needs_sync = true;
             st.last_g5 = None;
@@ -374,10 +500,17 @@ fn non_modal_g(cx: &mut Ctx, st: &mut State, t: u16, col: u16, out: &mut Out) ->
             if vals.iter().all(Option::is_none) {
                 return Err(GcodeError::new(ErrorKind::NoAxisWords, col));
             }
-            let base = st.wcs_offsets.get(usize::from(st.wcs)).copied().unwrap_or([0.0; AXES]);
+            let base = st
+                .wcs_offsets
+                .get(usize::from(st.wcs))
+                .copied()
+                .unwrap_or([0.0; AXES]);
             for i in 0..AXES {
-                let (Some(Some(v)), Some(g)) = (vals.get(i), st.g92.get_mut(i)) else { continue };
-                *g = st.pos.get(i).copied().unwrap_or(0.0) - base.get(i).copied().unwrap_or(0.0) - v;
+                let (Some(Some(v)), Some(g)) = (vals.get(i), st.g92.get_mut(i)) else {
+                    continue;
+                };
+                *g =
+                    st.pos.get(i).copied().unwrap_or(0.0) - base.get(i).copied().unwrap_or(0.0) - v;
             }
             st.g92_active = true;
         }
@@ -397,7 +530,9 @@ fn target(cx: &mut Ctx, st: &State, g53: bool) -> Pos {
     let wco = st.wco();
     let mut end = st.pos;
     for (i, l) in AXIS_LETTERS.iter().enumerate() {
-        let (Some(v), Some(e)) = (cx.take(*l), end.get_mut(i)) else { continue };
+        let (Some(v), Some(e)) = (cx.take(*l), end.get_mut(i)) else {
+            continue;
+        };
         let v = if i < 3 { v * u } else { v };
         *e = if g53 {
             v
@@ -427,7 +562,9 @@ fn motion(
     let ijk = |i: usize| [b'I', b'J', b'K'].get(i).is_some_and(|&l| cx.b.has(l));
     let has_axes = has_axes || (arc_mode && (ijk(p0) || ijk(p1)));
     if !has_axes {
-        if explicit.is_some() && !matches!(st.motion, Motion::Rapid | Motion::Linear | Motion::Cancel) {
+        if explicit.is_some()
+            && !matches!(st.motion, Motion::Rapid | Motion::Linear | Motion::Cancel)
+        {
             return Err(e(ErrorKind::NoAxisWords));
         }
         return Ok(());
@@ -443,10 +580,15 @@ fn motion(
     let start = st.pos;
     let cmd = match st.motion {
         Motion::Cancel => return Err(e(ErrorKind::AxisWordsUnused)),
-        Motion::Rapid => Command::Rapid { end: target(cx, st, g53) },
+        Motion::Rapid => Command::Rapid {
+            end: target(cx, st, g53),
+        },
         Motion::Linear => {
             let f = feed()?;
-            Command::Line { end: target(cx, st, g53), feed: f }
+            Command::Line {
+                end: target(cx, st, g53),
+                feed: f,
+            }
         }
         Motion::Probe(kind) => {
             let f = match feed()? {
@@ -473,7 +615,13 @@ fn motion(
     finish(st, cmd, col, out, false)
 }
 
-fn finish(st: &mut State, cmd: Command, col: u16, out: &mut Out, keep_g5: bool) -> Result<(), GcodeError> {
+fn finish(
+    st: &mut State,
+    cmd: Command,
+    col: u16,
+    out: &mut Out,
+    keep_g5: bool,
+) -> Result<(), GcodeError> {
     if !keep_g5 {
         st.last_g5 = None;
     }
@@ -489,11 +637,21 @@ fn arc(cx: &mut Ctx, st: &State, feed: Feed, col: u16) -> Result<Arc, GcodeError
     let axis_l = |i: usize| AXIS_LETTERS.get(i).copied().unwrap_or(b'X');
     let in_plane = cx.b.has(axis_l(a0)) || cx.b.has(axis_l(a1));
     let end = target(cx, st, false);
-    let s = [st.pos.get(a0).copied().unwrap_or(0.0), st.pos.get(a1).copied().unwrap_or(0.0)];
-    let en = [end.get(a0).copied().unwrap_or(0.0), end.get(a1).copied().unwrap_or(0.0)];
+    let s = [
+        st.pos.get(a0).copied().unwrap_or(0.0),
+        st.pos.get(a1).copied().unwrap_or(0.0),
+    ];
+    let en = [
+        end.get(a0).copied().unwrap_or(0.0),
+        end.get(a1).copied().unwrap_or(0.0),
+    ];
     let cw = st.motion == Motion::ArcCw;
     let u = st.unit();
-    let turns = if cx.b.has(b'P') { cx.int(b'P', 1.0, 10_000.0)? - 1 } else { 0 };
+    let turns = if cx.b.has(b'P') {
+        cx.int(b'P', 1.0, 10_000.0)? - 1
+    } else {
+        0
+    };
     // Off-plane offsets are legal words but meaningless: consume them (LinuxCNC warns).
     let li = |i: usize| letters.get(i).copied().unwrap_or(b'I');
     let center = if let Some(r) = cx.take(b'R') {
@@ -522,7 +680,14 @@ fn arc(cx: &mut Ctx, st: &State, feed: Feed, col: u16) -> Result<Arc, GcodeError
         let c = [abs(o0, a0, s[0]), abs(o1, a1, s[1])];
         geom::centre_ijk(s, en, c).map_err(|k| GcodeError::new(k, col))?
     };
-    Ok(Arc { end, center, plane: st.plane, dir: if cw { ArcDir::Cw } else { ArcDir::Ccw }, turns: turns as u16, feed })
+    Ok(Arc {
+        end,
+        center,
+        plane: st.plane,
+        dir: if cw { ArcDir::Cw } else { ArcDir::Ccw },
+        turns: turns as u16,
+        feed,
+    })
 }
 
 fn spline(cx: &mut Ctx, st: &mut State, feed: Feed, col: u16) -> Result<Spline, GcodeError> {
@@ -548,13 +713,22 @@ fn spline(cx: &mut Ctx, st: &mut State, feed: Feed, col: u16) -> Result<Spline, 
         let first = match (i, j, st.last_g5) {
             (Some(i), Some(j), _) => [i * u, j * u],
             (None, None, Some(prev)) => [-prev[0], -prev[1]],
-            (None, None, None) => return Err(GcodeError::new(ErrorKind::ValueWordMissing(b'I'), col)),
-            (None, Some(_), _) => return Err(GcodeError::new(ErrorKind::ValueWordMissing(b'I'), col)),
-            (Some(_), None, _) => return Err(GcodeError::new(ErrorKind::ValueWordMissing(b'J'), col)),
+            (None, None, None) => {
+                return Err(GcodeError::new(ErrorKind::ValueWordMissing(b'I'), col))
+            }
+            (None, Some(_), _) => {
+                return Err(GcodeError::new(ErrorKind::ValueWordMissing(b'I'), col))
+            }
+            (Some(_), None, _) => {
+                return Err(GcodeError::new(ErrorKind::ValueWordMissing(b'J'), col))
+            }
         };
         let pq = [p * u, q * u];
         st.last_g5 = Some(pq);
-        ([s[0] + first[0], s[1] + first[1]], [e[0] + pq[0], e[1] + pq[1]])
+        (
+            [s[0] + first[0], s[1] + first[1]],
+            [e[0] + pq[0], e[1] + pq[1]],
+        )
     } else {
         if i.is_none() && j.is_none() {
             return Err(GcodeError::new(ErrorKind::ValueWordMissing(b'I'), col));

@@ -87,17 +87,29 @@ mod tests {
         // CCW quarter from (0,0) to (1,1) with R1: centre (0,1)? No: left of
         // travel direction (1,1) is (-1,1), so the short CCW arc's centre is (0,1).
         let c = centre_r([0.0, 0.0], [1.0, 1.0], 1.0, false).unwrap();
-        assert!((c[0] - 0.0).abs() < 1e-5 && (c[1] - 1.0).abs() < 1e-5, "{c:?}");
+        assert!(
+            (c[0] - 0.0).abs() < 1e-5 && (c[1] - 1.0).abs() < 1e-5,
+            "{c:?}"
+        );
         let c = centre_r([0.0, 0.0], [1.0, 1.0], 1.0, true).unwrap();
-        assert!((c[0] - 1.0).abs() < 1e-5 && (c[1] - 0.0).abs() < 1e-5, "{c:?}");
+        assert!(
+            (c[0] - 1.0).abs() < 1e-5 && (c[1] - 0.0).abs() < 1e-5,
+            "{c:?}"
+        );
         let c = centre_r([0.0, 0.0], [1.0, 1.0], -1.0, true).unwrap();
-        assert!((c[0] - 0.0).abs() < 1e-5 && (c[1] - 1.0).abs() < 1e-5, "{c:?}");
+        assert!(
+            (c[0] - 0.0).abs() < 1e-5 && (c[1] - 1.0).abs() < 1e-5,
+            "{c:?}"
+        );
     }
 
     #[test]
     fn ijk_tolerance() {
         assert!(centre_ijk([0.0, 0.0], [10.0, 0.0], [5.0, 0.0]).is_ok());
-        assert_eq!(centre_ijk([0.0, 0.0], [10.0, 0.0], [4.0, 0.0]), Err(ErrorKind::ArcRadius));
+        assert_eq!(
+            centre_ijk([0.0, 0.0], [10.0, 0.0], [4.0, 0.0]),
+            Err(ErrorKind::ArcRadius)
+        );
         // 0.004 mm off on a 5 mm radius: fine, and the centre is made exact.
         let c = centre_ijk([0.0, 0.0], [10.0, 0.0], [5.002, 0.0]).unwrap();
         assert!((c[0] - 5.0).abs() < 1e-5);

@@ -49,7 +49,10 @@ impl ParamStore for Env<'_> {
     fn get(&self, n: u16) -> Result<f32, ErrorKind> {
         match n {
             0 => Ok(0.0),
-            1..=crate::gcode::params::PARAM_MAX => Ok(self.state.param(n).unwrap_or_else(|| self.params.get_num(n))),
+            1..=crate::gcode::params::PARAM_MAX => Ok(self
+                .state
+                .param(n)
+                .unwrap_or_else(|| self.params.get_num(n))),
             _ => Err(ErrorKind::ParamOutOfRange),
         }
     }
@@ -93,13 +96,20 @@ fn cmd_finite(c: &Command) -> bool {
 
 impl Interpreter {
     pub const fn new() -> Self {
-        Interpreter { state: State::new(), params: Params::new() }
+        Interpreter {
+            state: State::new(),
+            params: Params::new(),
+        }
     }
 
     /// Interprets one line (terminator optional). On success the line's
     /// commands go to `out` in order; on error nothing is emitted and the
     /// interpreter is as it was before the line.
-    pub fn execute_line(&mut self, line: &[u8], out: &mut dyn FnMut(Command)) -> Result<(), GcodeError> {
+    pub fn execute_line(
+        &mut self,
+        line: &[u8],
+        out: &mut dyn FnMut(Command),
+    ) -> Result<(), GcodeError> {
         let snapshot = self.state;
         self.params.begin_line();
         let mut buf = exec::Out::new();
@@ -121,7 +131,9 @@ impl Interpreter {
     fn run_block(&mut self, b: &Block, buf: &mut exec::Out) -> Result<(), GcodeError> {
         let before = buf.len();
         exec::execute(&mut self.state, b, buf)?;
-        let bad = buf.get(before..).is_some_and(|s| s.iter().any(|c| !cmd_finite(c)));
+        let bad = buf
+            .get(before..)
+            .is_some_and(|s| s.iter().any(|c| !cmd_finite(c)));
         if bad || !self.state.pos.iter().all(|v| v.is_finite()) {
             return Err(GcodeError::new(ErrorKind::NotFinite, b.first_col));
         }
@@ -136,7 +148,10 @@ impl Interpreter {
         let mut block = Block::default();
         loop {
             let tok = {
-                let mut env = Env { state: &mut self.state, params: &mut self.params };
+                let mut env = Env {
+                    state: &mut self.state,
+                    params: &mut self.params,
+                };
                 lx.next_token(&mut env)?
             };
             match tok {
@@ -193,7 +208,11 @@ impl Interpreter {
         self.state.probe_ok = contact;
         if let Some(t) = self.state.pending_probe_z.take() {
             if contact {
-                let base = self.state.wcs_offsets.get(usize::from(self.state.wcs)).map_or(0.0, |o| o[2]);
+                let base = self
+                    .state
+                    .wcs_offsets
+                    .get(usize::from(self.state.wcs))
+                    .map_or(0.0, |o| o[2]);
                 if !self.state.g92_active {
                     self.state.g92 = [0.0; crate::AXES];
                 }
@@ -289,7 +308,11 @@ impl Interpreter {
         };
         for (k, o) in s.wcs_offsets.iter().enumerate() {
             w.write_char('[')?;
-            let code = if k < 6 { 540 + 10 * k as u16 } else { 591 + k as u16 - 6 };
+            let code = if k < 6 {
+                540 + 10 * k as u16
+            } else {
+                591 + k as u16 - 6
+            };
             crate::gcode::error::write_code(w, b'G', code)?;
             w.write_char(':')?;
             pos(w, o)?;

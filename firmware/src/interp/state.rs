@@ -146,7 +146,11 @@ impl State {
 
     /// Work coordinate offset: active G54.. plus G92 when active (GRBL's WCO).
     pub fn wco(&self) -> Pos {
-        let base = self.wcs_offsets.get(usize::from(self.wcs)).copied().unwrap_or([0.0; AXES]);
+        let base = self
+            .wcs_offsets
+            .get(usize::from(self.wcs))
+            .copied()
+            .unwrap_or([0.0; AXES]);
         let mut o = base;
         if self.g92_active {
             for (a, g) in o.iter_mut().zip(self.g92.iter()) {

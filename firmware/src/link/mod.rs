@@ -23,12 +23,14 @@
 //! [`Link`] bundles both halves with a plain ring for host-sim and tests.
 
 mod assembler;
+pub mod framed;
 pub mod reply;
 pub mod rt;
 mod splitter;
 pub mod syscmd;
 
 pub use assembler::{LineAssembler, LinkEvent};
+pub use framed::{encode_reply, FramedAction, FramedPort};
 pub use rt::{RtFlags, RtSet};
 pub use splitter::{RxSplitter, PACKET_ROOM, SNIFF};
 pub use syscmd::SysCmd;
@@ -137,7 +139,7 @@ impl Link {
 
     /// The port was closed or reopened: back to text mode.
     pub fn reset(&mut self) {
-        self.splitter.reset(&mut self.ring);
+        self.splitter.reset(&mut self.ring, &self.flags);
     }
 
     /// Next line, command or frame, if a complete one has arrived.

@@ -11,6 +11,7 @@ use protocol::Rt;
 pub struct RtFlags {
     pending: AtomicU32,
     overflow: AtomicBool,
+    framed: AtomicBool,
 }
 
 impl RtFlags {
@@ -18,6 +19,7 @@ impl RtFlags {
         RtFlags {
             pending: AtomicU32::new(0),
             overflow: AtomicBool::new(false),
+            framed: AtomicBool::new(false),
         }
     }
 
@@ -39,6 +41,16 @@ impl RtFlags {
     /// Record that input bytes were dropped (interrupt side).
     pub fn set_overflow(&self) {
         self.overflow.store(true, Ordering::Release);
+    }
+
+    /// The receive side's current mode (set by the splitter). Replies to
+    /// realtime commands (status) use it: text `<…>` or a `Status` frame.
+    pub fn is_framed(&self) -> bool {
+        self.framed.load(Ordering::Acquire)
+    }
+
+    pub(super) fn set_framed(&self, framed: bool) {
+        self.framed.store(framed, Ordering::Release);
     }
 
     /// Whether bytes were dropped since the last call (clears the flag).

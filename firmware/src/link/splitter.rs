@@ -24,7 +24,9 @@ pub const PACKET_ROOM: usize = 64 + 1 + SNIFF;
 enum Mode {
     Text,
     /// Framed; `passthrough` once the current frame outgrew the sniff buffer.
-    Framed { passthrough: bool },
+    Framed {
+        passthrough: bool,
+    },
 }
 
 /// Splits the raw receive stream into realtime flags and ring tokens.
@@ -63,8 +65,9 @@ impl RxSplitter {
 
     /// The port was closed or USB reset: back to text mode. The marker goes
     /// through the ring so the assembler switches at the same point.
-    pub fn reset(&mut self, ring: &mut impl TokenSink) {
+    pub fn reset(&mut self, ring: &mut impl TokenSink, flags: &RtFlags) {
         self.mode = Mode::Text;
+        flags.set_framed(false);
         self.hold_len = 0;
         self.reset_pending = true;
         self.put_pending(ring);
@@ -87,12 +90,19 @@ impl RxSplitter {
         }
         if b == 0 {
             self.mode = Mode::Framed { passthrough: false };
+            flags.set_framed(true);
             self.hold_len = 0;
         }
         self.put(RxToken::from(b), ring, flags);
     }
 
-    fn framed_byte(&mut self, b: u8, passthrough: bool, ring: &mut impl TokenSink, flags: &RtFlags) {
+    fn framed_byte(
+        &mut self,
+        b: u8,
+        passthrough: bool,
+        ring: &mut impl TokenSink,
+        flags: &RtFlags,
+    ) {
         if passthrough {
             if b == 0 {
                 self.mode = Mode::Framed { passthrough: false };
@@ -120,7 +130,10 @@ impl RxSplitter {
                 self.hold_len = 0;
                 return;
             }
-            Some(Ok(HostMsg::Bye)) => self.mode = Mode::Text,
+            Some(Ok(HostMsg::Bye)) => {
+                self.mode = Mode::Text;
+                flags.set_framed(false);
+            }
             _ => {}
         }
         self.flush_hold(ring, flags);

@@ -122,7 +122,10 @@ fn parse_u16(digits: &[u8]) -> Option<u16> {
 
 /// Plain decimal numbers only: GRBL's syntax, no `inf`, `nan` or exponents.
 pub fn parse_f32(text: &[u8]) -> Option<f32> {
-    let body = text.strip_prefix(b"-").or(text.strip_prefix(b"+")).unwrap_or(text);
+    let body = text
+        .strip_prefix(b"-")
+        .or(text.strip_prefix(b"+"))
+        .unwrap_or(text);
     let digits = body.iter().filter(|b| b.is_ascii_digit()).count();
     let dots = body.iter().filter(|&&b| b == b'.').count();
     if digits == 0 || dots > 1 || digits + dots != body.len() {
@@ -150,8 +153,14 @@ fn strip_prefix_ci<'a>(s: &'a [u8], prefix: &[u8]) -> Option<&'a [u8]> {
 }
 
 fn trim(s: &[u8]) -> &[u8] {
-    let start = s.iter().position(|b| !b.is_ascii_whitespace()).unwrap_or(s.len());
-    let end = s.iter().rposition(|b| !b.is_ascii_whitespace()).map_or(start, |e| e + 1);
+    let start = s
+        .iter()
+        .position(|b| !b.is_ascii_whitespace())
+        .unwrap_or(s.len());
+    let end = s
+        .iter()
+        .rposition(|b| !b.is_ascii_whitespace())
+        .map_or(start, |e| e + 1);
     s.get(start..end).unwrap_or(&[])
 }
 
@@ -169,13 +178,19 @@ mod tests {
         assert_eq!(parse(b"$HQ"), Some(Err(Code::InvalidStatement)));
         assert_eq!(
             parse(b"$110 = 5000.5"),
-            Some(Ok(SysCmd::SetSetting { n: 110, value: 5000.5 }))
+            Some(Ok(SysCmd::SetSetting {
+                n: 110,
+                value: 5000.5
+            }))
         );
         assert_eq!(parse(b"$110=abc"), Some(Err(Code::BadNumber)));
         assert_eq!(parse(b"$110=inf"), Some(Err(Code::BadNumber)));
         assert_eq!(parse(b"$110="), Some(Err(Code::BadNumber)));
         assert_eq!(parse(b"$99999999=1"), Some(Err(Code::InvalidStatement)));
-        assert_eq!(parse(b"$J=G91 X1 F100"), Some(Ok(SysCmd::Jog(b"G91 X1 F100"))));
+        assert_eq!(
+            parse(b"$J=G91 X1 F100"),
+            Some(Ok(SysCmd::Jog(b"G91 X1 F100")))
+        );
         assert_eq!(parse(b"$RST=*"), Some(Ok(SysCmd::Restore(Restore::All))));
         assert_eq!(parse(b"$Q"), Some(Err(Code::InvalidStatement)));
         assert_eq!(parse(b"$"), Some(Ok(SysCmd::Help)));

@@ -55,7 +55,13 @@ const BIG: f32 = 1.0e6;
 
 /// `$0`–`$32`, in order.
 const GLOBAL: [(u16, Kind); 22] = [
-    (0, Kind::Real { min: 0.5, max: 100.0 }),
+    (
+        0,
+        Kind::Real {
+            min: 0.5,
+            max: 100.0,
+        },
+    ),
     (1, Kind::Int { min: 0, max: 255 }),
     (2, Kind::Mask { bits: AXIS_BITS }),
     (3, Kind::Mask { bits: AXIS_BITS }),
@@ -63,8 +69,20 @@ const GLOBAL: [(u16, Kind); 22] = [
     (5, Kind::Mask { bits: AXIS_BITS }),
     (6, Kind::Bool),
     (10, Kind::Mask { bits: 0b11 }),
-    (11, Kind::Real { min: 0.0, max: 10.0 }),
-    (12, Kind::Real { min: 0.0001, max: 10.0 }),
+    (
+        11,
+        Kind::Real {
+            min: 0.0,
+            max: 10.0,
+        },
+    ),
+    (
+        12,
+        Kind::Real {
+            min: 0.0001,
+            max: 10.0,
+        },
+    ),
     (13, Kind::Bool),
     (20, Kind::Bool),
     (21, Kind::Bool),
@@ -73,7 +91,13 @@ const GLOBAL: [(u16, Kind); 22] = [
     (24, Kind::Real { min: 0.1, max: BIG }),
     (25, Kind::Real { min: 0.1, max: BIG }),
     (26, Kind::Int { min: 0, max: 65535 }),
-    (27, Kind::Real { min: 0.0, max: 1000.0 }),
+    (
+        27,
+        Kind::Real {
+            min: 0.0,
+            max: 1000.0,
+        },
+    ),
     (30, Kind::Real { min: 0.0, max: BIG }),
     (31, Kind::Real { min: 0.0, max: BIG }),
     (32, Kind::Bool),
@@ -82,21 +106,69 @@ const GLOBAL: [(u16, Kind); 22] = [
 /// Per-axis groups: `$100+i` steps/mm, `$110+i` rate, `$120+i` accel,
 /// `$130+i` travel.
 const AXIS_GROUPS: [(u16, Kind); 4] = [
-    (100, Kind::Real { min: 0.001, max: BIG }),
-    (110, Kind::Real { min: 0.001, max: BIG }),
-    (120, Kind::Real { min: 0.001, max: BIG }),
+    (
+        100,
+        Kind::Real {
+            min: 0.001,
+            max: BIG,
+        },
+    ),
+    (
+        110,
+        Kind::Real {
+            min: 0.001,
+            max: BIG,
+        },
+    ),
+    (
+        120,
+        Kind::Real {
+            min: 0.001,
+            max: BIG,
+        },
+    ),
     (130, Kind::Real { min: 0.0, max: BIG }),
 ];
 
 /// burin's own, `$200`–`$206` (documented on the [`Settings`] fields).
 const BURIN: [(u16, Kind); 7] = [
-    (200, Kind::Real { min: 0.0, max: 100.0 }),
-    (201, Kind::Real { min: 1.0, max: 2.0e6 }),
+    (
+        200,
+        Kind::Real {
+            min: 0.0,
+            max: 100.0,
+        },
+    ),
+    (
+        201,
+        Kind::Real {
+            min: 1.0,
+            max: 2.0e6,
+        },
+    ),
     (202, Kind::Int { min: 0, max: 1 }),
-    (203, Kind::Real { min: 1.0, max: 1.0e9 }),
+    (
+        203,
+        Kind::Real {
+            min: 1.0,
+            max: 1.0e9,
+        },
+    ),
     (204, Kind::Int { min: 0, max: 1 }),
-    (205, Kind::Real { min: 0.0, max: 100.0 }),
-    (206, Kind::Int { min: 0, max: 0xFFFF }),
+    (
+        205,
+        Kind::Real {
+            min: 0.0,
+            max: 100.0,
+        },
+    ),
+    (
+        206,
+        Kind::Int {
+            min: 0,
+            max: 0xFFFF,
+        },
+    ),
 ];
 
 /// The kind of setting `n`, or `None` if there is no such setting.
@@ -258,7 +330,13 @@ impl Settings {
             }
             200 => self.dir_setup_us = v,
             201 => self.max_step_rate_hz = v,
-            202 => self.profile = if on { Profile::SCurve } else { Profile::Trapezoid },
+            202 => {
+                self.profile = if on {
+                    Profile::SCurve
+                } else {
+                    Profile::Trapezoid
+                }
+            }
             203 => self.jerk = v,
             204 => {
                 self.rapid_mode = if on {

@@ -5,6 +5,7 @@ use burin::link::{Link, LinkEvent, LinkMode, SysCmd};
 use protocol::{Code, FrameError, HostMsg, Rt};
 
 /// An owned [`LinkEvent`], so runs can be compared.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, PartialEq)]
 pub enum Ev {
     Line(Vec<u8>),

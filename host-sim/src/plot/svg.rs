@@ -7,6 +7,7 @@ use std::io::{self, Write};
 
 use burin::{AXES, AXIS_NAMES};
 
+use super::frame::{polyline, Frame};
 use super::Series;
 use crate::record::{AxisInfo, RunInfo, Summary};
 use crate::report::format_duration;
@@ -65,119 +66,6 @@ fn esc(s: &str) -> String {
         .replace('"', "&quot;")
 }
 
-/// A 1-2-5 tick step giving about `n` ticks over `span`.
-fn nice_step(span: f64, n: f64) -> f64 {
-    let raw = (span / n).max(1e-9);
-    let mag = 10f64.powf(raw.log10().floor());
-    let f = raw / mag;
-    let m = if f <= 1.0 {
-        1.0
-    } else if f <= 2.0 {
-        2.0
-    } else if f <= 5.0 {
-        5.0
-    } else {
-        10.0
-    };
-    m * mag
-}
-
-fn ticks(lo: f64, hi: f64, n: f64) -> (Vec<f64>, usize) {
-    let step = nice_step(hi - lo, n);
-    let decimals = if step >= 1.0 {
-        0
-    } else {
-        (-step.log10()).ceil() as usize
-    };
-    let mut v = Vec::new();
-    let mut t = (lo / step).ceil() * step;
-    while t <= hi + step * 1e-6 && v.len() < 100 {
-        v.push(if t.abs() < step * 1e-6 { 0.0 } else { t });
-        t += step;
-    }
-    (v, decimals)
-}
-
-/// A panel: data box [x0, x1] × [y0, y1] mapped onto pixels.
-struct Frame {
-    left: f64,
-    top: f64,
-    w: f64,
-    h: f64,
-    x: (f64, f64),
-    y: (f64, f64),
-}
-
-impl Frame {
-    fn px(&self, x: f64) -> f64 {
-        self.left + (x - self.x.0) / (self.x.1 - self.x.0) * self.w
-    }
-    fn py(&self, y: f64) -> f64 {
-        self.top + self.h - (y - self.y.0) / (self.y.1 - self.y.0) * self.h
-    }
-
-    /// Background, grid, tick labels and axis titles.
-    fn axes(&self, s: &mut String, xlabel: &str, ylabel: &str) {
-        let (l, t, r, b) = (self.left, self.top, self.left + self.w, self.top + self.h);
-        let _ = writeln!(
-            s,
-            r##"<rect x="{l:.1}" y="{t:.1}" width="{:.1}" height="{:.1}" fill="#fcfcfc" stroke="none"/>"##,
-            self.w, self.h
-        );
-        let (xt, xd) = ticks(self.x.0, self.x.1, self.w / 90.0);
-        for v in xt {
-            let x = self.px(v);
-            let _ = writeln!(
-                s,
-                r#"<line class="grid" x1="{x:.1}" y1="{t:.1}" x2="{x:.1}" y2="{b:.1}"/>"#
-            );
-            let _ = writeln!(
-                s,
-                r#"<text x="{x:.1}" y="{:.1}" text-anchor="middle">{v:.xd$}</text>"#,
-                b + 16.0
-            );
-        }
-        let (yt, yd) = ticks(self.y.0, self.y.1, (self.h / 60.0).max(2.0));
-        for v in yt {
-            let y = self.py(v);
-            let _ = writeln!(
-                s,
-                r#"<line class="grid" x1="{l:.1}" y1="{y:.1}" x2="{r:.1}" y2="{y:.1}"/>"#
-            );
-            let _ = writeln!(
-                s,
-                r#"<text x="{:.1}" y="{:.1}" text-anchor="end">{v:.yd$}</text>"#,
-                l - 6.0,
-                y + 4.0
-            );
-        }
-        let _ = writeln!(
-            s,
-            r##"<rect x="{l:.1}" y="{t:.1}" width="{:.1}" height="{:.1}" fill="none" stroke="#777" stroke-width="1"/>"##,
-            self.w, self.h
-        );
-        let _ = writeln!(
-            s,
-            r#"<text class="lab" x="{:.1}" y="{:.1}" text-anchor="middle">{xlabel}</text>"#,
-            l + self.w / 2.0,
-            b + 36.0
-        );
-        let (cx, cy) = (l - 56.0, t + self.h / 2.0);
-        let _ = writeln!(
-            s,
-            r#"<text class="lab" x="{cx:.1}" y="{cy:.1}" text-anchor="middle" transform="rotate(-90 {cx:.1} {cy:.1})">{ylabel}</text>"#
-        );
-    }
-
-    fn clip(&self, s: &mut String, id: &str) {
-        let _ = writeln!(
-            s,
-            r#"<clipPath id="{id}"><rect x="{:.1}" y="{:.1}" width="{:.1}" height="{:.1}"/></clipPath>"#,
-            self.left, self.top, self.w, self.h
-        );
-    }
-}
-
 /// Bounds of everything drawn in XY, padded, never degenerate.
 fn xy_bounds(p: &Plot) -> ((f64, f64), (f64, f64)) {
     let mut lo = [f64::INFINITY; 2];
@@ -205,16 +93,6 @@ fn xy_bounds(p: &Plot) -> ((f64, f64), (f64, f64)) {
         (mid - half, mid + half)
     };
     (r(0), r(1))
-}
-
-fn polyline(s: &mut String, class: &str, f: &Frame, pts: impl Iterator<Item = [f64; 2]>) {
-    s.push_str(r#"<polyline class=""#);
-    s.push_str(class);
-    s.push_str(r#"" points=""#);
-    for q in pts {
-        let _ = write!(s, "{:.1},{:.1} ", f.px(q[0]), f.py(q[1]));
-    }
-    s.push_str("\"/>\n");
 }
 
 fn xy_panel(s: &mut String, p: &Plot, top: f64) -> f64 {
@@ -282,8 +160,16 @@ fn xy_panel(s: &mut String, p: &Plot, top: f64) -> f64 {
 /// A sample holds until the next one ("recorded whenever it changes"), so
 /// a series is drawn as a staircase, not as a line between samples.
 fn staircase(series: &Series, hz: f64, t_end: f64) -> Vec<[f64; 2]> {
-    let mut pts: Vec<[f64; 2]> = Vec::with_capacity(series.samples.len() * 2 + 1);
-    for &(t, v) in &series.samples {
+    // More samples than pixel columns only add bytes: fold to min/max per column.
+    let folded;
+    let samples = if series.samples.len() > 4 * W as usize {
+        folded = super::fold_min_max(&series.samples, W as usize);
+        &folded
+    } else {
+        &series.samples
+    };
+    let mut pts: Vec<[f64; 2]> = Vec::with_capacity(samples.len() * 2 + 1);
+    for &(t, v) in samples {
         let q = [t as f64 / hz, f64::from(v)];
         if let Some(&[_, held]) = pts.last() {
             pts.push([q[0], held]);
@@ -307,7 +193,8 @@ fn time_span(p: &Plot) -> (f64, f64) {
 /// Z over time, when Z moved at all: plunges and retracts at a glance.
 fn z_panel(s: &mut String, p: &Plot, top: f64) -> Option<f64> {
     let (lo, hi) = (f64::from(p.z.min), f64::from(p.z.max));
-    if !(hi > lo) {
+    // Also false when Z never moved (min +inf, max -inf).
+    if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
         return None;
     }
     let (hz, t_end) = time_span(p);

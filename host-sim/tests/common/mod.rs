@@ -123,8 +123,15 @@ pub const ACCEL_BIN_S: f64 = 0.025;
 /// 2 ms segment at its average speed, a staircase that can add `a·2ms` of
 /// speed difference between bins (factor `1 + 2ms/25ms`), and each bin's
 /// rate can be off by two event periods of jitter (≤ 125 µs at the AMASS
-/// floor), `4·v·p/Δ²`. Returns the worst ratio measured/limit.
-pub fn check_max_accel(info: &RunInfo, events: &[PinEvent]) -> f64 {
+/// floor), `4·v·p/Δ²`.
+///
+/// Corners: junction-deviation cornering (like GRBL's) turns at a finite
+/// speed, so an axis's velocity steps at the corner by up to
+/// `sqrt(8·a·δ)` (the maximum over all corner angles of `v_j·|Δu|` with
+/// `v_j² = a·δ·c/(1−c)`). Bin pairs around a sharp corner (`corners`, from
+/// [`check_path`]) may exceed the limit by that step spread over one bin.
+/// Returns the worst ratio measured/limit.
+pub fn check_max_accel(info: &RunInfo, events: &[PinEvent], corners: &[u64], jd_mm: f64) -> f64 {
     let mut worst = 0.0f64;
     let hz = info.tick_hz as f64;
     for (i, ax) in info.axes.iter().enumerate() {
@@ -161,7 +168,12 @@ pub fn check_max_accel(info: &RunInfo, events: &[PinEvent]) -> f64 {
             }
             let a = (v1 - v0).abs() / (t1 - t0);
             let v = v0.abs().max(v1.abs());
-            let tol = a_max * (1.0 + 0.002 / ACCEL_BIN_S) + 4.0 * v * 125e-6 / (ACCEL_BIN_S * ACCEL_BIN_S);
+            let mut tol = a_max * (1.0 + 0.002 / ACCEL_BIN_S) + 4.0 * v * 125e-6 / (ACCEL_BIN_S * ACCEL_BIN_S);
+            let (lo, hi) = (((t0 - ACCEL_BIN_S) * hz) as u64, ((t1 + ACCEL_BIN_S) * hz) as u64);
+            let i0 = corners.partition_point(|&c| c < lo);
+            if corners.get(i0).is_some_and(|&c| c <= hi) {
+                tol += (8.0 * a_max * jd_mm).sqrt() / ACCEL_BIN_S;
+            }
             worst = worst.max(a / a_max);
             assert!(a <= tol, "axis {i} accel {a:.1} mm/s² > {tol:.1} at t={t0:.4}s (v {v0:.2} -> {v1:.2})");
         }
@@ -204,7 +216,9 @@ pub fn check_pin_timing(info: &RunInfo, events: &[PinEvent]) {
 
 /// Every stepped position lies within one step per axis (plus `extra_mm`)
 /// of the commanded polyline. Returns the worst distance in mm.
-pub fn check_path(info: &RunInfo, start: [f32; AXES], path: &[(u32, MoveKind, [f32; AXES])], events: &[PinEvent], extra_mm: f64) -> f64 {
+/// Also returns the ticks at which the stepped path passes a corner of the
+/// commanded path (any vertex that is not inside one arc or spline).
+pub fn check_path(info: &RunInfo, start: [f32; AXES], path: &[(u32, MoveKind, [f32; AXES])], events: &[PinEvent], extra_mm: f64) -> (f64, Vec<u64>) {
     let spm: Vec<f64> = info.axes.iter().map(|a| a.steps_per_mm as f64).collect();
     // One step on every axis that moves in this trace.
     let moved = events.iter().fold(0u8, |m, e| m | e.step_mask);
@@ -214,6 +228,17 @@ pub fn check_path(info: &RunInfo, start: [f32; AXES], path: &[(u32, MoveKind, [f
     verts.extend(path.iter().map(|p| p.2.map(|v| v as f64)));
     let mut seg = 0usize;
     let mut worst = 0.0f64;
+    let mut corners = Vec::new();
+    // Vertex k joins pieces k-1 and k. Every vertex is a junction-deviation
+    // corner except those inside one arc or spline (its chords).
+    let sharp = |k: usize| -> bool {
+        if k == 0 || k >= path.len() {
+            return false;
+        }
+        let (a, b) = (&path[k - 1], &path[k]);
+        let curve = |m: MoveKind| matches!(m, MoveKind::Arc | MoveKind::Spline);
+        !(curve(a.1) && curve(b.1) && a.0 == b.0)
+    };
     let dist = |p: &[f64; AXES], a: &[f64; AXES], b: &[f64; AXES]| {
         let mut ab = [0.0; AXES];
         let mut ap = [0.0; AXES];
@@ -246,12 +271,17 @@ pub fn check_path(info: &RunInfo, start: [f32; AXES], path: &[(u32, MoveKind, [f
             best = best.min(dist(&p, &verts[s], &verts[s + 1]));
         }
         if best.is_finite() {
+            for k in seg + 1..=best_seg {
+                if sharp(k) {
+                    corners.push(e.tick);
+                }
+            }
             seg = best_seg;
             worst = worst.max(best);
             assert!(best <= step_diag + extra_mm + 1e-6, "stepped point {p:?} is {best:.5} mm off the path (tick {})", e.tick);
         }
     }
-    worst
+    (worst, corners)
 }
 
 /// Final position in steps equals the commanded end rounded to steps.

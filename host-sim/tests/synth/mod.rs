@@ -2,6 +2,8 @@
 //! circle (as chords) and a curve, each move with a trapezoid speed profile,
 //! stepped by Bresenham at the times that profile gives.
 
+#![allow(dead_code)] // each test crate uses a different part
+
 use burin::AXES;
 use host_sim::record::{AxisInfo, MoveKind, PinEvent, Recorder, RunInfo, Summary};
 
@@ -160,4 +162,30 @@ pub fn run(r: &mut dyn Recorder) -> Summary {
     };
     r.finish(&summary).expect("finish");
     summary
+}
+
+pub fn event(tick: u64, dir_mask: u8, step_mask: u8, pos: [i64; 4]) -> PinEvent {
+    PinEvent {
+        tick,
+        dir_mask,
+        step_mask,
+        dir_changed_tick: 0,
+        pos,
+    }
+}
+
+pub fn empty_summary() -> Summary {
+    Summary {
+        lines: 0,
+        moves: 0,
+        job_time_s: 0.0,
+        distance_mm: 0.0,
+        max_feed_mm_min: 0.0,
+        steps: [0; 4],
+        final_position_steps: [0; 4],
+        final_position_mm: [0.0; 4],
+        final_work_position_mm: [0.0; 4],
+        planner_underruns: 0,
+        errors: vec![],
+    }
 }

@@ -12,6 +12,7 @@
 //! `Hello` after [`Client::set_resync_after`] of silence, whose `Welcome`
 //! carries the device's `next_seq` and free slots.
 
+pub mod grbl;
 pub mod mem;
 
 use crate::frame::{self, FrameDecoder, FrameError, MAX_WIRE};

@@ -21,7 +21,11 @@ const fn bsrr_word(pins: &[u8; 4], high: u8, touched: u8) -> u32 {
     while axis < 4 {
         if touched & (1 << axis) != 0 {
             let pin = (pins[axis] & 0xF) as u32;
-            word |= if high & (1 << axis) != 0 { 1 << pin } else { 1 << (pin + 16) };
+            word |= if high & (1 << axis) != 0 {
+                1 << pin
+            } else {
+                1 << (pin + 16)
+            };
         }
         axis += 1;
     }
@@ -71,7 +75,11 @@ impl StepPort {
         self.step_off = bsrr_word(&p.step, step_invert, 0xF);
         let en = [p.enable; 4];
         let (low, high) = (bsrr_word(&en, 0, 1), bsrr_word(&en, 1, 1));
-        (self.enable_on, self.enable_off) = if enable_invert { (high, low) } else { (low, high) };
+        (self.enable_on, self.enable_off) = if enable_invert {
+            (high, low)
+        } else {
+            (low, high)
+        };
     }
 
     #[inline(always)]
@@ -158,7 +166,9 @@ impl StepTimer for Tim5 {
     }
     #[inline(always)]
     fn schedule_in(&mut self, ticks: u32) {
-        self.tim.arr().write(|w| w.arr().set(ticks.max(MIN_TICKS) - 1));
+        self.tim
+            .arr()
+            .write(|w| w.arr().set(ticks.max(MIN_TICKS) - 1));
     }
     fn stop(&mut self) {
         self.tim.cr1().modify(|_, w| w.cen().clear_bit());
@@ -177,7 +187,10 @@ pub struct FixedRate {
 impl FixedRate {
     pub fn new(step_hz: u32, tick_hz: u32) -> Self {
         let half_period = (tick_hz / step_hz.max(1) / 2).max(MIN_TICKS);
-        FixedRate { half_period, high: false }
+        FixedRate {
+            half_period,
+            high: false,
+        }
     }
 
     /// Ticks to the first event.

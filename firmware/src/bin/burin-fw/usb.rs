@@ -51,7 +51,15 @@ impl UsbLink {
             Err(_) => defmt::panic!("USB string descriptors rejected"),
         };
         let dev = builder.device_class(usbd_serial::USB_CLASS_CDC).build();
-        UsbLink { dev, serial, rx, tx, pending: Packet::new(), sent: 0, overruns: 0 }
+        UsbLink {
+            dev,
+            serial,
+            rx,
+            tx,
+            pending: Packet::new(),
+            sent: 0,
+            overruns: 0,
+        }
     }
 
     /// Everything the OTG_FS interrupt does. Reads are never deferred: an
@@ -70,7 +78,9 @@ impl UsbLink {
             // Realtime bytes (? ! ~ 0x18) will be picked out here, before
             // queueing, so they act even when the job stream is backed up.
             let bytes = buf.get(..n).unwrap_or(&[]);
-            let Ok(packet) = Packet::from_slice(bytes) else { continue };
+            let Ok(packet) = Packet::from_slice(bytes) else {
+                continue;
+            };
             if self.rx.try_send(packet).is_err() {
                 // Senders pace themselves by credits / GRBL character
                 // counting; landing here means the host overran the buffer

@@ -26,7 +26,10 @@
 use super::super::step::{PortPins, StepPort};
 use burin::seams::StepPins;
 use stm32f4xx_hal::{
-    gpio::{gpioa, gpiob, gpioc, Input, Output, Speed, PA0, PA1, PA11, PA12, PA2, PA3, PA4, PA5, PA6, PB0, PB1, PB10, PB9, PC13},
+    gpio::{
+        gpioa, gpiob, gpioc, Input, Output, PinState, Speed, PA0, PA1, PA11, PA12, PA2, PA3, PA4,
+        PA5, PA6, PB0, PB1, PB10, PB9, PC13,
+    },
     pac,
     prelude::*,
     rcc::Rcc,
@@ -34,7 +37,11 @@ use stm32f4xx_hal::{
 };
 
 /// Step, direction and enable pin numbers on port B.
-pub const PORT_PINS: PortPins = PortPins { step: [12, 13, 14, 15], dir: [4, 5, 6, 7], enable: 8 };
+pub const PORT_PINS: PortPins = PortPins {
+    step: [12, 13, 14, 15],
+    dir: [4, 5, 6, 7],
+    enable: 8,
+};
 
 /// Spindle PWM carrier; the duty cycle carries the speed.
 const SPINDLE_PWM_HZ: u32 = 1_000;
@@ -117,7 +124,9 @@ pub fn split(
         gpiob.pb5.into_push_pull_output().speed(Speed::Medium),
         gpiob.pb6.into_push_pull_output().speed(Speed::Medium),
         gpiob.pb7.into_push_pull_output().speed(Speed::Medium),
-        gpiob.pb8.into_push_pull_output(),
+        // Enable starts high (drivers off with the default active-low
+        // polarity) instead of passing through low for a few cycles.
+        gpiob.pb8.into_push_pull_output_in_state(PinState::High),
     );
     // SAFETY: only forms the address of GPIOB's BSRR from the PAC's fixed
     // base pointer; no register is accessed here.
