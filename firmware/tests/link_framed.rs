@@ -361,3 +361,29 @@ fn port_closed_mid_job_then_reopened_executes_nothing_twice() {
         "every line once, in order, across the reconnect"
     );
 }
+
+#[test]
+fn mode_flag_follows_nul_bye_and_reset() {
+    let mut link = Link::new();
+    link.feed(b"?");
+    assert!(!link.flags().is_framed());
+    link.feed(&[0]);
+    assert!(link.flags().is_framed(), "0x00 switches at once, for realtime replies");
+    link.feed(&enc(&HostMsg::Bye));
+    assert!(!link.flags().is_framed());
+    link.feed(&[0]);
+    link.reset();
+    assert!(!link.flags().is_framed());
+    let mut out = Outcome::default();
+    drain(&mut link, &mut out);
+    assert_eq!(
+        out.events,
+        vec![
+            Ev::Mode(LinkMode::Framed),
+            Ev::Frame(HostMsg::Bye),
+            Ev::Mode(LinkMode::Framed),
+            Ev::Mode(LinkMode::Text)
+        ]
+    );
+    assert_eq!(link.mode(), LinkMode::Text);
+}

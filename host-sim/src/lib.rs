@@ -6,6 +6,7 @@
 
 pub mod config;
 pub mod engine;
+pub mod outputs;
 pub mod plot;
 pub mod record;
 pub mod report;

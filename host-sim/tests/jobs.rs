@@ -69,3 +69,48 @@ fn laser_job_runs_on_the_laser() {
     assert_eq!(s.final_work_position_mm[..2], [5.0, 5.0]);
     assert_within(&cfg, &ext, [0.0, -400.0, -40.0], [400.0, 0.0, 0.0]);
 }
+
+#[test]
+fn simulate_writes_every_requested_file() {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("simulate-demo");
+    std::fs::create_dir_all(&dir).unwrap();
+    let src =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("jobs/demo.gcode"))
+            .unwrap();
+    let out = host_sim::outputs::Outputs {
+        json: Some(dir.join("demo.json")),
+        trace: Some(dir.join("demo.csv")),
+        vcd: Some(dir.join("demo.vcd")),
+        plot: Some(dir.join("demo.svg")),
+    };
+    let s =
+        host_sim::outputs::simulate(&MachineConfig::default(), &src, "demo.gcode", &out).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("demo.json")).unwrap()).unwrap();
+    assert_eq!(json["steps"][0].as_u64(), Some(s.steps[0]));
+    let csv = std::fs::read_to_string(dir.join("demo.csv")).unwrap();
+    assert!(csv.starts_with("tick,X,Y,Z,A\n"));
+    let last: Vec<i64> = csv
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .skip(1)
+        .map(|f| f.parse().unwrap())
+        .collect();
+    assert_eq!(last, s.final_position_steps);
+    let vcd = std::fs::read_to_string(dir.join("demo.vcd")).unwrap();
+    assert!(vcd.contains("$enddefinitions $end"));
+    let svg = std::fs::read_to_string(dir.join("demo.svg")).unwrap();
+    assert!(svg.trim_end().ends_with("</svg>"));
+}
+
+#[test]
+fn simulate_names_a_file_it_cannot_create() {
+    let out = host_sim::outputs::Outputs {
+        plot: Some("/nonexistent-dir/plot.svg".into()),
+        ..Default::default()
+    };
+    let e = host_sim::outputs::simulate(&MachineConfig::default(), "G0 X1", "x", &out).unwrap_err();
+    assert!(e.to_string().contains("/nonexistent-dir/plot.svg"), "{e}");
+}

@@ -193,3 +193,19 @@ fn inverse_time_feed_sets_duration() {
     let r = run(&cfg, &cmds, &[]);
     assert!((r.summary.job_time_s - 2.0).abs() < 0.02, "took {}", r.summary.job_time_s);
 }
+
+#[test]
+fn independent_rapid_moves_each_axis_at_its_own_rate() {
+    let end = [100.0, 0.0, -10.0, 0.0];
+    let cmds = vec![Command::Rapid { end }];
+    let last_tick = |r: &Run, axis: usize| r.rec.events.iter().rev().find(|e| e.step_mask & (1 << axis) != 0).unwrap().tick;
+    let coord = run(&config(), &cmds, &[]);
+    let mut cfg = config();
+    cfg.settings.rapid_mode = RapidMode::Independent;
+    let ind = run(&cfg, &cmds, &[]);
+    check_all(&cfg, &ind, &cmds, "independent rapid");
+    // coordinated: Z ends with X; independent: Z (0.6 s at 1000 mm/min) long before X (1.2 s)
+    assert!(last_tick(&coord, 2) as f64 > 0.95 * last_tick(&coord, 0) as f64);
+    assert!((last_tick(&ind, 2) as f64) < 0.7 * last_tick(&ind, 0) as f64);
+    assert!(ind.rec.path.len() == 2, "two legs: {:?}", ind.rec.path);
+}

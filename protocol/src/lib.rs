@@ -51,10 +51,29 @@
 //!   are recognised as duplicates. "Acknowledged" means "queued for
 //!   execution": only an operator abort (reset, alarm) drops queued lines.
 //!
+//! # Text mode details
+//!
+//! * Lines end at `\n` or `\r`; `\r\n` counts as one ending. An empty line
+//!   is answered `ok` (senders that send blank lines stay in step).
+//! * Lines longer than [`MAX_LINE`] bytes are answered `error:11` and
+//!   discarded whole, never truncated and run.
+//! * The realtime bytes (`?` `!` `~` 0x18 0x84 0x85 0x90–0x9D 0x9E 0xA0
+//!   0xA1) are taken out wherever they occur, even inside a comment, as in
+//!   GRBL; a UTF-8 comment whose bytes hit that range loses them.
+//! * The device can always hold [`RX_WINDOW`] (128) unprocessed bytes, which
+//!   `$I` reports in `[OPT:…,<blocks>,128]` for character-counting senders.
+//!
 //! # Realtime
 //!
 //! [`Rt`] lists the realtime commands with their GRBL byte values; both
 //! protocols share them.
+//!
+//! # Host side (feature `std`)
+//!
+//! [`client::Client`] speaks the framed protocol over any `Read + Write`;
+//! [`client::grbl::GrblClient`] is a plain GRBL sender (send-response or
+//! character counting) for tests and benchmarks; [`client::mem::MemPipe`]
+//! is an in-memory duplex pipe to test both without a port.
 #![cfg_attr(not(feature = "std"), no_std)]
 #![deny(unsafe_code)]
 #![warn(missing_debug_implementations)]

@@ -233,3 +233,32 @@ fn overrunning_the_credits_is_refused_and_loses_nothing() {
     run.stream(&lines, 4, 1, 10_000);
     assert_eq!(run.dev.executed, lines);
 }
+
+#[test]
+fn reconnecting_to_a_rebooted_device_is_reported_not_guessed() {
+    let lines = job(50);
+    let mut run = Run::clean(8);
+    let mut next = 0;
+    while run.dev.executed.len() < 20 {
+        while next < lines.len() && run.client.can_send() {
+            run.client.send_line(&lines[next]).expect("send");
+            next += 1;
+        }
+        run.tick(1);
+    }
+    while next < lines.len() && run.client.can_send() {
+        run.client.send_line(&lines[next]).expect("send");
+        next += 1;
+    }
+    assert!(run.client.in_flight() > 0);
+    // The device reboots: its sequence starts again at 1.
+    let (host2, dev2) = MemPipe::pair();
+    run.dev = FakeDevice::new(dev2, 8);
+    run.client.reconnect(host2).expect("hello");
+    run.dev.pump();
+    let err = (0..10).find_map(|_| run.client.poll().err());
+    assert!(
+        matches!(err, Some(protocol::client::ClientError::SessionLost { device_next: 1 })),
+        "{err:?}"
+    );
+}

@@ -10,7 +10,7 @@
 //! LinuxCNC, which strips spaces before parsing.
 
 use super::error::{ErrorKind, Unsupported};
-use super::lexer::{Cursor, LexResult};
+use super::lexer::{blank, Cursor, LexResult};
 use super::params::{Name, ParamStore, PARAM_MAX};
 use libm::{atan2f, ceilf, cosf, expf, floorf, fmodf, logf, powf, roundf, sinf, sqrtf, tanf};
 
@@ -32,41 +32,37 @@ fn finite(v: f32) -> Result<f32, ErrorKind> {
 }
 
 impl Cursor<'_> {
-    /// An unsigned decimal number: digits with at most one point.
+    /// An unsigned decimal number: digits with at most one point (blanks
+    /// allowed between them). Up to 7 significant digits and 10 decimals take
+    /// the exact path (integer mantissa over an exact power of ten, one
+    /// rounding); anything longer goes to core's correctly rounded parser.
     pub(crate) fn number(&mut self) -> LexResult<f32> {
         let start = self.pos;
-        let mut buf = [0u8; 40];
-        let mut n = 0usize;
+        let line = self.line;
+        let mut i = start;
         let mut mant: u32 = 0;
-        let mut sig = 0u32; // significant digits kept in `mant`
         let mut frac = 0usize;
         let mut dot = false;
         let mut digits = 0u32;
         let mut exact = true;
-        while let Some(b) = self.peek() {
-            if b.is_ascii_digit() {
+        while let Some(&b) = line.get(i) {
+            let d = b.wrapping_sub(b'0');
+            if d < 10 {
                 digits += 1;
-                if dot {
-                    frac += 1;
-                }
-                if mant != 0 || b != b'0' {
-                    sig += 1;
-                }
-                if sig <= 8 {
-                    mant = mant * 10 + u32::from(b - b'0');
+                if mant < 10_000_000 {
+                    mant = mant * 10 + u32::from(d);
+                    frac += usize::from(dot);
                 } else {
                     exact = false;
                 }
             } else if b == b'.' && !dot {
                 dot = true;
-            } else {
+            } else if !blank(b) {
                 break;
             }
-            *buf.get_mut(n)
-                .ok_or_else(|| self.err_at(ErrorKind::BadNumber, start))? = b;
-            n += 1;
-            self.bump();
+            i += 1;
         }
+        self.pos = i;
         if digits == 0 {
             return Err(self.err_at(ErrorKind::BadNumber, start));
         }
@@ -75,7 +71,15 @@ impl Cursor<'_> {
                 return Ok(mant as f32 / p);
             }
         }
-        // Rare: more than 8 significant digits. Let core's parser round it.
+        // Rare: many significant digits. Let core's parser round it.
+        let mut buf = [0u8; 48];
+        let mut n = 0;
+        for &b in line.get(start..i).unwrap_or(&[]) {
+            if !blank(b) {
+                *buf.get_mut(n).ok_or_else(|| self.err_at(ErrorKind::BadNumber, start))? = b;
+                n += 1;
+            }
+        }
         let s = buf.get(..n).and_then(|b| core::str::from_utf8(b).ok());
         s.and_then(|s| s.parse::<f32>().ok())
             .filter(|v| v.is_finite())

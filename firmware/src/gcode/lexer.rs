@@ -29,7 +29,7 @@ pub(crate) struct Cursor<'a> {
     pub(crate) pos: usize,
 }
 
-fn blank(b: u8) -> bool {
+pub(crate) fn blank(b: u8) -> bool {
     b == b' ' || b == b'\t' || b == b'\r'
 }
 

@@ -14,8 +14,10 @@
 //! before the next line; [`Interpreter::needs_sync`] says when.
 
 mod block;
+mod codes;
 mod exec;
 mod geom;
+mod motion;
 mod state;
 
 pub use exec::{G30_PROBE_TRAVEL, LINE_COMMANDS};

@@ -15,7 +15,7 @@ use crate::arc::{ArcChords, SplineChords};
 use crate::command::{AxisMask, Command, Feed, Pos, ProbeKind};
 use crate::planner::{Planner, Speed, Watch};
 use crate::realtime::{Realtime, Trip};
-use crate::settings::Settings;
+use crate::settings::{RapidMode, Settings};
 use crate::stepper::prep::{Preparer, SegmentSink};
 use crate::stepper::{StepConfig, Switches};
 use crate::AXES;
@@ -50,6 +50,8 @@ pub enum Note<'a> {
 enum Chords {
     Arc(ArcChords),
     Spline(SplineChords),
+    /// Legs of an independent-axis rapid.
+    Legs { pts: [Pos; AXES], n: usize, i: usize },
 }
 
 #[derive(Clone, Debug)]
@@ -223,6 +225,11 @@ impl<const N: usize> Machine<N> {
         match cmd {
             Command::Rapid { end } => {
                 self.check_soft(end, end)?;
+                if self.planner.settings.rapid_mode == RapidMode::Independent {
+                    let (pts, n) = self.rapid_legs(end);
+                    self.pending = Pending::Chords { chords: Chords::Legs { pts, n, i: 0 }, speed: Speed::Rapid, line };
+                    return self.feed_chords(obs);
+                }
                 self.push_line(end, Speed::Rapid, Watch::default(), line, PathKind::Rapid, obs)
             }
             Command::Line { end, feed } => {
@@ -293,6 +300,46 @@ impl<const N: usize> Machine<N> {
         }
     }
 
+    /// Independent-axis rapid: every axis runs at its own max rate, so the
+    /// move splits where each axis arrives (fastest first). Each leg is a
+    /// straight block whose direction makes all its axes hit their max rate
+    /// together; the legs stay inside the start/end box, so checking the end
+    /// against soft limits is enough.
+    fn rapid_legs(&self, end: &Pos) -> ([Pos; AXES], usize) {
+        let start = self.commanded;
+        let s = &self.planner.settings;
+        let rate: [f32; AXES] = core::array::from_fn(|i| s.axes[i].max_rate.max(1e-3) / 60.0);
+        let time: [f32; AXES] = core::array::from_fn(|i| libm::fabsf(end[i] - start[i]) / rate[i]);
+        let mut order: [usize; AXES] = core::array::from_fn(|i| i);
+        order.sort_unstable_by(|a, b| time[*a].total_cmp(&time[*b]));
+        let mut pts = [*end; AXES];
+        let mut n = 0;
+        let mut last_t = 0.0f32;
+        for &k in &order {
+            let tk = time[k];
+            if tk <= last_t {
+                continue;
+            }
+            last_t = tk;
+            for i in 0..AXES {
+                pts[n][i] = if time[i] <= tk {
+                    end[i]
+                } else {
+                    start[i] + libm::copysignf(rate[i] * tk, end[i] - start[i])
+                };
+            }
+            n += 1;
+        }
+        if n == 0 {
+            pts[0] = *end;
+            n = 1;
+        }
+        if let Some(p) = pts.get_mut(n - 1) {
+            *p = *end;
+        }
+        (pts, n)
+    }
+
     /// G93 arcs and splines: the whole curve takes `1/F` minutes, so every
     /// chord runs at the curve's length over that time.
     fn chord_speed(&self, feed: Feed, ch: Chords) -> Result<Speed, MachineError> {
@@ -307,6 +354,7 @@ impl<const N: usize> Machine<N> {
         match ch {
             Chords::Arc(c) => c.for_each(&mut add),
             Chords::Spline(c) => c.for_each(&mut add),
+            Chords::Legs { .. } => {}
         }
         if len <= 0.0 {
             return Err(MachineError::InvalidNumber);
@@ -321,12 +369,23 @@ impl<const N: usize> Machine<N> {
             let (next, kind) = match chords {
                 Chords::Arc(c) => (c.next(), PathKind::Arc),
                 Chords::Spline(c) => (c.next(), PathKind::Spline),
+                Chords::Legs { pts, n, i } => {
+                    let p = if *i < *n { pts.get(*i).copied() } else { None };
+                    *i += 1;
+                    (p, PathKind::Rapid)
+                }
             };
             let Some(p) = next else {
                 self.pending = Pending::None;
                 return Ok(());
             };
-            let pushed = self.planner.to_steps(&p).and_then(|t| self.planner.push_chord(t, speed, line));
+            let pushed = self.planner.to_steps(&p).and_then(|t| {
+                if kind == PathKind::Rapid {
+                    self.planner.push_line(t, speed, Watch::default(), line)
+                } else {
+                    self.planner.push_chord(t, speed, line)
+                }
+            });
             if let Err(e) = pushed {
                 self.pending = Pending::None;
                 return Err(e);

@@ -145,8 +145,9 @@ impl<T: Read + Write> GrblClient<T> {
         match self.pacing {
             Pacing::SendResponse => self.in_flight.is_empty(),
             Pacing::CharCounting => {
-                let used: usize = self.in_flight.iter().sum();
-                used + line.len() + 1 <= RX_WINDOW
+                // The line goes out with its `\n`.
+                let used: usize = self.in_flight.iter().sum::<usize>() + 1;
+                used + line.len() <= RX_WINDOW
             }
         }
     }
