@@ -188,7 +188,7 @@ impl SplineChords {
             .chain(s.end.iter())
             .chain(s.p1.iter())
             .chain(s.p2.iter());
-        if !all.clone().all(|v| v.is_finite()) || !(tol > 0.0 && tol.is_finite()) {
+        if !(all.clone().all(|v| v.is_finite()) && tol > 0.0 && tol.is_finite()) {
             return Err(MachineError::InvalidNumber);
         }
         let d = |p0: [f32; 2], p1: [f32; 2], p2: [f32; 2]| {
@@ -234,8 +234,8 @@ impl SplineChords {
         for (k, v) in p.iter_mut().enumerate() {
             *v = self.start[k] + (self.end[k] - self.start[k]) * t;
         }
-        for k in 0..2 {
-            p[k] = b0 * self.start[k] + b1 * self.p1[k] + b2 * self.p2[k] + b3 * self.end[k];
+        for (k, v) in p.iter_mut().take(2).enumerate() {
+            *v = b0 * self.start[k] + b1 * self.p1[k] + b2 * self.p2[k] + b3 * self.end[k];
         }
         p
     }

@@ -18,8 +18,21 @@ fn words(line: &str) -> Result<Vec<Word>, ErrorKind> {
 #[test]
 fn words_and_columns() {
     let w = words("G1X0Y8 x+1.5 (c) Z.5 a-0.").unwrap();
-    let got: Vec<(char, f32, u16)> = w.iter().map(|w| (w.letter as char, w.value, w.col)).collect();
-    assert_eq!(got, vec![('G', 1.0, 1), ('X', 0.0, 3), ('Y', 8.0, 5), ('X', 1.5, 8), ('Z', 0.5, 18), ('A', -0.0, 22)]);
+    let got: Vec<(char, f32, u16)> = w
+        .iter()
+        .map(|w| (w.letter as char, w.value, w.col))
+        .collect();
+    assert_eq!(
+        got,
+        vec![
+            ('G', 1.0, 1),
+            ('X', 0.0, 3),
+            ('Y', 8.0, 5),
+            ('X', 1.5, 8),
+            ('Z', 0.5, 18),
+            ('A', -0.0, 22)
+        ]
+    );
 }
 
 #[test]
@@ -35,7 +48,13 @@ fn message_and_delimiters() {
     let mut p = Params::new();
     let mut lx = Lexer::new(b"G1 (MSG, Hello ) X1").unwrap();
     assert!(matches!(lx.next_token(&mut p), Ok(Some(Token::Word(_)))));
-    assert!(matches!(lx.next_token(&mut p), Ok(Some(Token::Message { text: b"Hello", col: 4 }))));
+    assert!(matches!(
+        lx.next_token(&mut p),
+        Ok(Some(Token::Message {
+            text: b"Hello",
+            col: 4
+        }))
+    ));
     let lx = Lexer::new(b"  /G1 X1").unwrap();
     assert!(lx.block_delete);
     let lx = Lexer::new(b"%").unwrap();
@@ -48,7 +67,10 @@ fn checksum() {
     let body = "N1 G1 X5";
     let x = body.bytes().fold(0u8, |a, b| a ^ b);
     assert!(words(&format!("{body}*{x}")).is_ok());
-    assert!(matches!(words(&format!("{body}*{}", x ^ 1)), Err(ErrorKind::ChecksumMismatch { .. })));
+    assert!(matches!(
+        words(&format!("{body}*{}", x ^ 1)),
+        Err(ErrorKind::ChecksumMismatch { .. })
+    ));
     // Inside brackets `*` multiplies.
     assert_eq!(words("X[2*3]").unwrap()[0].value, 6.0);
 }
@@ -56,7 +78,10 @@ fn checksum() {
 #[test]
 fn immediate_assignment() {
     let w = words("G1 #3=2 Y#3 #<x y>=[#3*2] Z#<XY>").unwrap();
-    assert_eq!(w.iter().map(|w| w.value).collect::<Vec<_>>(), vec![1.0, 2.0, 4.0]);
+    assert_eq!(
+        w.iter().map(|w| w.value).collect::<Vec<_>>(),
+        vec![1.0, 2.0, 4.0]
+    );
 }
 
 proptest! {

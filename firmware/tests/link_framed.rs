@@ -136,6 +136,11 @@ impl Dev {
                 Ok(n) if n > 0 => self.link.feed(&buf[..n]),
                 _ => break,
             }
+            if self.link.take_realtime().contains(Rt::SoftReset) {
+                // Abort: the queue goes; the link already dropped the input
+                // that came before the reset.
+                self.queue.clear();
+            }
             while let Some(ev) = self.link.poll().map(own) {
                 self.handle(ev);
             }
@@ -368,7 +373,10 @@ fn mode_flag_follows_nul_bye_and_reset() {
     link.feed(b"?");
     assert!(!link.flags().is_framed());
     link.feed(&[0]);
-    assert!(link.flags().is_framed(), "0x00 switches at once, for realtime replies");
+    assert!(
+        link.flags().is_framed(),
+        "0x00 switches at once, for realtime replies"
+    );
     link.feed(&enc(&HostMsg::Bye));
     assert!(!link.flags().is_framed());
     link.feed(&[0]);
@@ -386,4 +394,61 @@ fn mode_flag_follows_nul_bye_and_reset() {
         ]
     );
     assert_eq!(link.mode(), LinkMode::Text);
+}
+
+#[test]
+fn soft_reset_mid_job_voids_the_rest_and_the_next_job_runs_exactly_once() {
+    let job1: Vec<Vec<u8>> = (0..300).map(|i| format!("G1 X{i}").into_bytes()).collect();
+    let job2: Vec<Vec<u8>> = (0..100).map(|i| format!("G0 Y{i}").into_bytes()).collect();
+    let (host, dev_io) = MemPipe::pair();
+    let mut dev = Dev {
+        io: dev_io,
+        link: Link::new(),
+        port: FramedPort::new(),
+        queue: VecDeque::new(),
+        cap: 8,
+        executed: Vec::new(),
+        rng: Rng(5),
+    };
+    let mut client = Client::new(host);
+    client.set_resync_after(None);
+    client.begin().expect("hello");
+    let mut next = 0;
+    while dev.executed.len() < 50 {
+        while next < job1.len() && client.can_send() {
+            client.send_line(&job1[next]).expect("send");
+            next += 1;
+        }
+        dev.pump();
+        dev.execute();
+        while client.poll().expect("poll").is_some() {}
+    }
+    // More lines in flight, then the operator resets.
+    while next < job1.len() && client.can_send() {
+        client.send_line(&job1[next]).expect("send");
+        next += 1;
+    }
+    client.realtime(Rt::SoftReset).expect("reset");
+    assert_eq!(client.in_flight(), 0, "the client forgets voided lines");
+    let done_before = dev.executed.len();
+    let mut sent2 = 0;
+    for _ in 0..10_000 {
+        while sent2 < job2.len() && client.can_send() {
+            client.send_line(&job2[sent2]).expect("send");
+            sent2 += 1;
+        }
+        dev.pump();
+        dev.execute();
+        while client.poll().expect("poll").is_some() {}
+        if sent2 == job2.len() && client.in_flight() == 0 && dev.queue.is_empty() {
+            break;
+        }
+    }
+    let (old, new) = dev.executed.split_at(done_before);
+    assert!(job1.starts_with(old));
+    assert_eq!(
+        new,
+        &job2[..],
+        "after the reset only the new job runs, once, in order"
+    );
 }

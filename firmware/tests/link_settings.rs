@@ -88,6 +88,7 @@ fn simple_replies() {
         text(|w| reply::param(w, "G54", &[1.0, -2.0, 0.0004, 9.0], f)),
         "[G54:1.000,-2.000,0.000]\r\n"
     );
+    assert_eq!(text(|w| reply::tlo(w, -1.5, f)), "[TLO:-1.500]\r\n");
     assert_eq!(
         text(|w| reply::probe(w, &[1.0, 2.0, -0.00001], true, f)),
         "[PRB:1.000,2.000,0.000:1]\r\n"

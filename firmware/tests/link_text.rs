@@ -101,9 +101,9 @@ fn realtime_acts_while_the_ring_is_full_and_nobody_reads() {
     // The task is busy: nobody polls. Fill the ring and then some.
     let flood = vec![b'X'; RX_RING + 100];
     link.feed(&flood);
-    link.feed(b"!\x18");
+    link.feed(b"!\x85");
     let rt = link.take_realtime();
-    assert!(rt.contains(Rt::FeedHold) && rt.contains(Rt::SoftReset));
+    assert!(rt.contains(Rt::FeedHold) && rt.contains(Rt::JogCancel));
     assert!(link.flags().take_overflow(), "dropped input is flagged");
     // The task catches up; the damaged line is reported, never executed,
     // and the next one is fine.
@@ -217,4 +217,27 @@ proptest! {
         let n = NOISE_CASES.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
         if n == 5_000 { println!("text/binary noise: {n} cases"); }
     }
+}
+
+#[test]
+fn soft_reset_discards_input_received_before_it_and_keeps_what_follows() {
+    let mut link = Link::new();
+    // The task is busy; two lines and half a line wait in the ring.
+    link.feed(b"G1 X1\nG1 X2\nG1 X");
+    link.feed(b"\x18");
+    link.feed(b"3\n$I\n");
+    let rt = link.take_realtime();
+    assert!(rt.contains(Rt::SoftReset));
+    let mut out = Outcome::default();
+    drain(&mut link, &mut out);
+    assert_eq!(
+        out.events,
+        vec![Ev::Line(b"3".to_vec()), Ev::System("BuildInfo".into())]
+    );
+    // Two resets before the task looks: input up to the second one goes.
+    link.feed(b"G0 X1\n\x18G0 X2\n\x18G0 X3\n");
+    let _ = link.take_realtime();
+    let mut out = Outcome::default();
+    drain(&mut link, &mut out);
+    assert_eq!(out.events, vec![Ev::Line(b"G0 X3".to_vec())]);
 }

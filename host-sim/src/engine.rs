@@ -181,7 +181,7 @@ impl<'r> Sim<'r> {
                 }
             }
             machine.poll(rt, queue, world.switches(), &mut |n| note(stats, &mut **rec, n));
-            if !(machine.ready() && !commands.is_empty()) {
+            if !machine.ready() || commands.is_empty() {
                 break;
             }
         }
@@ -374,7 +374,7 @@ pub fn run_job(config: &MachineConfig, source: &str, recorder: &mut dyn Recorder
     sim.run();
     let mut summary = sim.summary(lines, interp.wco());
     let mut errors = gcode_errors;
-    errors.extend(summary.errors.drain(..));
+    errors.append(&mut summary.errors);
     errors.sort_by_key(|e| e.line);
     summary.errors = errors;
     // A recorder's I/O error cannot be reported through the Summary; callers

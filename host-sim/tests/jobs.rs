@@ -114,3 +114,17 @@ fn simulate_names_a_file_it_cannot_create() {
     let e = host_sim::outputs::simulate(&MachineConfig::default(), "G0 X1", "x", &out).unwrap_err();
     assert!(e.to_string().contains("/nonexistent-dir/plot.svg"), "{e}");
 }
+
+#[cfg(target_os = "linux")]
+#[test]
+fn simulate_reports_a_write_error_with_its_file() {
+    let src =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("jobs/demo.gcode"))
+            .unwrap();
+    let out = host_sim::outputs::Outputs {
+        trace: Some("/dev/full".into()),
+        ..Default::default()
+    };
+    let e = host_sim::outputs::simulate(&MachineConfig::default(), &src, "demo", &out).unwrap_err();
+    assert!(e.to_string().starts_with("/dev/full: "), "{e}");
+}

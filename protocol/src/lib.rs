@@ -47,9 +47,13 @@
 //!   moment). The host may have sent lines up to `next + credits - 1` and no
 //!   further. When slots free up while the host is starved, the device sends
 //!   a fresh `Ack` for `next - 1` (a credit refresh).
-//! * Soft reset empties the device's queue but keeps `next`, so stale resends
-//!   are recognised as duplicates. "Acknowledged" means "queued for
-//!   execution": only an operator abort (reset, alarm) drops queued lines.
+//! * Soft reset empties the device's queue and voids every line received
+//!   before it but not yet queued (in both modes the device discards input
+//!   up to the reset, as GRBL empties its receive buffer). It keeps `next`,
+//!   so stale resends are recognised as duplicates; the client drops its
+//!   unacknowledged lines and re-reads `next_seq` with `Hello`.
+//!   "Acknowledged" means "queued for execution": only an operator abort
+//!   (reset, alarm) drops queued lines.
 //!
 //! # Text mode details
 //!

@@ -258,7 +258,10 @@ fn reconnecting_to_a_rebooted_device_is_reported_not_guessed() {
     run.dev.pump();
     let err = (0..10).find_map(|_| run.client.poll().err());
     assert!(
-        matches!(err, Some(protocol::client::ClientError::SessionLost { device_next: 1 })),
+        matches!(
+            err,
+            Some(protocol::client::ClientError::SessionLost { device_next: 1 })
+        ),
         "{err:?}"
     );
 }

@@ -76,7 +76,8 @@ impl Cursor<'_> {
         let mut n = 0;
         for &b in line.get(start..i).unwrap_or(&[]) {
             if !blank(b) {
-                *buf.get_mut(n).ok_or_else(|| self.err_at(ErrorKind::BadNumber, start))? = b;
+                *buf.get_mut(n)
+                    .ok_or_else(|| self.err_at(ErrorKind::BadNumber, start))? = b;
                 n += 1;
             }
         }

@@ -180,12 +180,31 @@ impl<'a> Lexer<'a> {
                             .cur
                             .err_at(ErrorKind::Unsupported(Unsupported::OWord), col));
                     }
-                    if self.keyword_at(col) {
-                        return Err(self
-                            .cur
-                            .err_at(ErrorKind::Unsupported(Unsupported::ControlFlow), col));
-                    }
-                    let value = self.cur.real(p, 0)?;
+                    // Fast path: a plain unsigned number right after the letter.
+                    let value = match self.cur.peek_raw() {
+                        Some(b'0'..=b'9' | b'.') => self.cur.number()?,
+                        _ => {
+                            if self.keyword_at(col) {
+                                return Err(self.cur.err_at(
+                                    ErrorKind::Unsupported(Unsupported::ControlFlow),
+                                    col,
+                                ));
+                            }
+                            let next = self.cur.peek();
+                            let ends = matches!(next, None | Some(b';' | b'(' | b'*'))
+                                || next.is_some_and(|b| b.is_ascii_alphabetic());
+                            if ends && matches!(l, b'X' | b'Y' | b'Z' | b'A') {
+                                self.seen_word = true;
+                                return Ok(Some(Token::Word(Word {
+                                    letter: l,
+                                    value: 0.0,
+                                    col: (col + 1) as u16,
+                                    bare: true,
+                                })));
+                            }
+                            self.cur.real(p, 0)?
+                        }
+                    };
                     if !value.is_finite() {
                         return Err(self.cur.err_at(ErrorKind::NotFinite, col));
                     }
@@ -205,6 +224,7 @@ impl<'a> Lexer<'a> {
                         letter: l,
                         value,
                         col: col16,
+                        bare: false,
                     })));
                 }
                 _ if !b.is_ascii() => return Err(self.cur.err(ErrorKind::NonAscii)),

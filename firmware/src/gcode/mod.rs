@@ -26,15 +26,23 @@ pub struct Word {
     pub value: f32,
     /// 1-based column of the letter.
     pub col: u16,
+    /// An axis letter with no number (`G28 X Y`, `M18 Z`: RepRap style).
+    /// Only homing and motor commands accept it; `value` is then 0.
+    pub bare: bool,
 }
 
 impl Word {
     /// The number in tenths (G59.1 -> 591) when it has at most one decimal,
     /// as G and M numbers must.
     pub fn tenths(&self) -> Option<u16> {
-        let t = libm::roundf(self.value * 10.0);
-        if (0.0..=65535.0).contains(&t) && (self.value * 10.0 - t).abs() < 1e-3 {
-            Some(t as u16)
+        let t10 = self.value * 10.0;
+        if !(0.0..=65535.0).contains(&t10) {
+            return None;
+        }
+        // Non-negative here, so the cast after +0.5 rounds to nearest.
+        let t = (t10 + 0.5) as u16;
+        if (t10 - f32::from(t)).abs() < 1e-3 {
+            Some(t)
         } else {
             None
         }

@@ -107,6 +107,8 @@ pub(crate) struct Block<'a> {
     pub text: Option<&'a [u8]>,
     /// Column of the first word, for faults of the block as a whole.
     pub first_col: u16,
+    /// Column of the first axis letter given without a number, if any.
+    pub bare_col: u16,
 }
 
 pub(crate) fn bit(letter: u8) -> u32 {
@@ -244,6 +246,9 @@ impl<'a> Block<'a> {
                     *c = w.col;
                 }
                 self.present |= bit(w.letter);
+                if w.bare && self.bare_col == 0 {
+                    self.bare_col = w.col;
+                }
             }
             l => return err(ErrorKind::Unsupported(Unsupported::Letter(l))),
         }

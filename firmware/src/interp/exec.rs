@@ -192,6 +192,12 @@ pub(crate) fn execute(st: &mut State, b: &Block, out: &mut Out) -> Result<(), Gc
     let axes = b.axis_mask();
     let motors_take_axes = matches!(misc, Some(17 | 18 | 84)) && !axis_nm && motion_word.is_none();
 
+    // `G28 X Y` / `M18 Z`: bare axis letters only name axes; anywhere else
+    // a missing number is an error, never a silent 0.
+    let names_axes = matches!(nm, Some(270 | 280)) || motors_take_axes;
+    if b.bare_col != 0 && !names_axes {
+        return Err(GcodeError::new(ErrorKind::BadNumber, b.bare_col));
+    }
     if let Some((m, col)) = b.m_of(MGroup::Misc) {
         super::codes::misc_m(&mut cx, st, m, col, motors_take_axes, out)?;
     }

@@ -117,8 +117,10 @@ impl Interpreter {
         let mut buf = exec::Out::new();
         match self.run(line, &mut buf) {
             Ok(()) => {
-                for c in buf {
-                    out(c);
+                // By reference: moving the whole buffer into an iterator
+                // would copy all its slots (1.3 KB) on every line.
+                for c in buf.iter() {
+                    out(c.clone());
                 }
                 Ok(())
             }

@@ -3,8 +3,9 @@
 //! pulls the next token when the caller asks for the next event, which is
 //! how a full job queue pushes back on the sender (the ring, then USB, fill).
 
+use super::rt::RtFlags;
 use super::syscmd::{self, SysCmd};
-use super::{LinkMode, TokenSource, TOKEN_OVERFLOW, TOKEN_TEXT_MODE};
+use super::{LinkMode, TokenSource, TOKEN_OVERFLOW, TOKEN_RESET, TOKEN_TEXT_MODE};
 use protocol::{Code, FrameDecoder, FrameError, HostMsg, MAX_LINE};
 
 /// One thing that arrived. Text-mode variants borrow the assembler's line
@@ -48,6 +49,8 @@ pub struct LineAssembler {
     /// Last terminator was `\r`: a `\n` right after it ends nothing.
     after_cr: bool,
     frames: FrameDecoder,
+    /// Soft-reset markers taken from the ring (compare `RtFlags::reset_marks`).
+    marks_seen: u32,
 }
 
 impl Default for LineAssembler {
@@ -65,7 +68,30 @@ impl LineAssembler {
             discard: None,
             after_cr: false,
             frames: FrameDecoder::new(),
+            marks_seen: 0,
         }
+    }
+
+    /// Call after taking [`protocol::Rt::SoftReset`]: discards everything
+    /// received before the reset (up to its marker in the ring), keeping
+    /// mode switches in step, and forgets any partial line or frame.
+    pub fn flush_reset(&mut self, rx: &mut impl TokenSource, flags: &RtFlags) {
+        while self.marks_seen != flags.reset_marks() {
+            let Some(t) = rx.pop() else { break };
+            // Run the state machine so 0x00 / `Bye` still switch modes,
+            // but drop what it produces.
+            if let Step::LineDone = self.token(t) {
+                self.len = 0;
+            }
+        }
+        self.clear_partial();
+    }
+
+    fn clear_partial(&mut self) {
+        self.len = 0;
+        self.discard = None;
+        self.after_cr = false;
+        self.frames.reset();
     }
 
     pub fn mode(&self) -> LinkMode {
@@ -100,6 +126,11 @@ impl LineAssembler {
     fn token(&mut self, t: u16) -> Step {
         match t {
             TOKEN_TEXT_MODE => self.switch(LinkMode::Text),
+            TOKEN_RESET => {
+                self.marks_seen = self.marks_seen.wrapping_add(1);
+                self.clear_partial();
+                Step::Nothing
+            }
             TOKEN_OVERFLOW => {
                 if self.mode == LinkMode::Text {
                     self.discard = Some(Code::RxOverflow);
@@ -119,10 +150,7 @@ impl LineAssembler {
 
     fn switch(&mut self, mode: LinkMode) -> Step {
         self.mode = mode;
-        self.len = 0;
-        self.discard = None;
-        self.after_cr = false;
-        self.frames.reset();
+        self.clear_partial();
         Step::Owned(LinkEvent::Mode(mode))
     }
 

@@ -20,6 +20,9 @@
 //! [`RX_RING`] tokens hold more than the [`protocol::RX_WINDOW`] of 128 bytes
 //! that character-counting senders rely on, plus a USB packet of slack.
 //!
+//! On a soft reset the task must call [`LineAssembler::flush_reset`] right
+//! after taking the flag: it drops the input that arrived before the reset.
+//!
 //! [`Link`] bundles both halves with a plain ring for host-sim and tests.
 
 mod assembler;
@@ -37,12 +40,19 @@ pub use syscmd::SysCmd;
 
 use heapless::{spsc, Deque};
 
+/// What the device fills once per status request; text mode prints it with
+/// [`reply::status`], framed mode sends it as `DeviceMsg::Status`.
+pub type StatusSnapshot = protocol::Status;
+
 /// One ring entry: a received byte (0..=255) or a marker.
 pub type RxToken = u16;
 /// Input was dropped here (ring full): the line it hit is reported, not run.
 pub const TOKEN_OVERFLOW: RxToken = 0x100;
 /// The port was reset: back to text mode from here on.
 pub const TOKEN_TEXT_MODE: RxToken = 0x101;
+/// A soft reset (0x18 or a `Realtime(SoftReset)` frame) arrived here:
+/// everything before it is void.
+pub const TOKEN_RESET: RxToken = 0x102;
 
 /// Ring size for the RTIC app: `heapless::spsc::Queue<RxToken, RX_RING>`
 /// holds `RX_RING - 1` tokens.
@@ -128,7 +138,7 @@ impl Link {
     /// Bytes the link can take now without dropping any. Like the USB
     /// endpoint, a transport should hold bytes back rather than overfill.
     pub fn room(&self) -> usize {
-        self.ring.free().saturating_sub(1 + SNIFF)
+        self.ring.free().saturating_sub(2 + SNIFF)
     }
 
     /// Receive bytes (the interrupt's job). Realtime commands are flagged
@@ -147,9 +157,15 @@ impl Link {
         self.assembler.poll(&mut self.ring)
     }
 
-    /// Realtime commands raised since the last call.
-    pub fn take_realtime(&self) -> RtSet {
-        self.flags.take()
+    /// Realtime commands raised since the last call. On a soft reset the
+    /// input received before it is discarded here, as the RTIC task does
+    /// with [`LineAssembler::flush_reset`].
+    pub fn take_realtime(&mut self) -> RtSet {
+        let set = self.flags.take();
+        if set.contains(protocol::Rt::SoftReset) {
+            self.assembler.flush_reset(&mut self.ring, &self.flags);
+        }
+        set
     }
 
     /// The shared flags (an RTIC app keeps its own in a `static`).

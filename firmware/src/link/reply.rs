@@ -136,6 +136,13 @@ pub fn param(w: &mut impl Write, name: &str, pos: &[f32], f: Format) -> fmt::Res
     w.write_str("]\r\n")
 }
 
+/// `$#` tool length offset line: `[TLO:0.000]` (mm, or inches per `$13`).
+pub fn tlo(w: &mut impl Write, offset: f32, f: Format) -> fmt::Result {
+    w.write_str("[TLO:")?;
+    coords(w, &[offset], Format { axes: 1, ..f })?;
+    w.write_str("]\r\n")
+}
+
 /// `$#` probe line: `[PRB:x,y,z:1]`.
 pub fn probe(w: &mut impl Write, pos: &[f32], ok: bool, f: Format) -> fmt::Result {
     w.write_str("[PRB:")?;

@@ -12,6 +12,8 @@ pub struct RtFlags {
     pending: AtomicU32,
     overflow: AtomicBool,
     framed: AtomicBool,
+    /// Soft-reset markers put into the ring so far (wrapping).
+    reset_marks: AtomicU32,
 }
 
 impl RtFlags {
@@ -20,6 +22,7 @@ impl RtFlags {
             pending: AtomicU32::new(0),
             overflow: AtomicBool::new(false),
             framed: AtomicBool::new(false),
+            reset_marks: AtomicU32::new(0),
         }
     }
 
@@ -51,6 +54,16 @@ impl RtFlags {
 
     pub(super) fn set_framed(&self, framed: bool) {
         self.framed.store(framed, Ordering::Release);
+    }
+
+    pub(super) fn note_reset_mark(&self) {
+        self.reset_marks.fetch_add(1, Ordering::Release);
+    }
+
+    /// Soft-reset markers queued so far; the assembler discards input up to
+    /// the last of them (see `LineAssembler::flush_reset`).
+    pub fn reset_marks(&self) -> u32 {
+        self.reset_marks.load(Ordering::Acquire)
     }
 
     /// Whether bytes were dropped since the last call (clears the flag).

@@ -9,16 +9,17 @@
 //! a valid `Realtime` message is acted on here and never queued.
 
 use super::rt::RtFlags;
-use super::{RxToken, TokenSink, TOKEN_OVERFLOW, TOKEN_TEXT_MODE};
+use super::{RxToken, TokenSink, TOKEN_OVERFLOW, TOKEN_RESET, TOKEN_TEXT_MODE};
 use protocol::{frame, HostMsg, Rt};
 
 /// Frames up to this many encoded bytes are checked for realtime commands
 /// (an encoded `Realtime` frame is 5 bytes).
 pub const SNIFF: usize = 16;
 
-/// Free ring tokens the interrupt should see before reading a USB packet
-/// (64 bytes, plus one for a pending overflow marker and a sniffed frame).
-pub const PACKET_ROOM: usize = 64 + 1 + SNIFF;
+/// Free ring tokens the interrupt should see before reading a USB packet:
+/// at most one token per byte, plus the owed mode-reset and overflow
+/// markers, plus a held-back frame start released by this packet.
+pub const PACKET_ROOM: usize = 64 + 2 + SNIFF;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Mode {
@@ -39,6 +40,8 @@ pub struct RxSplitter {
     dropped: bool,
     /// A mode reset is waiting for room in the ring.
     reset_pending: bool,
+    /// Soft-reset markers waiting for room in the ring.
+    marks_pending: u8,
 }
 
 impl Default for RxSplitter {
@@ -55,6 +58,7 @@ impl RxSplitter {
             hold_len: 0,
             dropped: false,
             reset_pending: false,
+            marks_pending: 0,
         }
     }
 
@@ -70,7 +74,7 @@ impl RxSplitter {
         flags.set_framed(false);
         self.hold_len = 0;
         self.reset_pending = true;
-        self.put_pending(ring);
+        self.put_pending(ring, flags);
     }
 
     /// Handle one received chunk (any size; the USB packet is at most 64).
@@ -85,7 +89,7 @@ impl RxSplitter {
 
     fn text_byte(&mut self, b: u8, ring: &mut impl TokenSink, flags: &RtFlags) {
         if let Some(rt) = Rt::from_byte(b) {
-            flags.raise(rt);
+            self.realtime(rt, ring, flags);
             return;
         }
         if b == 0 {
@@ -126,8 +130,8 @@ impl RxSplitter {
         let len = self.hold_len;
         match copy.get_mut(..len).map(frame::decode::<HostMsg>) {
             Some(Ok(HostMsg::Realtime(rt))) => {
-                flags.raise(rt);
                 self.hold_len = 0;
+                self.realtime(rt, ring, flags);
                 return;
             }
             Some(Ok(HostMsg::Bye)) => {
@@ -138,6 +142,18 @@ impl RxSplitter {
         }
         self.flush_hold(ring, flags);
         self.put(0, ring, flags);
+    }
+
+    /// A soft reset also leaves a marker in the ring, *before* the flag is
+    /// raised: the task then throws away exactly the input that came before
+    /// the reset (GRBL empties its receive buffer on reset, and senders
+    /// count on it), keeping what the sender sent after it.
+    fn realtime(&mut self, rt: Rt, ring: &mut impl TokenSink, flags: &RtFlags) {
+        if rt == Rt::SoftReset {
+            self.marks_pending = self.marks_pending.saturating_add(1);
+            self.put_pending(ring, flags);
+        }
+        flags.raise(rt);
     }
 
     fn flush_hold(&mut self, ring: &mut impl TokenSink, flags: &RtFlags) {
@@ -151,7 +167,7 @@ impl RxSplitter {
     /// Queue a token; on a full ring drop it and leave an overflow marker at
     /// the first chance, so the assembler knows which line was damaged.
     fn put(&mut self, t: RxToken, ring: &mut impl TokenSink, flags: &RtFlags) {
-        if self.put_pending(ring) && ring.push(t) {
+        if self.put_pending(ring, flags) && ring.push(t) {
             return;
         }
         self.dropped = true;
@@ -159,7 +175,7 @@ impl RxSplitter {
     }
 
     /// Deliver owed markers (mode reset first); false if the ring is full.
-    fn put_pending(&mut self, ring: &mut impl TokenSink) -> bool {
+    fn put_pending(&mut self, ring: &mut impl TokenSink, flags: &RtFlags) -> bool {
         if self.reset_pending {
             if !ring.push(TOKEN_TEXT_MODE) {
                 return false;
@@ -171,6 +187,13 @@ impl RxSplitter {
                 return false;
             }
             self.dropped = false;
+        }
+        while self.marks_pending > 0 {
+            if !ring.push(TOKEN_RESET) {
+                return false;
+            }
+            self.marks_pending -= 1;
+            flags.note_reset_mark();
         }
         true
     }

@@ -336,16 +336,13 @@ impl<const N: usize> Planner<N> {
         if cos < -0.999_999 {
             return f32::INFINITY;
         }
-        let mut d = [0.0f32; AXES];
-        for i in 0..AXES {
-            d[i] = unit[i] - self.prev_unit[i];
-        }
+        let d: [f32; AXES] = core::array::from_fn(|i| unit[i] - self.prev_unit[i]);
         let dn = libm::sqrtf(d.iter().map(|v| v * v).sum());
         let mut a = f32::INFINITY;
-        for i in 0..AXES {
-            let c = libm::fabsf(d[i]) / dn;
+        for (di, ax) in d.iter().zip(&self.settings.axes) {
+            let c = libm::fabsf(*di) / dn;
             if c > 1e-6 {
-                a = a.min(self.settings.axes[i].max_accel / c);
+                a = a.min(ax.max_accel / c);
             }
         }
         let sin_half = libm::sqrtf(0.5 * (1.0 - cos));

@@ -377,7 +377,7 @@ impl Preparer {
                 self.v = 0.0;
             }
         }
-        if stopped || (self.hold == Hold::Decelerating && self.v <= 1e-3 && (block_end || stopped)) {
+        if stopped || (self.hold == Hold::Decelerating && self.v <= 1e-3 && block_end) {
             self.hold = Hold::Held;
             self.v = 0.0;
         }

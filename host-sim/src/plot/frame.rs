@@ -20,8 +20,7 @@ fn nice_step(span: f64, n: f64) -> f64 {
     m * mag
 }
 
-fn ticks(lo: f64, hi: f64, n: f64) -> (Vec<f64>, usize) {
-    let step = nice_step(hi - lo, n);
+fn ticks(lo: f64, hi: f64, step: f64) -> (Vec<f64>, usize) {
     let decimals = if step >= 1.0 {
         0
     } else {
@@ -44,6 +43,8 @@ pub(super) struct Frame {
     pub h: f64,
     pub x: (f64, f64),
     pub y: (f64, f64),
+    /// Same tick spacing on both axes (the equal-aspect XY view).
+    pub equal: bool,
 }
 
 impl Frame {
@@ -62,7 +63,8 @@ impl Frame {
             r##"<rect x="{l:.1}" y="{t:.1}" width="{:.1}" height="{:.1}" fill="#fcfcfc" stroke="none"/>"##,
             self.w, self.h
         );
-        let (xt, xd) = ticks(self.x.0, self.x.1, self.w / 90.0);
+        let xstep = nice_step(self.x.1 - self.x.0, self.w / 90.0);
+        let (xt, xd) = ticks(self.x.0, self.x.1, xstep);
         for v in xt {
             let x = self.px(v);
             let _ = writeln!(
@@ -75,7 +77,12 @@ impl Frame {
                 b + 16.0
             );
         }
-        let (yt, yd) = ticks(self.y.0, self.y.1, (self.h / 45.0).max(2.5));
+        let ystep = if self.equal {
+            xstep
+        } else {
+            nice_step(self.y.1 - self.y.0, (self.h / 35.0).max(2.5))
+        };
+        let (yt, yd) = ticks(self.y.0, self.y.1, ystep);
         for v in yt {
             let y = self.py(v);
             let _ = writeln!(

@@ -110,6 +110,7 @@ fn xy_panel(s: &mut String, p: &Plot, top: f64) -> f64 {
         h: ph,
         x: (mx - hx, mx + hx),
         y: (my - hy, my + hy),
+        equal: true,
     };
     let (xn, yn) = (AXIS_NAMES[0], AXIS_NAMES[1]);
     f.axes(
@@ -206,6 +207,7 @@ fn z_panel(s: &mut String, p: &Plot, top: f64) -> Option<f64> {
         h: 130.0,
         x: (0.0, t_end),
         y: (lo - pad, hi + pad),
+        equal: false,
     };
     f.axes(s, "time (s)", &format!("{} (machine mm)", AXIS_NAMES[2]));
     f.clip(s, "zclip");
@@ -227,6 +229,7 @@ fn velocity_panel(s: &mut String, p: &Plot, top: f64) -> f64 {
         h: 210.0,
         x: (0.0, t_end),
         y: (0.0, vmax * 1.12),
+        equal: false,
     };
     f.axes(s, "time (s)", "path speed (mm/min)");
     f.clip(s, "vclip");

@@ -236,8 +236,14 @@ mod tests {
         assert_eq!(classify("error:22"), TextEvent::Error(22));
         assert_eq!(classify("ALARM:1"), TextEvent::Alarm(1));
         assert_eq!(classify("ok"), TextEvent::Ok);
-        assert!(matches!(classify("Grbl 1.1h ['$' for help]"), TextEvent::Banner(_)));
-        assert!(matches!(classify("[MSG:Reset to continue]"), TextEvent::Info(_)));
+        assert!(matches!(
+            classify("Grbl 1.1h ['$' for help]"),
+            TextEvent::Banner(_)
+        ));
+        assert!(matches!(
+            classify("[MSG:Reset to continue]"),
+            TextEvent::Info(_)
+        ));
         assert_eq!(parse_status("<Idle|MPos:x>"), None);
     }
 }

@@ -187,8 +187,19 @@ impl<T: Read + Write> Client<T> {
     }
 
     /// Send a realtime command (no sequence number, no queueing).
+    ///
+    /// A soft reset voids every line the device has not yet queued and
+    /// empties its queue, so the client forgets its unacknowledged lines and
+    /// asks for a fresh `Welcome` to learn the sequence number to go on with.
     pub fn realtime(&mut self, rt: Rt) -> Result<(), ClientError> {
-        self.send(&HostMsg::Realtime(rt))
+        self.send(&HostMsg::Realtime(rt))?;
+        if rt == Rt::SoftReset {
+            self.unacked.clear();
+            self.send_idx = 0;
+            self.window_end = self.next_seq;
+            self.resync()?;
+        }
+        Ok(())
     }
 
     /// Send any non-line message (settings requests, `Bye`).

@@ -13,6 +13,34 @@ pub struct PortPins {
     pub enable: u8,
 }
 
+impl PortPins {
+    /// Every pin exists (0..=15) and no two functions share one; the board
+    /// files check this at compile time.
+    pub const fn is_valid(&self) -> bool {
+        let all = [
+            self.step[0],
+            self.step[1],
+            self.step[2],
+            self.step[3],
+            self.dir[0],
+            self.dir[1],
+            self.dir[2],
+            self.dir[3],
+            self.enable,
+        ];
+        let mut seen = 0u16;
+        let mut i = 0;
+        while i < all.len() {
+            if all[i] > 15 || seen & (1 << all[i]) != 0 {
+                return false;
+            }
+            seen |= 1 << all[i];
+            i += 1;
+        }
+        true
+    }
+}
+
 /// BSRR word that drives the pins of the axes in `touched` (bit n = axis n)
 /// high where `high` has the bit and low otherwise; other pins are untouched.
 const fn bsrr_word(pins: &[u8; 4], high: u8, touched: u8) -> u32 {
@@ -31,6 +59,16 @@ const fn bsrr_word(pins: &[u8; 4], high: u8, touched: u8) -> u32 {
     }
     word
 }
+
+// Compile-time checks of the BSRR arithmetic (they run on every build).
+const _: () = {
+    let pins = [12, 13, 14, 15];
+    // X and Z high, Y and A untouched.
+    assert!(bsrr_word(&pins, 0b0101, 0b0101) == (1 << 12) | (1 << 14));
+    // All four driven: X, Z high; Y, A low (reset half of BSRR).
+    assert!(bsrr_word(&pins, 0b0101, 0b1111) == (1 << 12) | (1 << 14) | (1 << 29) | (1 << 31));
+    assert!(bsrr_word(&pins, 0, 0) == 0);
+};
 
 /// Step, direction and enable outputs of one port. Every call is one store
 /// to BSRR, precomputed per mask, so the step ISR never reads-modifies-writes

@@ -43,6 +43,11 @@ pub const PORT_PINS: PortPins = PortPins {
     enable: 8,
 };
 
+const _: () = assert!(
+    PORT_PINS.is_valid(),
+    "step port pins must be distinct and < 16"
+);
+
 /// Spindle PWM carrier; the duty cycle carries the speed.
 const SPINDLE_PWM_HZ: u32 = 1_000;
 

@@ -1,0 +1,75 @@
+//! run_job: G-code in, trace and summary out, through the real interpreter.
+mod common;
+use common::*;
+use host_sim::engine::run_job;
+
+const JOB: &str = "G21 G90 G17
+G0 X5 Y5
+G1 Z-1 F300
+G1 X20 F1500
+G2 X30 Y15 I0 J10
+G3 X30 Y15 Z-3 I-5 J0 P2
+G4 P0.2
+M3 S1000
+G18 G2 X40 Z-3 I5 K0
+G17 G91 G1 X-10 Y-10
+G90 G0 X0 Y0 Z0
+M5
+M30
+";
+
+#[test]
+fn gcode_job_exact_and_within_limits() {
+    let cfg = config();
+    let mut rec = Collect::default();
+    let s = run_job(&cfg, JOB, &mut rec);
+    assert!(s.errors.is_empty(), "{:?}", s.errors);
+    assert_eq!(s.lines, 13);
+    assert_eq!(s.moves, 8);
+    assert_eq!(s.final_position_steps, [0, 0, 0, 0]);
+    let info = rec.info.clone().unwrap();
+    check_max_rate(&info, &rec.events);
+    let (_, corners) = check_path(&info, [0.0; 4], &rec.path, &rec.events, 0.0);
+    check_max_accel(&info, &rec.events, &corners, 0.01);
+    check_pin_timing(&info, &rec.events);
+    assert!(s.job_time_s > 0.2, "includes the dwell");
+    assert!(s.distance_mm > 100.0, "{}", s.distance_mm);
+    assert!(rec.summary.is_some(), "recorder got finish()");
+}
+
+#[test]
+fn gcode_job_is_deterministic() {
+    let cfg = config();
+    let (mut a, mut b) = (Collect::default(), Collect::default());
+    let sa = run_job(&cfg, JOB, &mut a);
+    let sb = run_job(&cfg, JOB, &mut b);
+    assert_eq!(sa, sb);
+    assert_eq!(trace_hash(&a.events), trace_hash(&b.events));
+    assert_eq!(a.velocity, b.velocity);
+    assert_eq!(a.path, b.path);
+}
+
+#[test]
+fn gcode_errors_carry_line_numbers_and_job_continues() {
+    let cfg = config();
+    let src = "G1 X10 F1000\nG1 X20 Q\nG2 X0 Y0 I0 J0\nG1 X0\n";
+    let s = run_job(&cfg, src, &mut Collect::default());
+    let lines: Vec<u32> = s.errors.iter().map(|e| e.line).collect();
+    assert!(lines.contains(&2), "{:?}", s.errors);
+    assert_eq!(s.final_position_steps, [0, 0, 0, 0]);
+}
+
+#[test]
+fn gcode_homing_and_probing_sync_the_interpreter() {
+    let mut cfg = config_with_switches();
+    cfg.start_position_mm = [-40.0, -40.0, -10.0, 0.0];
+    // Home, probe down to the plate at Z=-20, then a relative move from
+    // wherever the probe stopped.
+    let src = "G28\nG90 G0 X-10 Y-10\nG38.2 Z-40 F200\nG91 G1 Z5 F500\nG90\n";
+    let mut rec = Collect::default();
+    let s = run_job(&cfg, src, &mut rec);
+    assert!(s.errors.is_empty(), "{:?}", s.errors);
+    // probe stops on the contact step (-20 mm = -8000 steps), then +5 mm
+    assert_eq!(s.final_position_steps[2], -8000 + 2000);
+    assert_eq!(&s.final_position_steps[..2], &[-800, -800]);
+}
