@@ -15,6 +15,7 @@ fn main() {
     let boards = [
         ("CARGO_FEATURE_BOARD_F411", "memory-f411.x"),
         ("CARGO_FEATURE_BOARD_F401", "memory-f401.x"),
+        ("CARGO_FEATURE_BOARD_QEMU", "memory-f405.x"),
     ];
     let chosen: Vec<&str> = boards
         .iter()

@@ -14,6 +14,7 @@
 
 pub mod arc;
 pub mod command;
+pub mod device;
 pub mod machine;
 pub mod planner;
 pub mod realtime;

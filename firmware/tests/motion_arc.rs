@@ -10,7 +10,7 @@ const TOL: f32 = 0.002;
 fn worst_chord_error(start: Pos, arc: &Arc, chords: &[Pos]) -> f64 {
     let (a, b, _) = arc.plane.axes();
     let c = [arc.center[0] as f64, arc.center[1] as f64];
-    let r0 = ((start[a] as f64 - c[0]).hypot(start[b] as f64 - c[1])) as f64;
+    let r0 = (start[a] as f64 - c[0]).hypot(start[b] as f64 - c[1]);
     let mut prev = start;
     let mut worst = 0.0f64;
     for p in chords {
@@ -29,7 +29,6 @@ fn arc(end: Pos, center: [f32; 2], plane: Plane, dir: ArcDir, turns: u16) -> Arc
 
 #[test]
 fn chords_within_tolerance_all_planes() {
-    let start = [10.0, 0.0, 0.0, 0.0];
     for plane in [Plane::XY, Plane::ZX, Plane::YZ] {
         let (a, b, h) = plane.axes();
         for dir in [ArcDir::Cw, ArcDir::Ccw] {
@@ -48,7 +47,6 @@ fn chords_within_tolerance_all_planes() {
                 // helix axis and A advance linearly
                 let mid = ch[ch.len() / 2];
                 assert!(mid[h] > 0.0 && mid[h] < 3.0);
-                let _ = start;
             }
         }
     }

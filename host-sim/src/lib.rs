@@ -13,3 +13,5 @@ pub mod report;
 pub mod trace;
 pub mod vcd;
 pub mod check;
+pub mod device_sim;
+pub mod pty;

@@ -173,8 +173,8 @@ fn soft_limits_refuse_before_any_step() {
     let s = rec.summary.clone();
     assert!(s.is_none());
     let steps = rec.events.iter().fold([0; 4], |mut a, e| {
-        for i in 0..4 {
-            a[i] += (e.step_mask >> i & 1) as u32;
+        for (i, c) in a.iter_mut().enumerate() {
+            *c += (e.step_mask >> i & 1) as u32;
         }
         a
     });
@@ -192,4 +192,20 @@ fn step_rate_ceiling_is_an_error() {
     sim.run();
     assert_eq!(sim.errors().iter().map(|e| (e.line, e.code)).collect::<Vec<_>>(), vec![(7, 401)]);
     assert_eq!(sim.rt.position(), [0, 0, 0, 100]);
+}
+
+#[test]
+fn soft_reset_mid_move_stops_and_flags_position() {
+    let cfg = config();
+    let mut rec = Collect::default();
+    let mut sim = Sim::new(&cfg, &mut rec);
+    sim.push_command(1, Command::Line { end: [100.0, 0.0, 0.0, 0.0], feed: Feed::PerMin(3000.0) });
+    sim.input_at(cfg.tick_hz as u64, host_sim::engine::Input::Reset);
+    sim.run();
+    assert_eq!(sim.errors().last().map(|e| e.code), Some(425));
+    assert!(sim.machine.position_lost());
+    let x = sim.rt.position()[0];
+    assert!(x > 0 && x < 8000, "stopped part way: {x}");
+    // the core's idea of the position matches the steps that really ran
+    assert_eq!(i64::from(x), sim.world.steps[0]);
 }

@@ -14,7 +14,6 @@ fn arc(end: [f32; 4], center: [f32; 2], plane: Plane, dir: ArcDir, turns: u16, f
 
 /// A job touching every motion kind: lines, rapids, arcs in all planes,
 /// helix, full circle, multi-turn, spline, G93, dwell, a reversal.
-
 fn mixed_job() -> Vec<Command> {
     vec![
         Command::Rapid { end: [5.0, 5.0, 0.0, 0.0] },
@@ -208,4 +207,28 @@ fn independent_rapid_moves_each_axis_at_its_own_rate() {
     assert!(last_tick(&coord, 2) as f64 > 0.95 * last_tick(&coord, 0) as f64);
     assert!((last_tick(&ind, 2) as f64) < 0.7 * last_tick(&ind, 0) as f64);
     assert!(ind.rec.path.len() == 2, "two legs: {:?}", ind.rec.path);
+}
+
+/// Path jerk from the recorded segment speeds (each a 2 ms average).
+fn max_jerk(r: &Run, hz: f64) -> f64 {
+    let v: Vec<(f64, f64)> = r.rec.velocity.iter().filter(|x| x.1 > 0.0).map(|&(t, v)| (t as f64 / hz, v as f64 / 60.0)).collect();
+    let a: Vec<(f64, f64)> = v.windows(2).filter(|w| w[1].0 > w[0].0).map(|w| ((w[0].0 + w[1].0) / 2.0, (w[1].1 - w[0].1) / (w[1].0 - w[0].0))).collect();
+    a.windows(2).filter(|w| w[1].0 > w[0].0).map(|w| ((w[1].1 - w[0].1) / (w[1].0 - w[0].0)).abs()).fold(0.0, f64::max)
+}
+
+#[test]
+fn scurve_limits_jerk_trapezoid_does_not() {
+    let cmds = vec![Command::Line { end: [150.0, 40.0, 0.0, 0.0], feed: Feed::PerMin(4000.0) }];
+    let mut cfg = config();
+    let trap = run(&cfg, &cmds, &[]);
+    cfg.settings.profile = Profile::SCurve;
+    let s = run(&cfg, &cmds, &[]);
+    check_all(&cfg, &s, &cmds, "s-curve line");
+    let hz = cfg.tick_hz as f64;
+    for v in s.rec.velocity.iter().take(30) { println!("{:.5} {:.3}", v.0 as f64 / hz, v.1); }
+    for v in s.rec.velocity.iter().rev().take(12) { println!("{:.5} {:.3}", v.0 as f64 / hz, v.1); }
+    let (jt, js) = (max_jerk(&trap, hz), max_jerk(&s, hz));
+    println!("max path jerk: trapezoid {jt:.0} mm/s³, s-curve {js:.0} mm/s³ (limit {})", cfg.settings.jerk);
+    assert!(js <= cfg.settings.jerk as f64 * 1.25, "{js}");
+    assert!(jt > cfg.settings.jerk as f64 * 10.0, "{jt}");
 }

@@ -1,9 +1,11 @@
 //! `cargo xtask …`: the project's one entry point for checks, images,
 //! flashing, simulation and streaming.
 
+mod bench_target;
 mod ci;
 mod flash;
 mod image;
+mod qemu;
 mod sim;
 mod stream;
 mod util;
@@ -29,6 +31,10 @@ enum Cmd {
     Sim(sim::SimArgs),
     /// Stream a job to a board (or to `sim --pty`).
     Stream(stream::StreamArgs),
+    /// Run the real RTIC app on QEMU's netduinoplus2 and check its serial link.
+    Qemu,
+    /// Count the hot paths' Cortex-M4 instructions under QEMU (-icount shift=0).
+    BenchTarget,
 }
 
 fn main() {
@@ -39,6 +45,8 @@ fn main() {
         Cmd::Flash(a) => flash::run(&a),
         Cmd::Sim(a) => sim::run(a),
         Cmd::Stream(a) => stream::run(a),
+        Cmd::Qemu => qemu::run(),
+        Cmd::BenchTarget => bench_target::run(),
     };
     match result {
         Ok(code) => std::process::exit(code),

@@ -37,6 +37,54 @@ impl Cursor<'_> {
     /// the exact path (integer mantissa over an exact power of ten, one
     /// rounding); anything longer goes to core's correctly rounded parser.
     pub(crate) fn number(&mut self) -> LexResult<f32> {
+        // Fast path: `digits[.digits]` with no blanks inside, the shape of
+        // nearly every number in real files.
+        let start = self.pos;
+        let line = self.line;
+        let mut i = start;
+        let mut mant: u64 = 0;
+        let mut nd = 0u32;
+        let mut frac = 0usize;
+        let run = |i: &mut usize, mant: &mut u64, nd: &mut u32| {
+            let from = *i;
+            while let Some(d) = line
+                .get(*i)
+                .map(|b| b.wrapping_sub(b'0'))
+                .filter(|d| *d < 10)
+            {
+                if *nd < 19 {
+                    *mant = *mant * 10 + u64::from(d);
+                }
+                *nd += 1;
+                *i += 1;
+            }
+            *i - from
+        };
+        run(&mut i, &mut mant, &mut nd);
+        let dot = line.get(i) == Some(&b'.');
+        if dot {
+            i += 1;
+            frac = run(&mut i, &mut mant, &mut nd);
+        }
+        let blank_inside = line.get(i).is_some_and(|&b| blank(b)) && {
+            let next = line.get(i..).and_then(|r| r.iter().find(|&&b| !blank(b)));
+            next.is_some_and(|&b| b.is_ascii_digit() || (b == b'.' && !dot))
+        };
+        if !blank_inside && nd > 0 && nd <= 19 && mant < (1 << 24) {
+            if frac == 0 {
+                self.pos = i;
+                return Ok(mant as f32);
+            }
+            if let Some(p) = POW10.get(frac) {
+                self.pos = i;
+                return Ok(mant as f32 / p);
+            }
+        }
+        self.number_slow()
+    }
+
+    /// Numbers with blanks inside or many significant digits.
+    fn number_slow(&mut self) -> LexResult<f32> {
         let start = self.pos;
         let line = self.line;
         let mut i = start;

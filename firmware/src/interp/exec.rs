@@ -14,7 +14,23 @@
 //!   no-ops: they select the only modes burin has (no cutter or tool-length
 //!   compensation; blending is the planner's junction deviation);
 //! - M2/M30 stop spindle and coolant, and reset G1 G17 G90 G94 G54 and
-//!   suspend G92 (LinuxCNC), keeping units.
+//!   suspend G92 (LinuxCNC), keeping units;
+//! - axis letters without a number (`G28 X Y`, `M18 Z`) are accepted only
+//!   where they name axes (G27, G28, M17, M18, M84); elsewhere they are a
+//!   bad-number error, never a silent 0;
+//! - G10 L2 under G91 adds to the stored offset (BeagleG); LinuxCNC 2.9
+//!   treats L2 values as absolute in both modes;
+//! - G2/G3 with in-plane offsets but no axis words is a full circle where
+//!   the tool is (LinuxCNC); an explicit G2/G3 with neither is an error;
+//! - G80 may share a block with another motion code, which wins (LinuxCNC);
+//! - G8 (lathe radius mode) is a no-op: it is the only mode; G7 is refused;
+//! - M42 P<pin> S<0-255> sets an aux output at once; M62/M63 switch one
+//!   with motion, M64/M65 at once; M106 [P<fan>] [S<0-255>] / M107 drive
+//!   aux output P (default 0) with motion;
+//! - the centre-format radius check is issue 3's rule: error when the
+//!   radii differ by more than 0.5 mm, or by more than 0.005 mm and 0.1%
+//!   of the radius (LinuxCNC 2.9 is looser: 0.0283 mm and 0.1%); the centre
+//!   is then moved onto the chord's bisector so the arc is consistent.
 
 use super::block::{bit, Block, GGroup, MGroup, AXIS_LETTERS};
 use super::state::{Motion, State};

@@ -228,6 +228,10 @@ impl<const N: usize> Planner<N> {
         let mut mm = [0.0f32; AXES];
         let mut len2 = 0.0;
         for i in 0..AXES {
+            let spm = s.axes[i].steps_per_mm;
+            if !(spm.is_finite() && spm > 0.0) {
+                return Err(MachineError::InvalidNumber);
+            }
             let d = target[i] as i64 - self.position[i] as i64;
             let ad = d.unsigned_abs();
             if ad > MAX_BLOCK_STEPS as u64 {

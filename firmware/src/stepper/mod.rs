@@ -189,6 +189,11 @@ impl Stepper {
             }
             self.halted = None;
         }
+        // A flush (reset, alarm) stops the running segment at once, not at its end.
+        if self.left > 0 && self.seg.is_some_and(|s| s.generation != generation) {
+            self.left = 0;
+            self.last_end = true;
+        }
         while self.left == 0 {
             let Some(s) = pop() else {
                 return self.idle(rt);

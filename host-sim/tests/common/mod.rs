@@ -192,21 +192,21 @@ pub fn check_pin_timing(info: &RunInfo, events: &[PinEvent]) {
             }
             let d = e.dir_mask >> i & 1;
             if let Some(t) = last_step[i] {
-                assert!(e.tick - t >= u64::from(info.pulse_ticks) + 1, "axis {i}: pulses {t} and {} overlap", e.tick);
+                assert!(e.tick - t > u64::from(info.pulse_ticks), "axis {i}: pulses {t} and {} overlap", e.tick);
                 if d != last_dir[i] {
                     assert!(e.dir_changed_tick > t, "axis {i}: direction flipped without a recorded change");
                     assert!(e.dir_changed_tick >= t + u64::from(info.pulse_ticks), "dir changed during a pulse at {}", e.tick);
                 }
             }
-            if last_step[i].is_none() || d != last_dir[i] {
-                if e.dir_changed_tick > last_step[i].unwrap_or(0) || last_step[i].is_none() {
-                    let setup = e.tick.saturating_sub(e.dir_changed_tick);
-                    assert!(
-                        e.dir_changed_tick == 0 && last_step[i].is_none() || setup >= u64::from(info.dir_setup_ticks),
-                        "axis {i}: direction set {setup} ticks before the step at {}",
-                        e.tick
-                    );
-                }
+            // This axis's direction pin changed before this step (pins start
+            // out positive): the step must wait the setup time.
+            let changed = match last_step[i] {
+                None => d == 1,
+                Some(_) => d != last_dir[i],
+            };
+            if changed {
+                let setup = e.tick.saturating_sub(e.dir_changed_tick);
+                assert!(setup >= u64::from(info.dir_setup_ticks), "axis {i}: direction set {setup} ticks before the step at {}", e.tick);
             }
             last_step[i] = Some(e.tick);
             last_dir[i] = d;

@@ -1,0 +1,411 @@
+//! The device session: link events in, machine commands and replies out.
+//!
+//! This is the one place that decides what a line from the host does, so
+//! the RTIC app and host-sim's virtual device behave identically. It sits
+//! between two seams: a [`LinkPort`] (the link decoder: lines, `$`
+//! commands, frames, realtime flags) and a [`MotionPort`] (the executor and
+//! the realtime atomics). Replies go to a [`Tx`] byte sink.
+//!
+//! # Backpressure: nothing acknowledged is ever lost
+//!
+//! A line is taken from the link only when the device can keep it:
+//!
+//! * the command queue ([`CMD_SLOTS`]) has room for the most commands one
+//!   line can produce ([`LINE_COMMANDS`]), so interpreting never has to drop
+//!   a command;
+//! * in framed mode a line slot ([`LINE_SLOTS`]) is free. Framed lines are
+//!   acknowledged when they enter a slot ("queued for execution") and are
+//!   interpreted in order as the command queue drains; a line that then
+//!   fails is reported with `DeviceMsg::Error { seq, .. }`.
+//!
+//! Otherwise the link is left alone: its ring fills, then USB (or the pty)
+//! pushes back on the sender. In text mode `ok` means what it means in GRBL:
+//! the line was interpreted and its commands are queued.
+//!
+//! # Choices
+//!
+//! * Errors found when a queued command reaches the executor (soft limits,
+//!   bad arcs) come after the line's `ok`: text mode reports them as
+//!   `[MSG:…]` (an extra `error:N` would break send-response counting),
+//!   framed mode as `DeviceMsg::Error` with the line's sequence number.
+//! * The machine line number (`Ln:`, traces) is the sequence number in
+//!   framed mode and the count of text lines received in text mode.
+//! * Soft reset during motion raises alarm 3 (as GRBL); `ALARM:3` comes
+//!   before the banner. Soft reset keeps the framed session's sequence.
+//! * Jog cancel is a feed hold followed, once stopped, by a flush; the
+//!   executor can flush only through a reset, so the device resets and
+//!   clears the resulting alarm itself (the position is kept exactly: the
+//!   hold decelerated).
+
+mod out;
+mod sys;
+
+pub use out::{Out, Tx};
+
+use crate::command::{Command, Pos};
+use crate::interp::{Interpreter, LINE_COMMANDS};
+use crate::link::{FramedAction, FramedPort, Link, LinkEvent, LinkMode, RtSet};
+use crate::machine::{self, MachineError};
+use crate::realtime::Realtime;
+use crate::settings::table::SettingError;
+use crate::settings::Settings;
+use heapless::Deque;
+use protocol::{DeviceInfo, DeviceMsg, HostMsg, LineText};
+
+/// Command queue between the interpreter and the executor.
+pub const CMD_SLOTS: usize = 2 * LINE_COMMANDS;
+/// Framed job lines acknowledged but not yet interpreted (the credits).
+pub const LINE_SLOTS: usize = 8;
+
+/// The link decoder as the device sees it ([`Link`] for host-sim; the RTIC
+/// app wraps its `LineAssembler` and ring consumer the same way).
+pub trait LinkPort {
+    fn poll(&mut self) -> Option<LinkEvent<'_>>;
+    fn take_realtime(&mut self) -> RtSet;
+    /// Received bytes not yet turned into events.
+    fn rx_pending(&self) -> usize;
+    /// True when replies to realtime commands must be frames.
+    fn framed(&self) -> bool;
+}
+
+impl LinkPort for Link {
+    fn poll(&mut self) -> Option<LinkEvent<'_>> {
+        Link::poll(self)
+    }
+    fn take_realtime(&mut self) -> RtSet {
+        Link::take_realtime(self)
+    }
+    fn rx_pending(&self) -> usize {
+        Link::rx_pending(self)
+    }
+    fn framed(&self) -> bool {
+        self.flags().is_framed() || self.mode() == LinkMode::Framed
+    }
+}
+
+/// The motion core as the device sees it.
+pub trait MotionPort {
+    fn rt(&self) -> &Realtime;
+    /// The executor takes a command now.
+    fn ready(&self) -> bool;
+    fn submit(&mut self, cmd: &Command, line: u32) -> Result<(), MachineError>;
+    fn state(&self) -> machine::State;
+    fn alarm(&self) -> Option<MachineError>;
+    /// Nothing queued, planned or moving.
+    fn motion_idle(&self) -> bool;
+    /// Where the next command starts, machine mm.
+    fn commanded_position(&self) -> Pos;
+    /// Last probe result (machine mm, contact).
+    fn probe_result(&self) -> Option<(Pos, bool)>;
+    /// Current feed, mm/min, and the machine line number executing.
+    fn feed_and_line(&self) -> (f32, u32);
+    fn planner_free(&self) -> u16;
+    fn planner_blocks(&self) -> u16;
+    fn settings(&self) -> &Settings;
+    /// Change a setting (the device calls this only while idle).
+    fn set_setting(&mut self, n: u16, value: f32) -> Result<(), SettingError>;
+    /// Active input pins, `protocol::msg::pins` bits.
+    fn pins(&self) -> u16 {
+        0
+    }
+}
+
+/// Static facts for `$I` and the handshake.
+#[derive(Clone, Copy, Debug)]
+pub struct Identity {
+    pub board: &'static str,
+    pub caps: u32,
+}
+
+/// The session state.
+#[derive(Debug)]
+pub struct Device {
+    pub interp: Interpreter,
+    port: FramedPort,
+    ident: Identity,
+    cmds: Deque<(u32, Command), CMD_SLOTS>,
+    slots: Deque<(u32, LineText), LINE_SLOTS>,
+    cadence: crate::link::reply::Cadence,
+    check: bool,
+    jogging: bool,
+    jog_cancel: bool,
+    /// Wait for motion to stop, then take the machine's position.
+    sync: bool,
+    probe_sync: bool,
+    /// Alarm already reported (or expected and to be handled silently).
+    seen_alarm: Option<MachineError>,
+    quiet_alarm: bool,
+    text_lines: u32,
+    spindle_ov: u8,
+    /// Counters for tests and reports.
+    pub stats: Stats,
+}
+
+/// What the device did, for tests and benchmarks.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Stats {
+    pub lines_ok: u32,
+    pub lines_err: u32,
+    pub commands: u32,
+    pub resets: u32,
+}
+
+impl Device {
+    pub fn new(ident: Identity) -> Self {
+        Device {
+            interp: Interpreter::new(),
+            port: FramedPort::new(),
+            ident,
+            cmds: Deque::new(),
+            slots: Deque::new(),
+            cadence: Default::default(),
+            check: false,
+            jogging: false,
+            jog_cancel: false,
+            sync: true,
+            probe_sync: false,
+            seen_alarm: None,
+            quiet_alarm: false,
+            text_lines: 0,
+            spindle_ov: 100,
+            stats: Stats::default(),
+        }
+    }
+
+    /// The banner, as after power-up or a reset (text mode only).
+    pub fn hello(&mut self, tx: &mut impl Tx) {
+        let mut o = Out::new(tx, false);
+        let _ = crate::link::reply::banner(&mut o);
+    }
+
+    /// The port was closed or reopened: the link is back in text mode.
+    /// Queued work goes on (GRBL keeps running when the sender goes away).
+    pub fn port_reset(&mut self, link: &mut Link) {
+        link.reset();
+    }
+
+    /// Free framed line slots (the credits).
+    pub fn free_slots(&self) -> u16 {
+        (LINE_SLOTS - self.slots.len()) as u16
+    }
+
+    /// True when nothing is queued in the device.
+    pub fn drained(&self) -> bool {
+        self.cmds.is_empty() && self.slots.is_empty() && !self.sync
+    }
+
+    fn info(&self, m: &impl MotionPort) -> DeviceInfo {
+        let mut s = protocol::ShortText::new();
+        let _ = s.push_str(crate::VERSION);
+        let mut b = protocol::ShortText::new();
+        let _ = b.push_str(self.ident.board);
+        DeviceInfo {
+            protocol: protocol::PROTOCOL_VERSION,
+            firmware: s,
+            board: b,
+            axes: crate::AXES as u8,
+            line_slots: LINE_SLOTS as u16,
+            planner_blocks: m.planner_blocks(),
+            rx_bytes: protocol::RX_WINDOW as u16,
+            caps: self.ident.caps,
+            next_seq: 0,
+            credits: 0,
+        }
+    }
+
+    /// One pass of the parse/plan task: realtime first, then alarms, then
+    /// feeding the executor, then new input as far as there is room.
+    pub fn poll(&mut self, link: &mut impl LinkPort, m: &mut impl MotionPort, tx: &mut impl Tx) {
+        let rt = link.take_realtime();
+        for r in rt.iter() {
+            let framed = link.framed();
+            let rx_free = protocol::RX_WINDOW.saturating_sub(link.rx_pending()) as u16;
+            self.realtime(r, rx_free, m, &mut Out::new(tx, framed));
+        }
+        self.watch(m, &mut Out::new(tx, link.framed()));
+        loop {
+            self.feed(m, &mut Out::new(tx, link.framed()));
+            if !self.can_take() {
+                break;
+            }
+            let free = self.free_slots();
+            let info = self.info(m);
+            let framed = link.framed();
+            let Some(ev) = link.poll() else { break };
+            let mut o = Out::new(tx, framed || matches!(ev, LinkEvent::Frame(_) | LinkEvent::BadFrame(_)));
+            self.event(ev, free, &info, m, &mut o);
+        }
+        let free = self.free_slots();
+        let mut o = Out::new(tx, true);
+        if link.framed() {
+            self.port.refresh(free, &mut |msg| o.frame(msg));
+        }
+    }
+
+    fn can_take(&self) -> bool {
+        !self.sync && self.cmds.capacity() - self.cmds.len() >= LINE_COMMANDS && !self.slots.is_full()
+    }
+
+    /// Alarms and the end of jogs and syncs.
+    fn watch(&mut self, m: &mut impl MotionPort, o: &mut Out<'_, impl Tx>) {
+        let alarm = m.alarm();
+        if alarm != self.seen_alarm {
+            self.seen_alarm = alarm;
+            if let Some(e) = alarm {
+                self.cmds.clear();
+                self.slots.clear();
+                self.sync = true;
+                if core::mem::take(&mut self.quiet_alarm) {
+                    // Our own flush (jog cancel): clear it again.
+                    let _ = self.cmds.push_back((0, Command::ClearAlarm));
+                } else {
+                    sys::report_alarm(e, o);
+                }
+            }
+        }
+        if self.jog_cancel && m.state() == machine::State::Hold && m.rt().stepper_idle() {
+            self.jog_cancel = false;
+            self.quiet_alarm = true;
+            m.rt().request_reset();
+        }
+        if m.motion_idle() && self.cmds.is_empty() {
+            if self.jogging {
+                self.jogging = false;
+                self.jog_cancel = false;
+                self.sync = true;
+            }
+            if self.sync && m.ready() {
+                self.sync = false;
+                match (self.probe_sync, m.probe_result()) {
+                    (true, Some((p, c))) => self.interp.probe_finished(p, c),
+                    _ => self.interp.set_machine_position(m.commanded_position()),
+                }
+                self.probe_sync = false;
+            }
+        }
+    }
+
+    /// Queued commands to the executor; framed lines to the interpreter.
+    fn feed(&mut self, m: &mut impl MotionPort, o: &mut Out<'_, impl Tx>) {
+        loop {
+            while m.ready() {
+                let Some((line, cmd)) = self.cmds.pop_front() else { break };
+                self.stats.commands += 1;
+                if let Err(e) = m.submit(&cmd, line) {
+                    sys::report_late(e, line, o);
+                }
+            }
+            if self.sync || self.cmds.capacity() - self.cmds.len() < LINE_COMMANDS {
+                return;
+            }
+            let Some((seq, text)) = self.slots.pop_front() else { return };
+            self.line(&text, seq, m, o);
+        }
+    }
+
+    fn event(&mut self, ev: LinkEvent<'_>, free: u16, info: &DeviceInfo, m: &mut impl MotionPort, o: &mut Out<'_, impl Tx>) {
+        match ev {
+            LinkEvent::Line(text) => {
+                self.text_lines = self.text_lines.wrapping_add(1);
+                let n = self.text_lines;
+                self.line(text, n, m, o);
+            }
+            LinkEvent::System(cmd) => {
+                let r = self.system(cmd, m, o);
+                sys::reply(r, None, o);
+            }
+            LinkEvent::Error(code) => sys::reply(Err(code.code()), None, o),
+            LinkEvent::Mode(_) => {}
+            LinkEvent::BadFrame(e) => self.port.on_bad_frame(e, &mut |msg| o.frame(msg)),
+            LinkEvent::Frame(msg) => self.frame(msg, free, info, m, o),
+        }
+    }
+
+    fn frame(&mut self, msg: HostMsg, free: u16, info: &DeviceInfo, m: &mut impl MotionPort, o: &mut Out<'_, impl Tx>) {
+        let action = self.port.on_frame(msg, free, info, &mut |r| o.frame(r));
+        match action {
+            None | Some(FramedAction::Closed) => {}
+            Some(FramedAction::Execute { seq, text }) => {
+                // A slot was free (`free > 0` made the session execute it).
+                let _ = self.slots.push_back((seq, text));
+            }
+            Some(FramedAction::Realtime(r)) => self.realtime(r, protocol::RX_WINDOW as u16, m, o),
+            Some(FramedAction::GetSetting(n)) => match m.settings().get(n) {
+                Some(value) => o.frame(&DeviceMsg::Setting { n, value }),
+                None => sys::reply(Err(protocol::Code::InvalidStatement.code()), None, o),
+            },
+            Some(FramedAction::SetSetting { n, value }) => {
+                let r = self.set_setting(n, value, m);
+                match r {
+                    Ok(()) => o.frame(&DeviceMsg::Setting { n, value }),
+                    Err(c) => sys::reply(Err(c), None, o),
+                }
+            }
+            Some(FramedAction::ListSettings) => {
+                for n in crate::settings::table::numbers() {
+                    if let Some(value) = m.settings().get(n) {
+                        o.frame(&DeviceMsg::Setting { n, value });
+                    }
+                }
+                o.frame(&DeviceMsg::SettingsEnd);
+            }
+        }
+    }
+
+    fn set_setting(&mut self, n: u16, value: f32, m: &mut impl MotionPort) -> Result<(), u16> {
+        if !m.motion_idle() {
+            return Err(protocol::Code::NotIdle.code());
+        }
+        m.set_setting(n, value).map_err(|e| e.code().code())
+    }
+
+    /// One job line (text mode) or one framed line leaving its slot.
+    /// `n` is its machine line number (text count or sequence number).
+    fn line(&mut self, text: &[u8], n: u32, m: &mut impl MotionPort, o: &mut Out<'_, impl Tx>) {
+        let seq = o.framed().then_some(n);
+        if let Some(cmd) = crate::link::syscmd::parse(text) {
+            let r = cmd.map_err(|c| c.code()).and_then(|c| self.system(c, m, o));
+            return self.reply_line(r, seq, o);
+        }
+        if self.seen_alarm.is_some() && !self.check && !text.iter().all(u8::is_ascii_whitespace) {
+            return self.reply_line(Err(protocol::Code::Locked.code()), seq, o);
+        }
+        let check = self.check;
+        let cmds = &mut self.cmds;
+        let mut probe = false;
+        let r = self.interp.execute_line(text, &mut |c| {
+            if !check {
+                probe |= matches!(c, Command::Probe { .. });
+                // Room for a whole line was checked before taking it.
+                let _ = cmds.push_back((n, c));
+            }
+        });
+        match r {
+            Ok(()) => {
+                if !check && self.interp.needs_sync() {
+                    self.sync = true;
+                    self.probe_sync = probe;
+                }
+                self.reply_line(Ok(()), seq, o)
+            }
+            Err(e) => {
+                if o.framed() {
+                    let mut t = protocol::msg::MsgText::new();
+                    let _ = core::fmt::write(&mut t, format_args!("{e}"));
+                    o.frame(&DeviceMsg::Msg(t));
+                    self.reply_line(Err(e.code()), seq, o)
+                } else {
+                    self.reply_line(Err(u16::from(e.grbl_code())), seq, o)
+                }
+            }
+        }
+    }
+
+    fn reply_line(&mut self, r: Result<(), u16>, seq: Option<u32>, o: &mut Out<'_, impl Tx>) {
+        match r {
+            Ok(()) => self.stats.lines_ok += 1,
+            Err(_) => self.stats.lines_err += 1,
+        }
+        sys::reply(r, seq, o);
+    }
+}

@@ -1,0 +1,277 @@
+//! `$` commands, realtime commands, status reports, jogging and the error
+//! and alarm replies of the device session.
+
+use super::{Device, MotionPort, Out, Tx};
+use crate::command::{Command, Feed};
+use crate::link::reply::{self, BuildInfo, Format};
+use crate::link::SysCmd;
+use crate::machine::{self, MachineError};
+use core::fmt::Write;
+use protocol::codes::alarm;
+use protocol::{Code, DeviceMsg, MachineState, Overrides, Rt, Status, WIRE_AXES};
+
+/// `ok` / `error:N` in text mode; nothing / `DeviceMsg::Error` in framed.
+pub(super) fn reply(r: Result<(), u16>, seq: Option<u32>, o: &mut Out<'_, impl Tx>) {
+    match (r, o.framed()) {
+        (Ok(()), false) => {
+            let _ = reply::ok(o);
+        }
+        (Ok(()), true) => {}
+        (Err(code), false) => {
+            let _ = reply::error(o, code);
+        }
+        (Err(code), true) => o.frame(&DeviceMsg::Error {
+            seq,
+            line: seq,
+            code,
+        }),
+    }
+}
+
+/// GRBL's alarm number for an executor alarm.
+pub fn alarm_code(e: MachineError) -> u16 {
+    match e {
+        MachineError::HardLimit { .. } => alarm::HARD_LIMIT,
+        MachineError::SoftLimit { .. } => alarm::SOFT_LIMIT,
+        MachineError::ResetDuringMotion => alarm::ABORT_CYCLE,
+        MachineError::ProbeInitialState => alarm::PROBE_FAIL_INITIAL,
+        MachineError::ProbeNoContact => alarm::PROBE_FAIL_CONTACT,
+        MachineError::HomingPullOff { .. } => alarm::HOMING_FAIL_PULLOFF,
+        MachineError::HomingNoSwitch { .. } => alarm::HOMING_FAIL_APPROACH,
+        _ => alarm::HOMING_FAIL_APPROACH,
+    }
+}
+
+pub(super) fn report_alarm(e: MachineError, o: &mut Out<'_, impl Tx>) {
+    let code = alarm_code(e);
+    if o.framed() {
+        o.frame(&DeviceMsg::Alarm { code });
+    } else {
+        let _ = reply::alarm(o, code);
+    }
+    let _ = write!(o, "[MSG:{e}]\r\n");
+}
+
+/// A queued command the executor refused after its line was acknowledged.
+pub(super) fn report_late(e: MachineError, line: u32, o: &mut Out<'_, impl Tx>) {
+    let _ = write!(o, "[MSG:line {line}: error {}: {e}]\r\n", e.code());
+    o.frame(&DeviceMsg::Error {
+        seq: Some(line),
+        line: Some(line),
+        code: e.code(),
+    });
+}
+
+impl Device {
+    pub(super) fn status(&mut self, rx_free: u16, m: &impl MotionPort) -> Status {
+        let s = m.settings();
+        let pos = m.rt().position();
+        let mut mpos = [0.0; WIRE_AXES];
+        for (i, p) in mpos.iter_mut().enumerate().take(crate::AXES) {
+            *p = pos[i] as f32 / s.axes[i].steps_per_mm;
+        }
+        let mut wco = [0.0; WIRE_AXES];
+        for (w, v) in wco.iter_mut().zip(self.interp.wco()) {
+            *w = v;
+        }
+        let ms = m.state();
+        let state = match ms {
+            _ if self.check => MachineState::Check,
+            machine::State::Alarm => MachineState::Alarm,
+            machine::State::Homing => MachineState::Home,
+            machine::State::Hold => MachineState::Hold,
+            _ if self.jogging => MachineState::Jog,
+            machine::State::Idle if self.cmds.is_empty() => MachineState::Idle,
+            _ => MachineState::Run,
+        };
+        let (feed, line) = m.feed_and_line();
+        Status {
+            state,
+            substate: u8::from(m.rt().stepper_idle()),
+            mpos,
+            wco,
+            feed,
+            spindle: self.interp.state().speed,
+            planner_free: m.planner_free(),
+            rx_free,
+            line: (line != 0).then_some(line),
+            overrides: Overrides {
+                feed: m.rt().feed_override(),
+                rapid: m.rt().rapid_override(),
+                spindle: self.spindle_ov,
+            },
+            pins: m.pins(),
+        }
+    }
+
+    pub(super) fn realtime(&mut self, r: Rt, rx_free: u16, m: &mut impl MotionPort, o: &mut Out<'_, impl Tx>) {
+        let rt = m.rt();
+        let feed = u16::from(rt.feed_override());
+        match r {
+            Rt::SoftReset => {
+                let moving = !m.motion_idle() || !self.cmds.is_empty();
+                m.rt().request_reset();
+                self.cmds.clear();
+                self.slots.clear();
+                self.interp.reset();
+                self.check = false;
+                self.jogging = false;
+                self.jog_cancel = false;
+                self.sync = true;
+                self.stats.resets += 1;
+                if moving && m.alarm().is_none() {
+                    // Reported now so that it comes before the banner.
+                    self.seen_alarm = Some(MachineError::ResetDuringMotion);
+                    report_alarm(MachineError::ResetDuringMotion, o);
+                }
+                if !o.framed() {
+                    let _ = reply::banner(o);
+                    if moving || m.alarm().is_some() {
+                        let _ = reply::msg(o, "'$H'|'$X' to unlock");
+                    }
+                }
+            }
+            Rt::StatusQuery => {
+                let st = self.status(rx_free, m);
+                if o.framed() {
+                    o.frame(&DeviceMsg::Status(st));
+                } else {
+                    let mask = m.settings().status_mask;
+                    let f = Format::from_settings(m.settings());
+                    let extras = self.cadence.next(&st);
+                    let _ = reply::status(o, &st, mask, f, extras);
+                }
+            }
+            Rt::FeedHold | Rt::SafetyDoor => rt.feed_hold(),
+            Rt::CycleStart => rt.cycle_start(),
+            Rt::JogCancel => {
+                if self.jogging {
+                    self.jog_cancel = true;
+                    rt.feed_hold();
+                }
+            }
+            Rt::FeedOv100 => rt.set_feed_override(100),
+            Rt::FeedOvPlus10 => rt.set_feed_override(feed + 10),
+            Rt::FeedOvMinus10 => rt.set_feed_override(feed.saturating_sub(10)),
+            Rt::FeedOvPlus1 => rt.set_feed_override(feed + 1),
+            Rt::FeedOvMinus1 => rt.set_feed_override(feed.saturating_sub(1)),
+            Rt::RapidOv100 => rt.set_rapid_override(100),
+            Rt::RapidOv50 => rt.set_rapid_override(50),
+            Rt::RapidOv25 => rt.set_rapid_override(25),
+            Rt::SpindleOv100 => self.spindle_ov = 100,
+            Rt::SpindleOvPlus10 => self.spindle_ov = self.spindle_ov.saturating_add(10).min(200),
+            Rt::SpindleOvMinus10 => self.spindle_ov = self.spindle_ov.saturating_sub(10).max(10),
+            Rt::SpindleOvPlus1 => self.spindle_ov = self.spindle_ov.saturating_add(1).min(200),
+            Rt::SpindleOvMinus1 => self.spindle_ov = self.spindle_ov.saturating_sub(1).max(10),
+            Rt::SpindleStopToggle | Rt::FloodToggle | Rt::MistToggle => {}
+        }
+    }
+
+    /// A `$` command; text output goes to `o`, the result becomes `ok`/`error`.
+    pub(super) fn system(&mut self, cmd: SysCmd<'_>, m: &mut impl MotionPort, o: &mut Out<'_, impl Tx>) -> Result<(), u16> {
+        let s = *m.settings();
+        let f = Format::from_settings(&s);
+        let _ = f;
+        match cmd {
+            SysCmd::Help => {
+                let _ = reply::help(o);
+            }
+            SysCmd::ListSettings => {
+                let _ = reply::settings(o, &s);
+            }
+            SysCmd::GetSetting(n) => {
+                let v = s.get(n).ok_or(Code::InvalidStatement.code())?;
+                let _ = reply::setting(o, n, v);
+            }
+            SysCmd::SetSetting { n, value } => self.set_setting(n, value, m)?,
+            SysCmd::Params => {
+                let _ = self.interp.write_offsets(o, "\r\n");
+            }
+            SysCmd::ParserState => {
+                let _ = o.write_str("[GC:");
+                let _ = self.interp.write_gc_state(o);
+                let _ = o.write_str("]\r\n");
+            }
+            SysCmd::BuildInfo => {
+                let info = BuildInfo {
+                    firmware: crate::VERSION,
+                    board: self.ident.board,
+                    options: "VNHM",
+                    planner_blocks: m.planner_blocks(),
+                };
+                let _ = reply::build_info(o, &info);
+            }
+            SysCmd::StartupLines => {
+                let _ = o.write_str("$N0=\r\n$N1=\r\n");
+            }
+            SysCmd::Home(axes) => {
+                if !s.homing_enable {
+                    return Err(Code::SettingDisabled.code());
+                }
+                if self.check || !m.motion_idle() {
+                    return Err(Code::NotIdle.code());
+                }
+                let _ = self.cmds.push_back((0, Command::Home { axes }));
+                self.sync = true;
+            }
+            SysCmd::Unlock => {
+                if m.alarm().is_some() {
+                    let _ = self.cmds.push_back((0, Command::ClearAlarm));
+                    let _ = reply::msg(o, "Caution: Unlocked");
+                }
+            }
+            SysCmd::CheckMode => {
+                if self.check {
+                    self.check = false;
+                    self.interp.reset();
+                    self.sync = true;
+                    let _ = reply::msg(o, "Disabled");
+                } else {
+                    if !m.motion_idle() || !self.cmds.is_empty() || m.alarm().is_some() {
+                        return Err(Code::NotIdle.code());
+                    }
+                    self.check = true;
+                    let _ = reply::msg(o, "Enabled");
+                }
+            }
+            SysCmd::Jog(body) => self.jog(body, m)?,
+            SysCmd::Sleep | SysCmd::Restore(_) => return Err(Code::Unsupported.code()),
+        }
+        Ok(())
+    }
+
+    /// `$J=`: only G20/G21, G90/G91, G53, axis words and a feed; runs on a
+    /// copy of the interpreter so the job's modal state is untouched.
+    fn jog(&mut self, body: &[u8], m: &mut impl MotionPort) -> Result<(), u16> {
+        let bad = Code::InvalidJog.code();
+        if self.check || m.alarm().is_some() {
+            return Err(Code::Locked.code());
+        }
+        if !(m.motion_idle() && self.cmds.is_empty()) && !self.jogging {
+            return Err(Code::NotIdle.code());
+        }
+        let allowed = |b: &u8| b" .-+0123456789GXYZAF".contains(&b.to_ascii_uppercase());
+        if !body.iter().all(allowed) || !body.iter().any(|b| b.eq_ignore_ascii_case(&b'F')) {
+            return Err(bad);
+        }
+        let mut line = heapless::Vec::<u8, { protocol::MAX_LINE }>::new();
+        line.extend_from_slice(b"G1 G94 ").map_err(|_| bad)?;
+        line.extend_from_slice(body).map_err(|_| bad)?;
+        let mut jog = self.interp.clone();
+        let mut end = None;
+        let mut count = 0;
+        jog.execute_line(&line, &mut |c| {
+            count += 1;
+            if let Command::Line { end: e, feed: Feed::PerMin(f) } = c {
+                end = Some((e, f));
+            }
+        })
+        .map_err(|e| u16::from(e.grbl_code()))?;
+        let (Some((e, f)), 1) = (end, count) else { return Err(bad) };
+        let cmd = Command::Line { end: e, feed: Feed::PerMin(f) };
+        let _ = self.cmds.push_back((0, cmd));
+        self.interp.set_machine_position(e);
+        self.jogging = true;
+        Ok(())
+    }
+}

@@ -1,0 +1,171 @@
+//! `cargo xtask qemu`: the real RTIC app on QEMU's netduinoplus2 (STM32F405,
+//! Cortex-M4F), built with `board-qemu` (HSI clocks, link on USART1 because
+//! QEMU has no USB OTG model). The test talks to USART1 through QEMU's
+//! stdin/stdout and kills QEMU when done. Also the QEMU plumbing that
+//! `bench-target` shares.
+use crate::util;
+use anyhow::{bail, Context, Result};
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+const QEMU: &str = "qemu-system-arm";
+const MACHINE: &str = "netduinoplus2";
+
+/// Builds `bin` of the firmware package for the QEMU board (release
+/// profile) and returns the ELF, copied to `<bin>-qemu.elf` beside it so a
+/// later `cargo xtask build` of a real board cannot be mistaken for it.
+pub fn build_bin(bin: &str, features: &[&str]) -> Result<PathBuf> {
+    util::ensure_target()?;
+    let mut cmd = util::cargo();
+    cmd.args(["build", "--package", "firmware", "--bin", bin, "--release"]);
+    cmd.args(["--target", util::TARGET, "--no-default-features"]);
+    cmd.args(["--features", &features.join(",")]);
+    util::run(&mut cmd)?;
+    let out = util::target_dir().join(util::TARGET).join("release");
+    let elf = out.join(format!("{bin}-qemu.elf"));
+    std::fs::copy(out.join(bin), &elf).with_context(|| format!("copying {bin}"))?;
+    Ok(elf)
+}
+
+/// Installs QEMU's ARM system emulator when it is missing (Debian package
+/// `qemu-system-arm`), as root only; otherwise says how.
+pub fn ensure_installed() -> Result<()> {
+    if util::have(QEMU) {
+        return Ok(());
+    }
+    let root = Command::new("id")
+        .arg("-u")
+        .output()
+        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0");
+    if !root {
+        bail!("{QEMU} is missing: install it with `sudo apt-get install -y qemu-system-arm`");
+    }
+    let install = || util::run(Command::new("apt-get").args(["install", "-y", "qemu-system-arm"]));
+    if install().is_err() {
+        util::run(Command::new("apt-get").arg("update"))?;
+        install()?;
+    }
+    if !util::have(QEMU) {
+        bail!("apt-get installed qemu-system-arm but {QEMU} is still not on PATH");
+    }
+    Ok(())
+}
+
+/// QEMU on the netduinoplus2 with `elf` loaded, semihosting on (output and
+/// exit status of `cortex_m_semihosting`), no display, no monitor. USART1
+/// (the first `-serial`) goes to stdin/stdout.
+pub fn command(elf: &Path) -> Command {
+    let mut cmd = Command::new(QEMU);
+    cmd.args(["-M", MACHINE, "-display", "none", "-monitor", "none"]);
+    cmd.args(["-semihosting-config", "enable=on,target=native"]);
+    cmd.args(["-serial", "stdio", "-kernel"]);
+    cmd.arg(elf);
+    cmd
+}
+
+/// Kills QEMU however a test ends.
+struct Guard(Child);
+
+impl Drop for Guard {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// Starts `cmd` with piped stdio; stdout arrives on the returned channel.
+fn spawn(mut cmd: Command) -> Result<(Guard, mpsc::Receiver<Vec<u8>>)> {
+    eprintln!("$ {}", util::show(&cmd));
+    cmd.stdin(Stdio::piped()).stdout(Stdio::piped());
+    let mut child = cmd.spawn().with_context(|| format!("starting {QEMU}"))?;
+    let mut stdout = child.stdout.take().context("QEMU stdout")?;
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        let mut buf = [0u8; 256];
+        while let Ok(n @ 1..) = stdout.read(&mut buf) {
+            if tx.send(buf[..n].to_vec()).is_err() {
+                break;
+            }
+        }
+    });
+    Ok((Guard(child), rx))
+}
+
+/// Runs `cmd` until the guest exits (semihosting `debug::exit`) and returns
+/// its stdout; fails on a non-zero exit or after `timeout`.
+pub fn run_to_exit(cmd: Command, timeout: Duration) -> Result<String> {
+    let (mut guard, rx) = spawn(cmd)?;
+    let end = Instant::now() + timeout;
+    let mut out = Vec::new();
+    loop {
+        while let Ok(chunk) = rx.try_recv() {
+            out.extend(chunk);
+        }
+        if let Some(status) = guard.0.try_wait()? {
+            // The reader thread ends at EOF; collect what it still has.
+            while let Ok(chunk) = rx.recv_timeout(Duration::from_millis(200)) {
+                out.extend(chunk);
+            }
+            let text = String::from_utf8_lossy(&out).into_owned();
+            if !status.success() {
+                bail!("{QEMU} exited with {status}; output:\n{text}");
+            }
+            return Ok(text);
+        }
+        if Instant::now() > end {
+            bail!(
+                "{QEMU} still running after {timeout:?}; output so far:\n{}",
+                String::from_utf8_lossy(&out)
+            );
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// Reads from `rx` into `seen` until `want` appears in it or `timeout`.
+fn expect(rx: &mpsc::Receiver<Vec<u8>>, seen: &mut Vec<u8>, want: &[u8], timeout: Duration) -> bool {
+    let end = Instant::now() + timeout;
+    loop {
+        if seen.windows(want.len()).any(|w| w == want) {
+            return true;
+        }
+        let left = end.saturating_duration_since(Instant::now());
+        if left.is_zero() {
+            return false;
+        }
+        if let Ok(chunk) = rx.recv_timeout(left) {
+            seen.extend(chunk);
+        }
+    }
+}
+
+/// The end-to-end test: boot the app, send bytes to USART1, expect them back.
+pub fn run() -> Result<i32> {
+    let elf = build_bin("burin-fw", &["board-qemu"])?;
+    ensure_installed()?;
+    let (mut guard, rx) = spawn(command(&elf))?;
+    let mut stdin = guard.0.stdin.take().context("QEMU stdin")?;
+    let mut seen = Vec::new();
+    let probes: [&[u8]; 2] = [b"burin echo 1\n", b"G1 X10.5 Y-3.25 F1200\n"];
+    for probe in probes {
+        stdin.write_all(probe)?;
+        stdin.flush()?;
+        if !expect(&rx, &mut seen, probe, Duration::from_secs(10)) {
+            bail!(
+                "no echo of {:?} from the app within 10 s; USART1 said {:?}",
+                String::from_utf8_lossy(probe),
+                String::from_utf8_lossy(&seen)
+            );
+        }
+        println!("echo ok: {:?}", String::from_utf8_lossy(probe).trim_end());
+    }
+    if let Some(status) = guard.0.try_wait()? {
+        bail!("{QEMU} exited by itself ({status})");
+    }
+    drop(guard);
+    println!("qemu: the RTIC app booted on {MACHINE} and echoed over USART1; QEMU stopped");
+    Ok(0)
+}
