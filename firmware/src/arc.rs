@@ -201,7 +201,14 @@ impl SplineChords {
         if n > MAX_CHORDS as f32 {
             return Err(MachineError::TooManySegments);
         }
-        Ok(SplineChords { start: *start, end: s.end, p1: s.p1, p2: s.p2, n: n as u32, i: 0 })
+        Ok(SplineChords {
+            start: *start,
+            end: s.end,
+            p1: s.p1,
+            p2: s.p2,
+            n: n as u32,
+            i: 0,
+        })
     }
 
     pub fn chords(&self) -> u32 {

@@ -15,7 +15,10 @@ fn worst_chord_error(start: Pos, arc: &Arc, chords: &[Pos]) -> f64 {
     let mut worst = 0.0f64;
     for p in chords {
         let r_end = (p[a] as f64 - c[0]).hypot(p[b] as f64 - c[1]);
-        let mid = [(prev[a] as f64 + p[a] as f64) / 2.0, (prev[b] as f64 + p[b] as f64) / 2.0];
+        let mid = [
+            (prev[a] as f64 + p[a] as f64) / 2.0,
+            (prev[b] as f64 + p[b] as f64) / 2.0,
+        ];
         let r_mid = (mid[0] - c[0]).hypot(mid[1] - c[1]);
         worst = worst.max((r0 - r_mid).abs()).max((r0 - r_end).abs());
         prev = *p;
@@ -24,7 +27,14 @@ fn worst_chord_error(start: Pos, arc: &Arc, chords: &[Pos]) -> f64 {
 }
 
 fn arc(end: Pos, center: [f32; 2], plane: Plane, dir: ArcDir, turns: u16) -> Arc {
-    Arc { end, center, plane, dir, turns, feed: Feed::PerMin(1000.0) }
+    Arc {
+        end,
+        center,
+        plane,
+        dir,
+        turns,
+        feed: Feed::PerMin(1000.0),
+    }
 }
 
 #[test]
@@ -43,7 +53,10 @@ fn chords_within_tolerance_all_planes() {
                 let ch: Vec<Pos> = ArcChords::new(&s, &arc, TOL).unwrap().collect();
                 assert_eq!(*ch.last().unwrap(), e, "end point exact");
                 let err = worst_chord_error(s, &arc, &ch);
-                assert!(err <= TOL as f64 * 1.01 + 1e-5, "{plane:?} {dir:?} r={r}: {err}");
+                assert!(
+                    err <= TOL as f64 * 1.01 + 1e-5,
+                    "{plane:?} {dir:?} r={r}: {err}"
+                );
                 // helix axis and A advance linearly
                 let mid = ch[ch.len() / 2];
                 assert!(mid[h] > 0.0 && mid[h] < 3.0);
@@ -56,17 +69,33 @@ fn chords_within_tolerance_all_planes() {
 fn full_circle_and_multi_turn() {
     let s = [10.0, 0.0, 0.0, 0.0];
     let one = arc(s, [0.0, 0.0], Plane::XY, ArcDir::Ccw, 0);
-    let three = arc([10.0, 0.0, -6.0, 0.0], [0.0, 0.0], Plane::XY, ArcDir::Ccw, 2);
+    let three = arc(
+        [10.0, 0.0, -6.0, 0.0],
+        [0.0, 0.0],
+        Plane::XY,
+        ArcDir::Ccw,
+        2,
+    );
     let c1 = ArcChords::new(&s, &one, TOL).unwrap();
     let c3 = ArcChords::new(&s, &three, TOL).unwrap();
     let n1 = c1.chords();
-    assert!(n1 > 50, "a full circle of r=10 at 2 µm needs many chords, got {n1}");
-    assert!(c3.chords() + 2 >= 3 * n1 && c3.chords() <= 3 * n1, "{} vs {n1}", c3.chords());
+    assert!(
+        n1 > 50,
+        "a full circle of r=10 at 2 µm needs many chords, got {n1}"
+    );
+    assert!(
+        c3.chords() + 2 >= 3 * n1 && c3.chords() <= 3 * n1,
+        "{} vs {n1}",
+        c3.chords()
+    );
     let pts: Vec<Pos> = c3.collect();
     assert_eq!(*pts.last().unwrap(), [10.0, 0.0, -6.0, 0.0]);
     // after one turn Z is at -2
     let p = pts[n1 as usize - 1];
-    assert!((p[2] + 2.0).abs() < 0.1 && (p[0] - 10.0).abs() < 0.1, "{p:?}");
+    assert!(
+        (p[2] + 2.0).abs() < 0.1 && (p[0] - 10.0).abs() < 0.1,
+        "{p:?}"
+    );
     assert!(worst_chord_error(s, &three, &pts) <= TOL as f64 * 1.01);
 }
 
@@ -74,26 +103,60 @@ fn full_circle_and_multi_turn() {
 fn cw_vs_ccw_go_opposite_ways() {
     let s = [10.0, 0.0, 0.0, 0.0];
     let e = [0.0, 10.0, 0.0, 0.0];
-    let ccw: Vec<Pos> = ArcChords::new(&s, &arc(e, [0.0, 0.0], Plane::XY, ArcDir::Ccw, 0), TOL).unwrap().collect();
-    let cw: Vec<Pos> = ArcChords::new(&s, &arc(e, [0.0, 0.0], Plane::XY, ArcDir::Cw, 0), TOL).unwrap().collect();
-    assert!(ccw[ccw.len() / 2][0] > 0.0 && ccw[ccw.len() / 2][1] > 0.0, "quarter through +X+Y");
-    assert!(cw[cw.len() / 2][0] < 0.0 && cw[cw.len() / 2][1] < 0.0, "three quarters through -X-Y");
+    let ccw: Vec<Pos> = ArcChords::new(&s, &arc(e, [0.0, 0.0], Plane::XY, ArcDir::Ccw, 0), TOL)
+        .unwrap()
+        .collect();
+    let cw: Vec<Pos> = ArcChords::new(&s, &arc(e, [0.0, 0.0], Plane::XY, ArcDir::Cw, 0), TOL)
+        .unwrap()
+        .collect();
+    assert!(
+        ccw[ccw.len() / 2][0] > 0.0 && ccw[ccw.len() / 2][1] > 0.0,
+        "quarter through +X+Y"
+    );
+    assert!(
+        cw[cw.len() / 2][0] < 0.0 && cw[cw.len() / 2][1] < 0.0,
+        "three quarters through -X-Y"
+    );
     assert!(cw.len() > 2 * ccw.len());
 }
 
 #[test]
 fn bad_arcs_are_errors_not_panics() {
     let s = [0.0, 0.0, 0.0, 0.0];
-    assert!(ArcChords::new(&s, &arc([1.0, 0.0, 0.0, 0.0], [0.0, 0.0], Plane::XY, ArcDir::Cw, 0), TOL).is_err());
-    assert!(ArcChords::new(&[f32::NAN; 4], &arc(s, [1.0, 0.0], Plane::XY, ArcDir::Cw, 0), TOL).is_err());
-    let huge = arc([1.0, 0.0, 0.0, 0.0], [0.0, 0.0], Plane::XY, ArcDir::Cw, u16::MAX);
-    assert!(ArcChords::new(&[1.0, 0.0, 0.0, 0.0], &huge, 1e-6).is_err(), "too many chords is refused");
+    assert!(ArcChords::new(
+        &s,
+        &arc([1.0, 0.0, 0.0, 0.0], [0.0, 0.0], Plane::XY, ArcDir::Cw, 0),
+        TOL
+    )
+    .is_err());
+    assert!(ArcChords::new(
+        &[f32::NAN; 4],
+        &arc(s, [1.0, 0.0], Plane::XY, ArcDir::Cw, 0),
+        TOL
+    )
+    .is_err());
+    let huge = arc(
+        [1.0, 0.0, 0.0, 0.0],
+        [0.0, 0.0],
+        Plane::XY,
+        ArcDir::Cw,
+        u16::MAX,
+    );
+    assert!(
+        ArcChords::new(&[1.0, 0.0, 0.0, 0.0], &huge, 1e-6).is_err(),
+        "too many chords is refused"
+    );
 }
 
 #[test]
 fn spline_flattened_within_tolerance() {
     let s = [0.0, 0.0, 0.0, 0.0];
-    let sp = Spline { p1: [30.0, 60.0], p2: [70.0, -40.0], end: [100.0, 10.0, -5.0, 0.0], feed: Feed::PerMin(1000.0) };
+    let sp = Spline {
+        p1: [30.0, 60.0],
+        p2: [70.0, -40.0],
+        end: [100.0, 10.0, -5.0, 0.0],
+        feed: Feed::PerMin(1000.0),
+    };
     let c = SplineChords::new(&s, &sp, TOL).unwrap();
     let exact = c.clone();
     let pts: Vec<Pos> = c.collect();

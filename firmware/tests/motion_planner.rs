@@ -16,12 +16,16 @@ fn straight_chain_keeps_speed_and_last_block_stops() {
     let mut p: Planner<64> = Planner::new(Settings::default());
     for i in 1..=10 {
         let t = steps(&p, [i as f32, 0.0, 0.0, 0.0]);
-        p.push_line(t, Speed::Feed(20.0), Watch::default(), i).unwrap();
+        p.push_line(t, Speed::Feed(20.0), Watch::default(), i)
+            .unwrap();
     }
     assert_eq!(p.len(), 10);
     assert_eq!(p.block(0).unwrap().entry, 0.0);
     // collinear junctions: entry is limited by ramps only
-    let shape = Shape { accel: 500.0, jerk: 0.0 };
+    let shape = Shape {
+        accel: 500.0,
+        jerk: 0.0,
+    };
     assert!((p.block(1).unwrap().entry - shape.reach(0.0, 1.0).min(20.0)).abs() < 1e-3);
     assert!((p.block(5).unwrap().entry - 20.0).abs() < 1e-3);
     // the last block must be able to stop within its length
@@ -32,23 +36,56 @@ fn straight_chain_keeps_speed_and_last_block_stops() {
 #[test]
 fn right_angle_corner_uses_junction_deviation() {
     let mut p: Planner<64> = Planner::new(Settings::default());
-    p.push_line(steps(&p, [50.0, 0.0, 0.0, 0.0]), Speed::Feed(100.0), Watch::default(), 1).unwrap();
-    p.push_line(steps(&p, [50.0, 50.0, 0.0, 0.0]), Speed::Feed(100.0), Watch::default(), 2).unwrap();
-    p.push_line(steps(&p, [50.0, 100.0, 0.0, 0.0]), Speed::Feed(100.0), Watch::default(), 3).unwrap();
+    p.push_line(
+        steps(&p, [50.0, 0.0, 0.0, 0.0]),
+        Speed::Feed(100.0),
+        Watch::default(),
+        1,
+    )
+    .unwrap();
+    p.push_line(
+        steps(&p, [50.0, 50.0, 0.0, 0.0]),
+        Speed::Feed(100.0),
+        Watch::default(),
+        2,
+    )
+    .unwrap();
+    p.push_line(
+        steps(&p, [50.0, 100.0, 0.0, 0.0]),
+        Speed::Feed(100.0),
+        Watch::default(),
+        3,
+    )
+    .unwrap();
     // a = along (0,1)-(1,0): 500/0.707 on each axis -> 707; c = sin(45°)
     let c = std::f32::consts::FRAC_1_SQRT_2;
     let v = (707.1 * 0.01 * c / (1.0 - c)).sqrt();
     let e = p.block(1).unwrap().entry;
-    assert!((e - v).abs() < 0.05 * v, "corner speed {e}, expected about {v}");
+    assert!(
+        (e - v).abs() < 0.05 * v,
+        "corner speed {e}, expected about {v}"
+    );
     // reversal: full stop
-    p.push_line(steps(&p, [50.0, 90.0, 0.0, 0.0]), Speed::Feed(100.0), Watch::default(), 4).unwrap();
+    p.push_line(
+        steps(&p, [50.0, 90.0, 0.0, 0.0]),
+        Speed::Feed(100.0),
+        Watch::default(),
+        4,
+    )
+    .unwrap();
     assert_eq!(p.block(3).unwrap().entry, 0.0);
 }
 
 #[test]
 fn rapid_capped_by_slowest_axis() {
     let mut p: Planner<64> = Planner::new(Settings::default());
-    p.push_line(steps(&p, [0.0, 0.0, -10.0, 0.0]), Speed::Rapid, Watch::default(), 1).unwrap();
+    p.push_line(
+        steps(&p, [0.0, 0.0, -10.0, 0.0]),
+        Speed::Rapid,
+        Watch::default(),
+        1,
+    )
+    .unwrap();
     assert!((p.block(0).unwrap().nominal - 1000.0 / 60.0).abs() < 1e-3);
     p.set_overrides(100, 25);
     assert!((p.block(0).unwrap().nominal - 250.0 / 60.0).abs() < 1e-3);
@@ -58,13 +95,24 @@ fn rapid_capped_by_slowest_axis() {
 fn profile_math_consistent() {
     for jerk in [0.0f32, 5000.0] {
         let sh = Shape { accel: 500.0, jerk };
-        for (v0, vn, v1, len) in [(0.0, 50.0, 0.0, 100.0), (10.0, 50.0, 5.0, 0.5), (0.0, 80.0, 20.0, 3.0)] {
+        for (v0, vn, v1, len) in [
+            (0.0, 50.0, 0.0, 100.0),
+            (10.0, 50.0, 5.0, 0.5),
+            (0.0, 80.0, 20.0, 3.0),
+        ] {
             let p = Profile::plan(&sh, v0, vn, v1, len);
-            assert!((p.total_dist() - len).abs() < 1e-3 * len.max(1.0), "{jerk} {v0} {vn} {v1} {len}: {}", p.total_dist());
+            assert!(
+                (p.total_dist() - len).abs() < 1e-3 * len.max(1.0),
+                "{jerk} {v0} {vn} {v1} {len}: {}",
+                p.total_dist()
+            );
             // eval at the end of each ramp reaches its distance and speed
             for ph in p.phases.iter().filter(|ph| ph.v0 != ph.v1) {
                 let (v, s) = sh.eval(ph.v0, ph.v1, ph.time);
-                assert!((v - ph.v1).abs() < 1e-2 && (s - ph.dist).abs() < 1e-3, "{ph:?} -> {v} {s}");
+                assert!(
+                    (v - ph.v1).abs() < 1e-2 && (s - ph.dist).abs() < 1e-3,
+                    "{ph:?} -> {v} {s}"
+                );
             }
         }
         // reach and dist are inverse
@@ -87,7 +135,13 @@ fn run_steps(settings: Settings, moves: &[[f32; 4]]) -> ([i32; 4], [u32; 4], u8)
     for _ in 0..10_000_000 {
         while !p.is_full() {
             let Some(m) = pending.next() else { break };
-            p.push_line(p.to_steps(m).unwrap(), Speed::Feed(10.0), Watch::default(), 0).unwrap();
+            p.push_line(
+                p.to_steps(m).unwrap(),
+                Speed::Feed(10.0),
+                Watch::default(),
+                0,
+            )
+            .unwrap();
         }
         prep.fill(&mut p, &rt, &mut q);
         if let Some(s) = q.peek() {
@@ -107,11 +161,31 @@ fn run_steps(settings: Settings, moves: &[[f32; 4]]) -> ([i32; 4], [u32; 4], u8)
 #[test]
 fn exact_steps_with_smoothing_at_low_rates() {
     let s = Settings::default();
-    let moves = [[3.3331, 1.2347, -0.1113, 0.0], [0.0001, 2.5, 0.3, 4.55], [-7.77, -1.01, 0.0, 0.0]];
+    let moves = [
+        [3.3331, 1.2347, -0.1113, 0.0],
+        [0.0001, 2.5, 0.3, 4.55],
+        [-7.77, -1.01, 0.0, 0.0],
+    ];
     let (pos, counts, amass) = run_steps(s, &moves);
     let last = moves[2];
-    let want: Vec<i32> = (0..4).map(|i| (last[i] * s.axes[i].steps_per_mm).round() as i32).collect();
+    let want: Vec<i32> = (0..4)
+        .map(|i| (last[i] * s.axes[i].steps_per_mm).round() as i32)
+        .collect();
     assert_eq!(pos.to_vec(), want);
-    assert!(amass > 0, "10 mm/s on a multi-axis move should use smoothing");
+    assert!(
+        amass > 0,
+        "10 mm/s on a multi-axis move should use smoothing"
+    );
     assert!(counts.iter().all(|c| *c > 0));
+}
+
+#[test]
+fn motion_core_fits_the_f411_ram_budget() {
+    use burin::machine::Machine;
+    let m = core::mem::size_of::<Machine<64>>();
+    let q = core::mem::size_of::<Queue<burin::stepper::Segment, 16>>();
+    let st = core::mem::size_of::<Stepper>();
+    println!("Machine<64>: {m} B, segment queue(16): {q} B, Stepper: {st} B");
+    // 128 KiB of RAM on the F411: the whole motion core stays under 16 KiB.
+    assert!(m + q + st < 16 * 1024);
 }

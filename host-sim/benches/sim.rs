@@ -28,8 +28,14 @@ fn zigzag() -> Vec<Command> {
     let mut v = Vec::new();
     for i in 0..40 {
         let y = i as f32 * 2.0;
-        v.push(Command::Line { end: [200.0, y + 1.0, 0.0, 0.0], feed: Feed::PerMin(4000.0) });
-        v.push(Command::Line { end: [0.0, y + 2.0, -1.0, 0.0], feed: Feed::PerMin(4000.0) });
+        v.push(Command::Line {
+            end: [200.0, y + 1.0, 0.0, 0.0],
+            feed: Feed::PerMin(4000.0),
+        });
+        v.push(Command::Line {
+            end: [0.0, y + 2.0, -1.0, 0.0],
+            feed: Feed::PerMin(4000.0),
+        });
     }
     v
 }
@@ -72,7 +78,9 @@ fn bench_planner(c: &mut Criterion) {
             let mut p: Planner<64> = Planner::new(s);
             for i in 0..N {
                 let a = i as f32 * 0.05;
-                let t = p.to_steps(&[10.0 * libm::cosf(a), 10.0 * libm::sinf(a), 0.0, 0.0]).unwrap_or([0; AXES]);
+                let t = p
+                    .to_steps(&[10.0 * libm::cosf(a), 10.0 * libm::sinf(a), 0.0, 0.0])
+                    .unwrap_or([0; AXES]);
                 if p.is_full() {
                     p.pop();
                 }
@@ -86,7 +94,9 @@ fn bench_planner(c: &mut Criterion) {
 
 fn corpus_jobs() -> Vec<String> {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/corpus");
-    let Ok(m) = std::fs::read_to_string(dir.join("MANIFEST.tsv")) else { return Vec::new() };
+    let Ok(m) = std::fs::read_to_string(dir.join("MANIFEST.tsv")) else {
+        return Vec::new();
+    };
     m.lines()
         .skip(1)
         .filter_map(|r| r.split('\t').next())
@@ -99,17 +109,31 @@ fn bench_ratio(c: &mut Criterion) {
     let mut jobs = corpus_jobs();
     if jobs.is_empty() {
         println!("corpus not found: using the built-in zig-zag as the long job");
-        let z: String = (0..40).map(|i| format!("G1 X200 Y{} F4000\nG1 X0 Y{} Z-1\n", i * 2 + 1, i * 2 + 2)).collect();
+        let z: String = (0..40)
+            .map(|i| format!("G1 X200 Y{} F4000\nG1 X0 Y{} Z-1\n", i * 2 + 1, i * 2 + 2))
+            .collect();
         jobs.push(z);
     }
     let t0 = Instant::now();
-    let sim_s: f64 = jobs.iter().map(|j| run_job(&cfg, j, &mut Discard).job_time_s).sum();
+    let sim_s: f64 = jobs
+        .iter()
+        .map(|j| run_job(&cfg, j, &mut Discard).job_time_s)
+        .sum();
     let wall = t0.elapsed().as_secs_f64();
-    println!("corpus: {:.1} s simulated in {:.3} s wall: ratio {:.0}x", sim_s, wall, sim_s / wall);
+    println!(
+        "corpus: {:.1} s simulated in {:.3} s wall: ratio {:.0}x",
+        sim_s,
+        wall,
+        sim_s / wall
+    );
     let mut g = c.benchmark_group("corpus");
     g.sample_size(10);
     g.bench_function("all_jobs", |b| {
-        b.iter(|| jobs.iter().map(|j| run_job(&cfg, j, &mut Discard).job_time_s).sum::<f64>())
+        b.iter(|| {
+            jobs.iter()
+                .map(|j| run_job(&cfg, j, &mut Discard).job_time_s)
+                .sum::<f64>()
+        })
     });
     g.finish();
 }

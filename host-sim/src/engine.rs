@@ -8,12 +8,12 @@
 //! time. There are no threads, clocks or hash maps, so two runs of the same
 //! job are identical event for event.
 
+mod job;
 mod world;
 
 use std::collections::VecDeque;
 
 use burin::command::Command;
-use burin::interp::Interpreter;
 use burin::machine::{Machine, MachineError, Note, PathKind};
 use burin::realtime::Realtime;
 use burin::stepper::{Segment, Stepper};
@@ -22,6 +22,7 @@ use heapless::spsc::Queue;
 
 use crate::config::MachineConfig;
 use crate::record::{AxisInfo, MoveKind, PinEvent, Recorder, RunError, RunInfo, Summary};
+pub use job::run_job;
 pub use world::World;
 
 /// Planner ring size (the F411 build uses the same).
@@ -84,7 +85,11 @@ fn kind(k: PathKind) -> MoveKind {
 }
 
 fn machine_error(line: u32, e: MachineError) -> RunError {
-    RunError { line, code: e.code(), message: e.to_string() }
+    RunError {
+        line,
+        code: e.code(),
+        message: e.to_string(),
+    }
 }
 
 impl<'r> Sim<'r> {
@@ -114,7 +119,10 @@ impl<'r> Sim<'r> {
             dir_setup_ticks: sc.dir_setup_ticks,
         };
         rec.start(&info);
-        let stats = Stats { last_path: Some(machine.commanded_position()), ..Stats::default() };
+        let stats = Stats {
+            last_path: Some(machine.commanded_position()),
+            ..Stats::default()
+        };
         Sim {
             cfg: cfg.clone(),
             rt,
@@ -149,7 +157,11 @@ impl<'r> Sim<'r> {
 
     /// Schedule realtime input at `tick` (kept in tick order; equal ticks in call order).
     pub fn input_at(&mut self, tick: u64, input: Input) {
-        let at = self.inputs.iter().position(|(t, _)| *t > tick).unwrap_or(self.inputs.len());
+        let at = self
+            .inputs
+            .iter()
+            .position(|(t, _)| *t > tick)
+            .unwrap_or(self.inputs.len());
         self.inputs.insert(at, (tick, input));
     }
 
@@ -170,17 +182,30 @@ impl<'r> Sim<'r> {
 
     /// Prio 1: feed queued commands to the executor and refill the segment queue.
     fn plan_task(&mut self) {
-        let Sim { machine, rt, queue, commands, rec, stats, world, .. } = self;
+        let Sim {
+            machine,
+            rt,
+            queue,
+            commands,
+            rec,
+            stats,
+            world,
+            ..
+        } = self;
         loop {
             while machine.ready() {
-                let Some((line, cmd)) = commands.pop_front() else { break };
+                let Some((line, cmd)) = commands.pop_front() else {
+                    break;
+                };
                 let motion = cmd.end().is_some();
                 match machine.submit(rt, &cmd, line, &mut |n| note(stats, &mut **rec, n)) {
                     Ok(()) => stats.moves += u32::from(motion),
                     Err(e) => stats.errors.push(machine_error(line, e)),
                 }
             }
-            machine.poll(rt, queue, world.switches(), &mut |n| note(stats, &mut **rec, n));
+            machine.poll(rt, queue, world.switches(), &mut |n| {
+                note(stats, &mut **rec, n)
+            });
             if !machine.ready() || commands.is_empty() {
                 break;
             }
@@ -216,7 +241,11 @@ impl<'r> Sim<'r> {
             self.stats.max_speed = self.stats.max_speed.max(v);
             self.rec.velocity(self.now, v);
         }
-        self.next_step = if ev.ticks == 0 { None } else { Some(self.now + u64::from(ev.ticks)) };
+        self.next_step = if ev.ticks == 0 {
+            None
+        } else {
+            Some(self.now + u64::from(ev.ticks))
+        };
     }
 
     /// True when nothing is moving, queued or pending.
@@ -234,7 +263,8 @@ impl<'r> Sim<'r> {
         self.run_until(u64::MAX);
     }
 
-    /// Run events up to and including `until`.
+    /// Run events up to and including `until`; afterwards the clock reads
+    /// `until` (or later, if it already did).
     pub fn run_until(&mut self, until: u64) {
         self.plan_task();
         loop {
@@ -255,7 +285,9 @@ impl<'r> Sim<'r> {
                 (Some(a), None) => a,
                 (None, Some(b)) => b,
                 (None, None) => {
-                    if self.auto_resume && self.machine.prep.hold() == burin::stepper::prep::Hold::Held {
+                    if self.auto_resume
+                        && self.machine.prep.hold() == burin::stepper::prep::Hold::Held
+                    {
                         self.rt.cycle_start();
                         self.plan_task();
                         if !self.queue.is_empty() {
@@ -264,12 +296,14 @@ impl<'r> Sim<'r> {
                     }
                     self.plan_task();
                     if self.queue.is_empty() {
+                        self.advance_clock(until);
                         return;
                     }
                     continue;
                 }
             };
             if next > until {
+                self.advance_clock(until);
                 return;
             }
             self.now = next;
@@ -283,11 +317,20 @@ impl<'r> Sim<'r> {
         }
     }
 
+    /// Nothing happens before `until`: virtual time still passes (a bounded
+    /// run ends at its bound; an unbounded one stays at the last event).
+    fn advance_clock(&mut self, until: u64) {
+        if until != u64::MAX {
+            self.now = self.now.max(until);
+        }
+    }
+
     /// Figures for the summary (`lines` and work offsets come from the caller).
     pub fn summary(&self, lines: u32, wco: [f32; AXES]) -> Summary {
         let s = &self.cfg.settings;
         let pos = self.rt.position();
-        let mm: [f64; AXES] = std::array::from_fn(|i| pos[i] as f64 / s.axes[i].steps_per_mm as f64);
+        let mm: [f64; AXES] =
+            std::array::from_fn(|i| pos[i] as f64 / s.axes[i].steps_per_mm as f64);
         Summary {
             lines,
             moves: self.stats.moves,
@@ -324,7 +367,9 @@ fn note(stats: &mut Stats, rec: &mut dyn Recorder, n: Note) {
             rec.commanded(line, kind(k), end);
         }
         Note::Error { line, error } => stats.errors.push(machine_error(line, error)),
-        Note::Probed { position, contact, .. } => {
+        Note::Probed {
+            position, contact, ..
+        } => {
             stats.probe = Some((position, contact));
             stats.last_path = Some(position);
             stats.barrier_done = true;
@@ -334,51 +379,4 @@ fn note(stats: &mut Stats, rec: &mut dyn Recorder, n: Note) {
         }
         Note::Executed { .. } => {}
     }
-}
-
-/// Simulate a G-code job from source text.
-pub fn run_job(config: &MachineConfig, source: &str, recorder: &mut dyn Recorder) -> Summary {
-    let mut sim = Sim::new(config, recorder);
-    let mut interp = Interpreter::new();
-    interp.set_machine_position(sim.machine.commanded_position());
-    let mut lines = 0u32;
-    let mut gcode_errors = Vec::new();
-    for (i, text) in source.lines().enumerate() {
-        let line_no = i as u32 + 1;
-        lines = line_no;
-        let mut cmds = Vec::new();
-        match interp.execute_line(text.as_bytes(), &mut |c| cmds.push(c)) {
-            Ok(()) => {}
-            Err(e) => {
-                gcode_errors.push(RunError { line: line_no, code: e.kind.code(), message: e.to_string() });
-                continue;
-            }
-        }
-        for c in cmds {
-            sim.push_command(line_no, c);
-        }
-        if interp.needs_sync() {
-            // Homing and probing end where only the machine knows: run to idle.
-            sim.run();
-            let _ = sim.take_barrier();
-            match sim.stats.probe.take() {
-                Some((pos, contact)) => interp.probe_finished(pos, contact),
-                None => interp.set_machine_position(sim.machine.commanded_position()),
-            }
-        }
-        if sim.machine.alarm().is_some() {
-            sim.run();
-            break;
-        }
-    }
-    sim.run();
-    let mut summary = sim.summary(lines, interp.wco());
-    let mut errors = gcode_errors;
-    errors.append(&mut summary.errors);
-    errors.sort_by_key(|e| e.line);
-    summary.errors = errors;
-    // A recorder's I/O error cannot be reported through the Summary; callers
-    // that care use `Sim` and `finish` directly.
-    let _ = sim.finish(&summary);
-    summary
 }

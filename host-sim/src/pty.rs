@@ -1,1 +1,202 @@
-//! placeholder
+//! `cargo xtask sim --pty`: the virtual device on a pseudo-terminal, so
+//! outside programs (our streamer, GRBL senders, a terminal) connect to it
+//! like to the board's USB-CDC port.
+//!
+//! Contract: the slave path (`/dev/pts/N`) is the first line on stdout;
+//! then the device runs until killed, paced to the wall clock (`speed` 1)
+//! or `speed` times faster.
+//!
+//! Connecting and disconnecting: the simulator keeps only the master side
+//! open, so the kernel reports a hangup whenever no client has the slave
+//! open. A hangup resets the link to text mode (as DTR dropping or a USB
+//! reset does on the board) and drops unsent replies; queued motion goes
+//! on, as GRBL keeps running when its sender goes away. When a client
+//! connects and after 50 ms the link is still in text mode, the device
+//! prints the `Grbl` banner (an Arduino GRBL resets when the port opens);
+//! a framed client sends 0x00 at once and gets no banner to trip over.
+
+use std::fs::File;
+use std::io::{self, ErrorKind, Read, Write};
+use std::os::fd::AsFd;
+use std::time::{Duration, Instant};
+
+use nix::fcntl::{fcntl, FcntlArg, OFlag};
+use nix::poll::{poll, PollFd, PollFlags, PollTimeout};
+use nix::sys::termios::{cfmakeraw, tcflush, tcgetattr, tcsetattr, FlushArg, SetArg};
+
+use crate::config::MachineConfig;
+use crate::device_sim::VirtualDevice;
+use crate::record::Discard;
+
+/// Virtual time one device pass may cover: the parse/plan task runs at
+/// least this often in virtual time, so the planner never starves because
+/// of the pacing.
+const CHUNK_S: f64 = 0.002;
+
+/// A pseudo-terminal's master side.
+pub struct Pty {
+    master: File,
+    path: String,
+}
+
+impl Pty {
+    /// Open a pty in raw mode; the slave is closed again (clients open it).
+    pub fn open() -> io::Result<Pty> {
+        let p = nix::pty::openpty(None, None).map_err(io::Error::from)?;
+        let mut t = tcgetattr(p.slave.as_fd()).map_err(io::Error::from)?;
+        cfmakeraw(&mut t);
+        tcsetattr(p.slave.as_fd(), SetArg::TCSANOW, &t).map_err(io::Error::from)?;
+        let path = nix::unistd::ttyname(p.slave.as_fd())
+            .map_err(io::Error::from)?
+            .display()
+            .to_string();
+        let flags = fcntl(p.master.as_fd(), FcntlArg::F_GETFL).map_err(io::Error::from)?;
+        let flags = OFlag::from_bits_truncate(flags) | OFlag::O_NONBLOCK;
+        fcntl(p.master.as_fd(), FcntlArg::F_SETFL(flags)).map_err(io::Error::from)?;
+        drop(p.slave);
+        Ok(Pty { master: File::from(p.master), path })
+    }
+
+    /// The device path clients open.
+    pub fn path(&self) -> &str {
+        &self.path
+    }
+
+    /// Forget bytes in flight both ways: the departed client's unread input
+    /// (its `Bye`, say) and replies it never read, which the next client
+    /// would otherwise receive glued to the front of its first frame. The
+    /// latter sit in the slave's queue, so the slave is opened for a moment.
+    fn flush_stale(&self) {
+        use std::os::unix::fs::OpenOptionsExt;
+        let _ = tcflush(self.master.as_fd(), FlushArg::TCIOFLUSH);
+        let slave = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .custom_flags((OFlag::O_NOCTTY | OFlag::O_NONBLOCK).bits())
+            .open(&self.path);
+        if let Ok(f) = slave {
+            let _ = tcflush(f.as_fd(), FlushArg::TCIOFLUSH);
+        }
+    }
+
+    /// Wait up to `timeout` for input; `Ok(false)` when no client has the
+    /// slave open (hangup).
+    fn wait(&self, timeout: Duration) -> io::Result<bool> {
+        let ms = u16::try_from(timeout.as_millis()).unwrap_or(u16::MAX);
+        let mut fds = [PollFd::new(self.master.as_fd(), PollFlags::POLLIN)];
+        match poll(&mut fds, PollTimeout::from(ms)) {
+            Ok(_) => {}
+            Err(nix::errno::Errno::EINTR) => return Ok(true),
+            Err(e) => return Err(e.into()),
+        }
+        let rev = fds[0].revents().unwrap_or(PollFlags::empty());
+        Ok(!rev.contains(PollFlags::POLLHUP))
+    }
+}
+
+/// Run the virtual device on a new pty until killed. `announce` gets the
+/// slave path first thing.
+pub fn run(cfg: &MachineConfig, speed: f64, announce: impl FnOnce(&str)) -> io::Result<()> {
+    let mut pty = Pty::open()?;
+    announce(pty.path());
+    let mut rec = Discard;
+    let mut dev = VirtualDevice::new(cfg, &mut rec);
+    // The power-up banner is for a client that is there; see the module docs.
+    let _ = dev.take_output();
+    let speed = if speed.is_finite() && speed > 0.0 { speed } else { 1.0 };
+    let hz = f64::from(cfg.tick_hz);
+    let chunk = ((CHUNK_S * hz) as u64).max(1);
+    let mut connected = false;
+    let mut connected_at = Instant::now();
+    let mut banner_due = false;
+    let mut closing = false;
+    let mut inbox: Vec<u8> = Vec::new();
+    let mut outbox: Vec<u8> = Vec::new();
+    let mut base = (Instant::now(), dev.sim.now());
+    let mut buf = [0u8; 4096];
+    let debug = std::env::var_os("BURIN_PTY_DEBUG").is_some();
+    loop {
+        let up = pty.wait(Duration::from_millis(1))?;
+        if up != connected {
+            connected = up;
+            if debug {
+                eprintln!("pty: {}", if up { "client connected" } else { "hangup" });
+            }
+            if up {
+                connected_at = Instant::now();
+                banner_due = true;
+            } else {
+                // What the client wrote before it left (a last soft reset,
+                // its `Bye`) still counts: read it, let the device take it,
+                // then close the session (below).
+                closing = true;
+                banner_due = false;
+                while let Ok(n @ 1..) = pty.master.read(&mut buf) {
+                    inbox.extend_from_slice(&buf[..n]);
+                }
+            }
+        }
+        if closing && inbox.is_empty() {
+            closing = false;
+            // Replies the departed client never read must not reach the next.
+            pty.flush_stale();
+            dev.port_closed();
+            outbox.clear();
+        }
+        if connected {
+            match pty.master.read(&mut buf) {
+                Ok(n) => {
+                    if debug && n > 0 {
+                        eprintln!("pty: rx {:?}", String::from_utf8_lossy(&buf[..n.min(40)]));
+                    }
+                    inbox.extend_from_slice(&buf[..n])
+                }
+                Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::Interrupted) => {}
+                // EIO: the client closed between poll and read.
+                Err(e) => {
+                    if debug {
+                        eprintln!("pty: read: {e}");
+                    }
+                }
+            }
+        }
+        if banner_due && connected_at.elapsed() > Duration::from_millis(50) {
+            banner_due = false;
+            if !dev.link.flags().is_framed() && dev.link.mode() == burin::link::LinkMode::Text {
+                dev.device.hello(&mut dev.tx);
+            }
+        }
+        // Virtual time follows the wall clock; while idle it waits.
+        if dev.sim.idle() {
+            base = (Instant::now(), dev.sim.now());
+        }
+        let wall = base.0.elapsed().as_secs_f64();
+        let target = base.1 + (wall * speed * hz) as u64;
+        let limit = dev.sim.now() + chunk * 64;
+        let target = target.min(limit);
+        loop {
+            let n = dev.receive(&inbox);
+            inbox.drain(..n);
+            let (before, t) = (dev.sim.now(), (dev.sim.now() + chunk).min(target));
+            dev.advance_to(t);
+            // Idle or held: no events to run, virtual time stands still.
+            if dev.sim.now() >= target || dev.sim.now() == before {
+                break;
+            }
+        }
+        if dev.sim.now() >= limit || dev.sim.now() < target {
+            // Falling behind the wall clock: do not try to catch up later.
+            base = (Instant::now(), dev.sim.now());
+        }
+        outbox.extend(dev.take_output());
+        if connected && !closing && !outbox.is_empty() {
+            match pty.master.write(&outbox) {
+                Ok(n) => {
+                    outbox.drain(..n);
+                }
+                Err(e) if e.kind() == ErrorKind::WouldBlock => {}
+                Err(_) => outbox.clear(),
+            }
+        }
+    }
+}

@@ -49,6 +49,8 @@ fn stream_framed(cfg: &MachineConfig, lines: &[&str], cut: Option<usize>) -> (Ve
     let mut rec = Discard;
     let mut dev = VirtualDevice::new(cfg, &mut rec);
     dev.log = Some(Vec::new());
+    // The power-up banner went out before the host connected.
+    let _ = dev.take_output();
     let (host, mut dpipe) = MemPipe::pair();
     let mut client = Client::new(host);
     client.set_resync_after(None);
@@ -167,7 +169,15 @@ fn stream_text(cfg: &MachineConfig, job: &str, pacing: Pacing) -> ([i32; 4], usi
             asked = true;
         }
     }
-    panic!("text stream did not finish: sent {sent}, ok {oks}, {last_status}");
+    panic!(
+        "text stream did not finish: sent {sent}, ok {oks}, {last_status}; idle {} drained {} ready {} state {:?} now {} log {:?}",
+        dev.sim.idle(),
+        dev.device.drained(),
+        dev.sim.machine.ready(),
+        dev.sim.machine.state(&dev.sim.rt),
+        dev.sim.now(),
+        dev.log.as_ref().map(|l| l.len())
+    );
 }
 
 #[test]

@@ -24,7 +24,10 @@ fn expected_end(src: &str) -> Option<([f32; 4], usize)> {
     for line in src.lines() {
         let mut ok = true;
         it.execute_line(line.as_bytes(), &mut |c: Command| {
-            if matches!(c, Command::Home { .. } | Command::VerifyHome { .. } | Command::Probe { .. }) {
+            if matches!(
+                c,
+                Command::Home { .. } | Command::VerifyHome { .. } | Command::Probe { .. }
+            ) {
                 depends = true;
             }
             if let Some(e) = c.end() {
@@ -51,8 +54,12 @@ fn corpus_jobs_end_exactly_and_keep_limits() {
     let cfg = config();
     let (mut ran, mut skipped) = (0, 0);
     for row in manifest.lines().skip(1) {
-        let Some(rel) = row.split('\t').next() else { continue };
-        let Ok(src) = std::fs::read_to_string(dir.join(rel)) else { continue };
+        let Some(rel) = row.split('\t').next() else {
+            continue;
+        };
+        let Ok(src) = std::fs::read_to_string(dir.join(rel)) else {
+            continue;
+        };
         let Some((end, moves)) = expected_end(&src) else {
             skipped += 1;
             continue;
@@ -64,12 +71,21 @@ fn corpus_jobs_end_exactly_and_keep_limits() {
         let mut rec = Collect::default();
         let s = run_job(&cfg, &src, &mut rec);
         let info = rec.info.clone().unwrap();
-        assert!(s.errors.is_empty(), "{rel}: {:?}", &s.errors[..s.errors.len().min(3)]);
+        assert!(
+            s.errors.is_empty(),
+            "{rel}: {:?}",
+            &s.errors[..s.errors.len().min(3)]
+        );
         assert_eq!(s.final_position_steps, expected_steps(&info, end), "{rel}");
         assert_eq!(s.planner_underruns, 0, "{rel}");
         let rate = check_max_rate(&info, &rec.events);
         let (dev, corners) = check_path(&info, cfg.start_position_mm, &rec.path, &rec.events, 0.0);
-        let acc = check_max_accel(&info, &rec.events, &corners, cfg.settings.junction_deviation as f64);
+        let acc = check_max_accel(
+            &info,
+            &rec.events,
+            &corners,
+            cfg.settings.junction_deviation as f64,
+        );
         check_pin_timing(&info, &rec.events);
         println!(
             "{rel}: {} moves, {} step events, {:.1} s simulated, rate {rate:.3}, accel {acc:.3}, path dev {dev:.4} mm",

@@ -34,7 +34,10 @@ pub fn run() -> Result<i32> {
             .map(|(_, v)| *v)
             .with_context(|| format!("bench-target printed no `{name}` line"))?;
         let verdict = match (name, goal) {
-            ("max_step_rate_hz_1axis", _) => judge(value >= STEP_RATE_GOAL_HZ, &format!(">= {STEP_RATE_GOAL_HZ}")),
+            ("max_step_rate_hz_1axis", _) => judge(
+                value >= STEP_RATE_GOAL_HZ,
+                &format!(">= {STEP_RATE_GOAL_HZ}"),
+            ),
             (_, Some(g)) => judge(value <= g, &format!("<= {g}")),
             (_, None) => "(no goal)".to_string(),
         };
@@ -80,7 +83,8 @@ mod tests {
 
     #[test]
     fn parses_metric_lines_only() {
-        let m = parse("# ticks 0.168\nstep_event_insns_1axis 104\nline_insns 2422\nnoise here too\n");
+        let m =
+            parse("# ticks 0.168\nstep_event_insns_1axis 104\nline_insns 2422\nnoise here too\n");
         assert_eq!(
             m,
             vec![

@@ -126,7 +126,12 @@ pub fn run_to_exit(cmd: Command, timeout: Duration) -> Result<String> {
 }
 
 /// Reads from `rx` into `seen` until `want` appears in it or `timeout`.
-fn expect(rx: &mpsc::Receiver<Vec<u8>>, seen: &mut Vec<u8>, want: &[u8], timeout: Duration) -> bool {
+fn expect(
+    rx: &mpsc::Receiver<Vec<u8>>,
+    seen: &mut Vec<u8>,
+    want: &[u8],
+    timeout: Duration,
+) -> bool {
     let end = Instant::now() + timeout;
     loop {
         if seen.windows(want.len()).any(|w| w == want) {

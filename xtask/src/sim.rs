@@ -34,9 +34,30 @@ pub struct SimArgs {
     /// Draw commanded vs stepped path and the velocity profile as SVG.
     #[arg(long, value_name = "FILE.svg")]
     pub plot: Option<PathBuf>,
+    /// Run a virtual device on a pseudo-terminal instead of a job: prints the
+    /// device path (e.g. /dev/pts/7) as the first line, then runs until killed.
+    /// Speaks GRBL text and the native protocol, like the board's USB port.
+    #[arg(long, conflicts_with_all = ["file", "check", "json", "trace", "vcd", "plot"])]
+    pub pty: bool,
+    /// With --pty: run N times faster than real time.
+    #[arg(long, value_name = "N", default_value_t = 1.0, requires = "pty")]
+    pub speed: f64,
 }
 
 pub fn run(a: SimArgs) -> Result<i32> {
+    if a.pty {
+        let cfg = match &a.machine {
+            Some(p) => MachineConfig::load(p).map_err(|e| anyhow::anyhow!("{e}"))?,
+            None => MachineConfig::default(),
+        };
+        host_sim::pty::run(&cfg, a.speed, |path| {
+            use std::io::Write;
+            let mut out = std::io::stdout().lock();
+            let _ = writeln!(out, "{path}");
+            let _ = out.flush();
+        })?;
+        return Ok(0);
+    }
     let (name, source) = match &a.file {
         Some(p) => (
             p.display().to_string(),

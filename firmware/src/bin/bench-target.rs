@@ -7,8 +7,8 @@
 //! SysTick (core clock source) counts that virtual clock at the machine's
 //! core frequency (168 MHz on netduinoplus2, so about 0.168 ticks per
 //! instruction). Rather than trust that constant, the program calibrates: it
-//! times `cortex_m::asm::delay(2 * N)`, whose body is a 2-instruction
-//! `subs`/`bne` loop run N + 1 times, and divides. A metric is then
+//! times a `subs`/`bne` loop written in assembly, run N times (exactly 2N
+//! instructions), and divides. A metric is then
 //! `(ticks − empty-measurement ticks) / ticks_per_insn / repetitions`. QEMU
 //! counts instructions, not cycles: the cycle figures below assume a CPI.
 //!
@@ -35,8 +35,5 @@ fn entry() -> ! {
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo) -> ! {
     cortex_m_semihosting::hprintln!("# panic: {}", info);
-    cortex_m_semihosting::debug::exit(cortex_m_semihosting::debug::EXIT_FAILURE);
-    loop {
-        cortex_m::asm::bkpt();
-    }
+    bench::exit(false)
 }

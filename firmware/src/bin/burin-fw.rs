@@ -25,7 +25,11 @@ mod boards;
 #[cfg(target_os = "none")]
 #[path = "burin-fw/step.rs"]
 mod step;
-#[cfg(target_os = "none")]
+// The link: USB-CDC on the real boards, USART1 on QEMU (no OTG model).
+#[cfg(all(target_os = "none", feature = "board-qemu"))]
+#[path = "burin-fw/usart.rs"]
+mod usart;
+#[cfg(all(target_os = "none", not(feature = "board-qemu")))]
 #[path = "burin-fw/usb.rs"]
 mod usb;
 
@@ -48,17 +52,29 @@ const WATCHDOG_MS: u32 = 500;
 mod app {
     use crate::boards::board;
     use crate::step::{FixedRate, StepPort, Tim5};
-    use crate::usb::{Packet, RxReceiver, TxSender, UsbLink, RX_PACKETS, TX_PACKETS};
+    #[cfg(feature = "board-qemu")]
+    use crate::usart::{Packet, RxReceiver, TxSender, UsartLink as Link, RX_PACKETS, TX_PACKETS};
+    #[cfg(not(feature = "board-qemu"))]
+    use crate::usb::{Packet, RxReceiver, TxSender, UsbLink as Link, RX_PACKETS, TX_PACKETS};
+    #[cfg(not(feature = "board-qemu"))]
     use burin::usb_ids::{serial_from_uid, USB_SERIAL_LEN};
     use cortex_m::peripheral::syst::SystClkSource;
+    #[cfg(not(feature = "board-qemu"))]
+    use stm32f4xx_hal::otg_fs::{UsbBus, UsbBusType, USB};
     use stm32f4xx_hal::{
         gpio::{Output, PC13},
-        otg_fs::{UsbBus, UsbBusType, USB},
         pac,
         prelude::*,
         watchdog::IndependentWatchdog,
     };
+    #[cfg(not(feature = "board-qemu"))]
     use usb_device::bus::UsbBusAllocator;
+
+    /// The link's interrupt, pended by `parse` after it queues a reply.
+    #[cfg(not(feature = "board-qemu"))]
+    const LINK_IRQ: pac::Interrupt = pac::Interrupt::OTG_FS;
+    #[cfg(feature = "board-qemu")]
+    const LINK_IRQ: pac::Interrupt = crate::usart::IRQ;
 
     #[shared]
     struct Shared {}
@@ -68,7 +84,12 @@ mod app {
         timer: Tim5,
         steppers: StepPort,
         pulses: FixedRate,
-        link: UsbLink,
+        /// USB-CDC (`usb.rs`), or USART1 on QEMU (`usart.rs`). Two names
+        /// because RTIC checks task locals before cfg removes a task.
+        #[cfg(not(feature = "board-qemu"))]
+        link: Link,
+        #[cfg(feature = "board-qemu")]
+        uart: Link,
         rx: RxReceiver,
         tx: TxSender,
         led: PC13<Output>,
@@ -77,8 +98,11 @@ mod app {
     }
 
     #[init(local = [
+        #[cfg(not(feature = "board-qemu"))]
         ep_memory: [u32; 1024] = [0; 1024],
+        #[cfg(not(feature = "board-qemu"))]
         usb_bus: Option<UsbBusAllocator<UsbBusType>> = None,
+        #[cfg(not(feature = "board-qemu"))]
         serial: [u8; USB_SERIAL_LEN] = [0; USB_SERIAL_LEN],
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
@@ -87,6 +111,7 @@ mod app {
 
         // Clocks: HSE + PLL as the board file says (96 MHz on the F411).
         let mut rcc = dp.RCC.freeze(board::clocks());
+        #[cfg(not(feature = "board-qemu"))]
         if !rcc.clocks.is_pll48clk_valid() {
             defmt::error!("USB clock is not 48 MHz: the port will not enumerate");
         }
@@ -120,17 +145,29 @@ mod app {
         let (tx, tx_recv) = rtic_sync::make_channel!(Packet, TX_PACKETS);
 
         // USB: serial number from the 96-bit unique ID, then the CDC port.
+        #[cfg(not(feature = "board-qemu"))]
         let serial = serial_from_uid(read_uid(), cx.local.serial);
+        #[cfg(not(feature = "board-qemu"))]
         let usb = USB::new(
             (dp.OTG_FS_GLOBAL, dp.OTG_FS_DEVICE, dp.OTG_FS_PWRCLK),
             pins.usb_pins,
             &rcc.clocks,
         );
+        #[cfg(not(feature = "board-qemu"))]
         let bus = &*cx
             .local
             .usb_bus
             .insert(UsbBus::new(usb, cx.local.ep_memory));
-        let link = UsbLink::new(bus, serial, rx_send, tx_recv);
+        #[cfg(not(feature = "board-qemu"))]
+        let link = Link::new(bus, serial, rx_send, tx_recv);
+        // QEMU: USART1 at BAUD 8N1 (the first `-serial` of the machine).
+        #[cfg(feature = "board-qemu")]
+        let uart = match dp.USART1.serial(pins.usart_pins, crate::usart::BAUD.bps(), &mut rcc) {
+            Ok(serial) => Link::new(serial, rx_send, tx_recv),
+            Err(_) => defmt::panic!("USART1 cannot run at {} baud", crate::usart::BAUD),
+        };
+        #[cfg(feature = "board-qemu")]
+        let serial = "-";
 
         // Heartbeat: SysTick at HEARTBEAT_HZ from the core clock.
         let sysclk = rcc.clocks.sysclk().raw();
@@ -164,7 +201,10 @@ mod app {
                 timer,
                 steppers: pins.steppers,
                 pulses,
+                #[cfg(not(feature = "board-qemu"))]
                 link,
+                #[cfg(feature = "board-qemu")]
+                uart,
                 rx,
                 tx,
                 led: pins.led,
@@ -198,9 +238,17 @@ mod app {
     }
 
     /// The USB port: enumeration, received packets to `parse`, replies out.
+    #[cfg(not(feature = "board-qemu"))]
     #[task(binds = OTG_FS, priority = 2, local = [link])]
     fn usb(cx: usb::Context) {
         cx.local.link.service();
+    }
+
+    /// The same for the USART link (QEMU): bytes in, replies out.
+    #[cfg(feature = "board-qemu")]
+    #[task(binds = USART1, priority = 2, local = [uart])]
+    fn usart(cx: usart::Context) {
+        cx.local.uart.service();
     }
 
     /// Will run parser -> interpreter -> planner -> segment preparer. Until
@@ -212,7 +260,7 @@ mod app {
             if cx.local.tx.send(packet).await.is_err() {
                 break;
             }
-            rtic::pend(pac::Interrupt::OTG_FS);
+            rtic::pend(LINK_IRQ);
         }
         defmt::error!("link channel closed; parse task ends");
     }
@@ -243,6 +291,7 @@ mod app {
     }
 
     /// The chip's 96-bit unique ID, lowest address first.
+    #[cfg(not(feature = "board-qemu"))]
     fn read_uid() -> [u32; 3] {
         const UID: *const u32 = 0x1FFF_7A10 as *const u32;
         // SAFETY: 0x1FFF_7A10..0x1FFF_7A1C is the factory-programmed,

@@ -44,7 +44,7 @@ pub use out::{Out, Tx};
 
 use crate::command::{Command, Pos};
 use crate::interp::{Interpreter, LINE_COMMANDS};
-use crate::link::{FramedAction, FramedPort, Link, LinkEvent, LinkMode, RtSet};
+use crate::link::{FramedAction, FramedPort, Link, LinkEvent, RtSet};
 use crate::machine::{self, MachineError};
 use crate::realtime::Realtime;
 use crate::settings::table::SettingError;
@@ -64,7 +64,9 @@ pub trait LinkPort {
     fn take_realtime(&mut self) -> RtSet;
     /// Received bytes not yet turned into events.
     fn rx_pending(&self) -> usize;
-    /// True when replies to realtime commands must be frames.
+    /// The receive side's mode right now (the splitter's, which runs
+    /// ahead of the events): replies to realtime commands and unprompted
+    /// reports (alarms) use it. Replies to an event use the event's mode.
     fn framed(&self) -> bool;
 }
 
@@ -79,7 +81,7 @@ impl LinkPort for Link {
         Link::rx_pending(self)
     }
     fn framed(&self) -> bool {
-        self.flags().is_framed() || self.mode() == LinkMode::Framed
+        self.flags().is_framed()
     }
 }
 
@@ -224,15 +226,14 @@ impl Device {
         }
         self.watch(m, &mut Out::new(tx, link.framed()));
         loop {
-            self.feed(m, &mut Out::new(tx, link.framed()));
+            self.feed(m, tx, link.framed());
             if !self.can_take() {
                 break;
             }
             let free = self.free_slots();
             let info = self.info(m);
-            let framed = link.framed();
             let Some(ev) = link.poll() else { break };
-            let mut o = Out::new(tx, framed || matches!(ev, LinkEvent::Frame(_) | LinkEvent::BadFrame(_)));
+            let mut o = Out::new(tx, matches!(ev, LinkEvent::Frame(_) | LinkEvent::BadFrame(_)));
             self.event(ev, free, &info, m, &mut o);
         }
         let free = self.free_slots();
@@ -286,20 +287,22 @@ impl Device {
     }
 
     /// Queued commands to the executor; framed lines to the interpreter.
-    fn feed(&mut self, m: &mut impl MotionPort, o: &mut Out<'_, impl Tx>) {
+    /// `framed` is the port's mode for unprompted reports; lines from the
+    /// slots are framed lines and are answered with frames.
+    fn feed(&mut self, m: &mut impl MotionPort, tx: &mut impl Tx, framed: bool) {
         loop {
             while m.ready() {
                 let Some((line, cmd)) = self.cmds.pop_front() else { break };
                 self.stats.commands += 1;
                 if let Err(e) = m.submit(&cmd, line) {
-                    sys::report_late(e, line, o);
+                    sys::report_late(e, line, &mut Out::new(&mut *tx, framed));
                 }
             }
             if self.sync || self.cmds.capacity() - self.cmds.len() < LINE_COMMANDS {
                 return;
             }
             let Some((seq, text)) = self.slots.pop_front() else { return };
-            self.line(&text, seq, m, o);
+            self.line(&text, seq, m, &mut Out::new(&mut *tx, true));
         }
     }
 

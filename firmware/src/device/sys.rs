@@ -81,7 +81,7 @@ impl Device {
             machine::State::Homing => MachineState::Home,
             machine::State::Hold => MachineState::Hold,
             _ if self.jogging => MachineState::Jog,
-            machine::State::Idle if self.cmds.is_empty() => MachineState::Idle,
+            machine::State::Idle if self.cmds.is_empty() && self.slots.is_empty() => MachineState::Idle,
             _ => MachineState::Run,
         };
         let (feed, line) = m.feed_and_line();

@@ -93,7 +93,11 @@ impl fmt::Display for MachineError {
         match *self {
             SoftLimit { axis } => write!(f, "move exceeds soft limit on {}", axis_name(axis)),
             StepRateTooHigh { axis } => {
-                write!(f, "{} max rate needs more steps/s than $201 allows", axis_name(axis))
+                write!(
+                    f,
+                    "{} max rate needs more steps/s than $201 allows",
+                    axis_name(axis)
+                )
             }
             InvalidArc => f.write_str("invalid arc geometry"),
             TooManySegments => f.write_str("arc or spline needs too many segments"),
@@ -107,9 +111,18 @@ impl fmt::Display for MachineError {
             ProbeInitialState => f.write_str("probe already in target state"),
             HardLimit { .. } => f.write_str("hard limit triggered; position lost"),
             HomingNoSwitch { axis } => write!(f, "homing: no switch found on {}", axis_name(axis)),
-            HomingPullOff { axis } => write!(f, "homing: {} switch still closed after pull-off", axis_name(axis)),
+            HomingPullOff { axis } => write!(
+                f,
+                "homing: {} switch still closed after pull-off",
+                axis_name(axis)
+            ),
             VerifyHome { axis, deviation_mm } => {
-                write!(f, "G27: {} home off by {:.3} mm", axis_name(axis), deviation_mm)
+                write!(
+                    f,
+                    "G27: {} home off by {:.3} mm",
+                    axis_name(axis),
+                    deviation_mm
+                )
             }
             ProbeNoContact => f.write_str("probe: no contact"),
             ResetDuringMotion => f.write_str("reset during motion; position lost"),

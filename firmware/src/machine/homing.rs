@@ -27,7 +27,11 @@ enum Phase {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Action {
     /// Move to `target` steps at `rate` mm/s, stopping on `watch`.
-    Move { target: [i32; AXES], rate: f32, watch: Watch },
+    Move {
+        target: [i32; AXES],
+        rate: f32,
+        watch: Watch,
+    },
     /// Redefine the machine position, steps.
     Redefine { position: [i32; AXES] },
     /// All cycles done.
@@ -49,12 +53,18 @@ pub struct Homing {
 
 impl Homing {
     /// `axes` 0 means every axis with a homing cycle.
-    pub fn new(s: &Settings, axes: AxisMask, verify: bool, line: u32) -> Result<Self, MachineError> {
+    pub fn new(
+        s: &Settings,
+        axes: AxisMask,
+        verify: bool,
+        line: u32,
+    ) -> Result<Self, MachineError> {
         if !s.homing_enable {
             return Err(MachineError::HomingDisabled);
         }
         let want = if axes == 0 { 0x0f } else { axes };
-        let cycles: [u8; 4] = core::array::from_fn(|i| ((s.homing_order >> (4 * i)) & 0x0f) as u8 & want);
+        let cycles: [u8; 4] =
+            core::array::from_fn(|i| ((s.homing_order >> (4 * i)) & 0x0f) as u8 & want);
         if cycles.iter().all(|c| *c == 0) {
             return Err(MachineError::HomingDisabled);
         }
@@ -99,7 +109,14 @@ impl Homing {
 
     /// A move of the axes in `mask` by `mm` towards (positive) or away from
     /// (negative) their switches; `rate` is per axis, mm/min.
-    fn mv(s: &Settings, pos: &[i32; AXES], mask: u8, mm: impl Fn(usize) -> f32, rate: f32, watch: u8) -> Action {
+    fn mv(
+        s: &Settings,
+        pos: &[i32; AXES],
+        mask: u8,
+        mm: impl Fn(usize) -> f32,
+        rate: f32,
+        watch: u8,
+    ) -> Action {
         let mut target = *pos;
         let mut n = 0;
         for (i, t) in target.iter_mut().enumerate() {
@@ -110,7 +127,15 @@ impl Homing {
             }
         }
         let rate = rate / 60.0 * libm::sqrtf(n.max(1) as f32);
-        Action::Move { target, rate, watch: Watch { limits: watch, probe: 0, homing: true } }
+        Action::Move {
+            target,
+            rate,
+            watch: Watch {
+                limits: watch,
+                probe: 0,
+                homing: true,
+            },
+        }
     }
 
     fn first_axis(mask: u8) -> u8 {
@@ -119,10 +144,18 @@ impl Homing {
 
     /// Next action, called whenever motion is idle. `limits` are the closed
     /// switches (after inversion).
-    pub fn step(&mut self, s: &Settings, pos: &[i32; AXES], limits: u8) -> Result<Action, MachineError> {
+    pub fn step(
+        &mut self,
+        s: &Settings,
+        pos: &[i32; AXES],
+        limits: u8,
+    ) -> Result<Action, MachineError> {
         loop {
             let Some(&mask) = self.cycles.get(self.idx) else {
-                return Ok(Action::Done { axes: self.axes(), verified: self.verify });
+                return Ok(Action::Done {
+                    axes: self.axes(),
+                    verified: self.verify,
+                });
             };
             if mask == 0 {
                 self.idx += 1;
@@ -135,11 +168,20 @@ impl Homing {
                     self.remaining = mask;
                     self.tripped_this_move = false;
                     self.phase = Phase::Seek;
-                    return Ok(Self::mv(s, pos, self.remaining, seek_len, s.homing_seek, self.remaining));
+                    return Ok(Self::mv(
+                        s,
+                        pos,
+                        self.remaining,
+                        seek_len,
+                        s.homing_seek,
+                        self.remaining,
+                    ));
                 }
                 Phase::Seek | Phase::Locate => {
                     if !self.tripped_this_move {
-                        return Err(MachineError::HomingNoSwitch { axis: Self::first_axis(self.remaining) });
+                        return Err(MachineError::HomingNoSwitch {
+                            axis: Self::first_axis(self.remaining),
+                        });
                     }
                     self.tripped_this_move = false;
                     if self.remaining != 0 {
@@ -148,7 +190,14 @@ impl Homing {
                         } else {
                             (pull * 3.0, s.homing_feed)
                         };
-                        return Ok(Self::mv(s, pos, self.remaining, |_| len, rate, self.remaining));
+                        return Ok(Self::mv(
+                            s,
+                            pos,
+                            self.remaining,
+                            |_| len,
+                            rate,
+                            self.remaining,
+                        ));
                     }
                     if self.phase == Phase::Seek {
                         self.phase = Phase::PullOff;
@@ -161,7 +210,10 @@ impl Homing {
                             }
                             let dev = libm::fabsf(self.located[i] as f32 / s.axes[i].steps_per_mm);
                             if dev > s.verify_home_tolerance {
-                                return Err(MachineError::VerifyHome { axis: i as u8, deviation_mm: dev });
+                                return Err(MachineError::VerifyHome {
+                                    axis: i as u8,
+                                    deviation_mm: dev,
+                                });
                             }
                         }
                         self.phase = Phase::Final;
@@ -178,7 +230,9 @@ impl Homing {
                 }
                 Phase::PullOff => {
                     if limits & mask != 0 {
-                        return Err(MachineError::HomingPullOff { axis: Self::first_axis(limits & mask) });
+                        return Err(MachineError::HomingPullOff {
+                            axis: Self::first_axis(limits & mask),
+                        });
                     }
                     self.remaining = mask;
                     self.tripped_this_move = false;
@@ -191,7 +245,9 @@ impl Homing {
                 }
                 Phase::Final => {
                     if limits & mask != 0 {
-                        return Err(MachineError::HomingPullOff { axis: Self::first_axis(limits & mask) });
+                        return Err(MachineError::HomingPullOff {
+                            axis: Self::first_axis(limits & mask),
+                        });
                     }
                     self.idx += 1;
                     self.phase = Phase::Start;

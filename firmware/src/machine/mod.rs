@@ -7,6 +7,8 @@
 
 mod error;
 mod homing;
+mod pending;
+mod submit;
 
 pub use error::MachineError;
 pub use homing::Homing;
@@ -41,7 +43,11 @@ pub enum Note<'a> {
     /// A non-motion command ran, in order with motion.
     Executed { line: u32, command: &'a Command },
     /// G38.x finished: where the probe tripped (or the move ended).
-    Probed { line: u32, position: Pos, contact: bool },
+    Probed {
+        line: u32,
+        position: Pos,
+        contact: bool,
+    },
     /// Homing finished for these axes; the position was redefined.
     Homed { axes: AxisMask },
 }
@@ -51,16 +57,35 @@ enum Chords {
     Arc(ArcChords),
     Spline(SplineChords),
     /// Legs of an independent-axis rapid.
-    Legs { pts: [Pos; AXES], n: usize, i: usize },
+    Legs {
+        pts: [Pos; AXES],
+        n: usize,
+        i: usize,
+    },
 }
 
 #[derive(Clone, Debug)]
 enum Pending {
     None,
-    Chords { chords: Chords, speed: Speed, line: u32 },
-    Sync { command: Command, line: u32 },
-    ProbeWait { end: Pos, speed: Speed, kind: ProbeKind, line: u32 },
-    ProbeRun { kind: ProbeKind, line: u32 },
+    Chords {
+        chords: Chords,
+        speed: Speed,
+        line: u32,
+    },
+    Sync {
+        command: Command,
+        line: u32,
+    },
+    ProbeWait {
+        end: Pos,
+        speed: Speed,
+        kind: ProbeKind,
+        line: u32,
+    },
+    ProbeRun {
+        kind: ProbeKind,
+        line: u32,
+    },
     Homing(Homing),
 }
 
@@ -185,7 +210,11 @@ impl<const N: usize> Machine<N> {
             if t <= 0.0 {
                 continue;
             }
-            let (min, max) = if s.homing_dir_invert & (1 << i) != 0 { (0.0, t) } else { (-t, 0.0) };
+            let (min, max) = if s.homing_dir_invert & (1 << i) != 0 {
+                (0.0, t)
+            } else {
+                (-t, 0.0)
+            };
             if lo[i] < min - EPS || hi[i] > max + EPS {
                 return Err(MachineError::SoftLimit { axis: i as u8 });
             }
@@ -205,194 +234,11 @@ impl<const N: usize> Machine<N> {
         let steps = self.planner.to_steps(end)?;
         self.planner.push_line(steps, speed, watch, line)?;
         self.commanded = *end;
-        obs(Note::Path { line, kind, end: *end });
-        Ok(())
-    }
-
-    /// Accept one command. Call only when [`ready`](Self::ready).
-    pub fn submit(&mut self, rt: &Realtime, cmd: &Command, line: u32, obs: &mut dyn FnMut(Note)) -> Result<(), MachineError> {
-        if !self.ready() {
-            return Err(MachineError::Busy);
-        }
-        let allowed_in_alarm = matches!(
-            cmd,
-            Command::Home { .. } | Command::ClearAlarm | Command::Report(_) | Command::Message(_)
-        );
-        if self.alarm.is_some() && !allowed_in_alarm {
-            return Err(MachineError::InAlarm);
-        }
-        let tol = self.planner.settings.arc_tolerance;
-        match cmd {
-            Command::Rapid { end } => {
-                self.check_soft(end, end)?;
-                if self.planner.settings.rapid_mode == RapidMode::Independent {
-                    let (pts, n) = self.rapid_legs(end);
-                    self.pending = Pending::Chords { chords: Chords::Legs { pts, n, i: 0 }, speed: Speed::Rapid, line };
-                    return self.feed_chords(obs);
-                }
-                self.push_line(end, Speed::Rapid, Watch::default(), line, PathKind::Rapid, obs)
-            }
-            Command::Line { end, feed } => {
-                self.check_soft(end, end)?;
-                let sp = Self::speed(*feed)?;
-                self.push_line(end, sp, Watch::default(), line, PathKind::Feed, obs)
-            }
-            Command::Arc(a) => {
-                let ch = ArcChords::new(&self.commanded, a, tol)?;
-                let (lo, hi) = ch.bounds();
-                self.check_soft(&lo, &hi)?;
-                let speed = self.chord_speed(a.feed, Chords::Arc(ch.clone()))?;
-                self.pending = Pending::Chords { chords: Chords::Arc(ch), speed, line };
-                self.feed_chords(obs)
-            }
-            Command::Spline(sp) => {
-                let ch = SplineChords::new(&self.commanded, sp, tol)?;
-                let (lo, hi) = ch.bounds();
-                self.check_soft(&lo, &hi)?;
-                let speed = self.chord_speed(sp.feed, Chords::Spline(ch.clone()))?;
-                self.pending = Pending::Chords { chords: Chords::Spline(ch), speed, line };
-                self.feed_chords(obs)
-            }
-            Command::Dwell { seconds } => {
-                if !(seconds.is_finite() && *seconds >= 0.0 && *seconds < 1.0e6) {
-                    return Err(MachineError::InvalidNumber);
-                }
-                let ticks = (*seconds as f64 * self.cfg.tick_hz as f64) as u64;
-                self.planner.push_dwell(ticks, line)
-            }
-            Command::Probe { end, feed, kind } => {
-                self.check_soft(end, end)?;
-                let speed = Self::speed(*feed)?;
-                self.pending = Pending::ProbeWait { end: *end, speed, kind: *kind, line };
-                Ok(())
-            }
-            Command::Home { axes } => {
-                let h = Homing::new(&self.planner.settings, *axes, false, line)?;
-                self.pending = Pending::Homing(h);
-                Ok(())
-            }
-            Command::VerifyHome { axes } => {
-                let h = Homing::new(&self.planner.settings, *axes, true, line)?;
-                if self.homed & h.axes() != h.axes() {
-                    return Err(MachineError::NotHomed);
-                }
-                self.pending = Pending::Homing(h);
-                Ok(())
-            }
-            Command::FeedOverride { percent } => {
-                rt.set_feed_override(*percent);
-                obs(Note::Executed { line, command: cmd });
-                Ok(())
-            }
-            Command::ClearAlarm => {
-                self.alarm = None;
-                obs(Note::Executed { line, command: cmd });
-                Ok(())
-            }
-            Command::Aux { synced: false, .. } | Command::Message(_) | Command::Report(_) => {
-                obs(Note::Executed { line, command: cmd });
-                Ok(())
-            }
-            _ => {
-                self.pending = Pending::Sync { command: cmd.clone(), line };
-                Ok(())
-            }
-        }
-    }
-
-    /// Independent-axis rapid: every axis runs at its own max rate, so the
-    /// move splits where each axis arrives (fastest first). Each leg is a
-    /// straight block whose direction makes all its axes hit their max rate
-    /// together; the legs stay inside the start/end box, so checking the end
-    /// against soft limits is enough.
-    fn rapid_legs(&self, end: &Pos) -> ([Pos; AXES], usize) {
-        let start = self.commanded;
-        let s = &self.planner.settings;
-        let rate: [f32; AXES] = core::array::from_fn(|i| s.axes[i].max_rate.max(1e-3) / 60.0);
-        let time: [f32; AXES] = core::array::from_fn(|i| libm::fabsf(end[i] - start[i]) / rate[i]);
-        let mut order: [usize; AXES] = core::array::from_fn(|i| i);
-        order.sort_unstable_by(|a, b| time[*a].total_cmp(&time[*b]));
-        let mut pts = [*end; AXES];
-        let mut n = 0;
-        let mut last_t = 0.0f32;
-        for &k in &order {
-            let tk = time[k];
-            if tk <= last_t {
-                continue;
-            }
-            last_t = tk;
-            for i in 0..AXES {
-                pts[n][i] = if time[i] <= tk {
-                    end[i]
-                } else {
-                    start[i] + libm::copysignf(rate[i] * tk, end[i] - start[i])
-                };
-            }
-            n += 1;
-        }
-        if n == 0 {
-            pts[0] = *end;
-            n = 1;
-        }
-        if let Some(p) = pts.get_mut(n - 1) {
-            *p = *end;
-        }
-        (pts, n)
-    }
-
-    /// G93 arcs and splines: the whole curve takes `1/F` minutes, so every
-    /// chord runs at the curve's length over that time.
-    fn chord_speed(&self, feed: Feed, ch: Chords) -> Result<Speed, MachineError> {
-        let sp = Self::speed(feed)?;
-        let Speed::Time(t) = sp else { return Ok(sp) };
-        let mut prev = self.commanded;
-        let mut len = 0.0f32;
-        let mut add = |p: Pos| {
-            len += libm::sqrtf(p.iter().zip(&prev).map(|(a, b)| (a - b) * (a - b)).sum());
-            prev = p;
-        };
-        match ch {
-            Chords::Arc(c) => c.for_each(&mut add),
-            Chords::Spline(c) => c.for_each(&mut add),
-            Chords::Legs { .. } => {}
-        }
-        if len <= 0.0 {
-            return Err(MachineError::InvalidNumber);
-        }
-        Ok(Speed::Feed(len / t))
-    }
-
-    fn feed_chords(&mut self, obs: &mut dyn FnMut(Note)) -> Result<(), MachineError> {
-        while !self.planner.is_full() {
-            let Pending::Chords { chords, speed, line } = &mut self.pending else { return Ok(()) };
-            let (speed, line) = (*speed, *line);
-            let (next, kind) = match chords {
-                Chords::Arc(c) => (c.next(), PathKind::Arc),
-                Chords::Spline(c) => (c.next(), PathKind::Spline),
-                Chords::Legs { pts, n, i } => {
-                    let p = if *i < *n { pts.get(*i).copied() } else { None };
-                    *i += 1;
-                    (p, PathKind::Rapid)
-                }
-            };
-            let Some(p) = next else {
-                self.pending = Pending::None;
-                return Ok(());
-            };
-            let pushed = self.planner.to_steps(&p).and_then(|t| {
-                if kind == PathKind::Rapid {
-                    self.planner.push_line(t, speed, Watch::default(), line)
-                } else {
-                    self.planner.push_chord(t, speed, line)
-                }
-            });
-            if let Err(e) = pushed {
-                self.pending = Pending::None;
-                return Err(e);
-            }
-            self.commanded = p;
-            obs(Note::Path { line, kind, end: p });
-        }
+        obs(Note::Path {
+            line,
+            kind,
+            end: *end,
+        });
         Ok(())
     }
 
@@ -406,7 +252,13 @@ impl<const N: usize> Machine<N> {
         rt.clear_trip();
     }
 
-    fn raise_alarm(&mut self, rt: &Realtime, e: MachineError, line: u32, obs: &mut dyn FnMut(Note)) {
+    fn raise_alarm(
+        &mut self,
+        rt: &Realtime,
+        e: MachineError,
+        line: u32,
+        obs: &mut dyn FnMut(Note),
+    ) {
         self.flush(rt);
         self.pending = Pending::None;
         self.alarm = Some(e);
@@ -416,7 +268,13 @@ impl<const N: usize> Machine<N> {
     /// Run the executor's background work: reset and trips, overrides,
     /// chords, synced commands, homing/probing, then fill the segment queue.
     /// `sw` are the switch pin levels as read now.
-    pub fn poll(&mut self, rt: &Realtime, sink: &mut impl SegmentSink, sw: Switches, obs: &mut dyn FnMut(Note)) {
+    pub fn poll(
+        &mut self,
+        rt: &Realtime,
+        sink: &mut impl SegmentSink,
+        sw: Switches,
+        obs: &mut dyn FnMut(Note),
+    ) {
         self.switches = sw;
         if rt.take_reset() {
             let moving = !self.motion_idle(rt, sink);
@@ -426,13 +284,17 @@ impl<const N: usize> Machine<N> {
             if moving {
                 self.position_lost = true;
                 self.alarm = Some(MachineError::ResetDuringMotion);
-                obs(Note::Error { line: 0, error: MachineError::ResetDuringMotion });
+                obs(Note::Error {
+                    line: 0,
+                    error: MachineError::ResetDuringMotion,
+                });
             }
         }
         let epoch = rt.override_epoch();
         if epoch != self.override_epoch {
             self.override_epoch = epoch;
-            self.planner.set_overrides(rt.feed_override(), rt.rapid_override());
+            self.planner
+                .set_overrides(rt.feed_override(), rt.rapid_override());
         }
         match rt.trip() {
             Trip::None => {}
@@ -447,7 +309,11 @@ impl<const N: usize> Machine<N> {
                 self.flush(rt);
                 if let Pending::ProbeRun { line, .. } = self.pending {
                     self.probe_result = Some((pos, true));
-                    obs(Note::Probed { line, position: pos, contact: true });
+                    obs(Note::Probed {
+                        line,
+                        position: pos,
+                        contact: true,
+                    });
                 }
                 self.pending = Pending::None;
             }
@@ -464,80 +330,11 @@ impl<const N: usize> Machine<N> {
                 obs(Note::Error { line: 0, error: e });
             }
         }
-        if !matches!(self.pending, Pending::None | Pending::Chords { .. }) && self.motion_idle(rt, sink) {
+        if !matches!(self.pending, Pending::None | Pending::Chords { .. })
+            && self.motion_idle(rt, sink)
+        {
             self.run_pending(rt, obs);
         }
         self.prep.fill(&mut self.planner, rt, sink);
-    }
-
-    fn run_pending(&mut self, rt: &Realtime, obs: &mut dyn FnMut(Note)) {
-        match core::mem::replace(&mut self.pending, Pending::None) {
-            Pending::None | Pending::Chords { .. } => {}
-            Pending::Sync { command, line } => {
-                if let Command::Pause { .. } = command {
-                    rt.feed_hold();
-                }
-                obs(Note::Executed { line, command: &command });
-            }
-            Pending::ProbeWait { end, speed, kind, line } => {
-                let contact = self.switches.probe ^ self.planner.settings.probe_invert;
-                let towards = matches!(kind, ProbeKind::Toward | ProbeKind::TowardNoError);
-                let must = matches!(kind, ProbeKind::Toward | ProbeKind::Away);
-                if contact == towards {
-                    if must {
-                        self.raise_alarm(rt, MachineError::ProbeInitialState, line, obs);
-                    }
-                    return;
-                }
-                let watch = Watch { limits: 0, probe: if towards { 1 } else { 2 }, homing: false };
-                match self.push_line(&end, speed, watch, line, PathKind::Probe, obs) {
-                    Ok(()) => self.pending = Pending::ProbeRun { kind, line },
-                    Err(e) => obs(Note::Error { line, error: e }),
-                }
-            }
-            Pending::ProbeRun { kind, line } => {
-                // The move ended without the probe tripping.
-                let pos = self.commanded;
-                self.probe_result = Some((pos, false));
-                obs(Note::Probed { line, position: pos, contact: false });
-                if matches!(kind, ProbeKind::Toward | ProbeKind::Away) {
-                    self.raise_alarm(rt, MachineError::ProbeNoContact, line, obs);
-                }
-            }
-            Pending::Homing(mut h) => {
-                let line = h.line();
-                let limits = self.switches.limits ^ self.planner.settings.limit_invert;
-                let pos = rt.position();
-                match h.step(&self.planner.settings, &pos, limits) {
-                    Ok(homing::Action::Move { target, rate, watch }) => {
-                        let end = self.steps_to_mm(&target);
-                        match self.push_line(&end, Speed::Feed(rate), watch, line, PathKind::Home, obs) {
-                            Ok(()) => self.pending = Pending::Homing(h),
-                            Err(e) => self.raise_alarm(rt, e, line, obs),
-                        }
-                    }
-                    Ok(homing::Action::Redefine { position }) => {
-                        rt.redefine_position(&position);
-                        self.planner.clear(position);
-                        self.commanded = self.steps_to_mm(&position);
-                        self.pending = Pending::Homing(h);
-                    }
-                    Ok(homing::Action::Done { axes, verified }) => {
-                        if !verified {
-                            self.homed |= axes;
-                            self.position_lost = false;
-                            self.alarm = None;
-                            obs(Note::Homed { axes });
-                        }
-                    }
-                    Err(e) => {
-                        if matches!(e, MachineError::VerifyHome { .. }) {
-                            self.position_lost = true;
-                        }
-                        self.raise_alarm(rt, e, line, obs);
-                    }
-                }
-            }
-        }
     }
 }

@@ -8,6 +8,7 @@
 //! appended later can change them. The backward pass stops as soon as an
 //! entry speed stops changing; the forward pass starts at `planned`.
 
+mod passes;
 pub mod ramp;
 
 use crate::command::Pos;
@@ -21,7 +22,9 @@ pub use ramp::{Phase, Profile, Shape};
 pub enum BlockKind {
     Line,
     /// G4: stand still this many timer ticks.
-    Dwell { ticks: u64 },
+    Dwell {
+        ticks: u64,
+    },
 }
 
 /// What stops a block early (homing switches, probe).
@@ -93,7 +96,11 @@ impl Block {
         junction: 0.0,
         max_entry: 0.0,
         entry: 0.0,
-        watch: Watch { limits: 0, probe: 0, homing: false },
+        watch: Watch {
+            limits: 0,
+            probe: 0,
+            homing: false,
+        },
         line: 0,
     };
 
@@ -102,7 +109,10 @@ impl Block {
             crate::settings::Profile::Trapezoid => 0.0,
             crate::settings::Profile::SCurve => s.jerk.max(1e-3),
         };
-        Shape { accel: self.accel, jerk }
+        Shape {
+            accel: self.accel,
+            jerk,
+        }
     }
 }
 
@@ -208,23 +218,46 @@ impl<const N: usize> Planner<N> {
 
     /// Queue a straight move to `target` steps. A zero-length move is dropped.
     /// The caller checks `is_full` first.
-    pub fn push_line(&mut self, target: [i32; AXES], speed: Speed, watch: Watch, line: u32) -> Result<(), MachineError> {
+    pub fn push_line(
+        &mut self,
+        target: [i32; AXES],
+        speed: Speed,
+        watch: Watch,
+        line: u32,
+    ) -> Result<(), MachineError> {
         self.push(target, speed, watch, line, false)
     }
 
     /// Queue one chord of an arc or spline. On a curve the axes feel the
     /// tangential and the centripetal acceleration at once, so each gets half
     /// of the acceleration budget: the sum stays within every axis limit.
-    pub fn push_chord(&mut self, target: [i32; AXES], speed: Speed, line: u32) -> Result<(), MachineError> {
+    pub fn push_chord(
+        &mut self,
+        target: [i32; AXES],
+        speed: Speed,
+        line: u32,
+    ) -> Result<(), MachineError> {
         self.push(target, speed, Watch::default(), line, true)
     }
 
-    fn push(&mut self, target: [i32; AXES], speed: Speed, watch: Watch, line: u32, curve: bool) -> Result<(), MachineError> {
+    fn push(
+        &mut self,
+        target: [i32; AXES],
+        speed: Speed,
+        watch: Watch,
+        line: u32,
+        curve: bool,
+    ) -> Result<(), MachineError> {
         if self.is_full() {
             return Err(MachineError::Busy);
         }
         let s = &self.settings;
-        let mut b = Block { target, watch, line, ..Block::EMPTY };
+        let mut b = Block {
+            target,
+            watch,
+            line,
+            ..Block::EMPTY
+        };
         let mut mm = [0.0f32; AXES];
         let mut len2 = 0.0;
         for i in 0..AXES {
@@ -299,7 +332,12 @@ impl<const N: usize> Planner<N> {
         if self.is_full() {
             return Err(MachineError::Busy);
         }
-        let b = Block { kind: BlockKind::Dwell { ticks }, target: self.position, line, ..Block::EMPTY };
+        let b = Block {
+            kind: BlockKind::Dwell { ticks },
+            target: self.position,
+            line,
+            ..Block::EMPTY
+        };
         let k = self.len;
         *self.at(k) = b;
         self.len += 1;
@@ -309,125 +347,16 @@ impl<const N: usize> Planner<N> {
     }
 
     fn nominal(&self, b: &Block) -> f32 {
-        let pct = if b.rapid { self.rapid_pct } else { self.feed_pct };
-        let v = if b.rapid { b.cap * pct } else { b.programmed * pct };
+        let pct = if b.rapid {
+            self.rapid_pct
+        } else {
+            self.feed_pct
+        };
+        let v = if b.rapid {
+            b.cap * pct
+        } else {
+            b.programmed * pct
+        };
         v.min(b.cap)
-    }
-
-    /// Cornering speed at the junction with the previous block.
-    ///
-    /// Junction deviation: round the corner by a circle tangent to both moves
-    /// whose closest approach to the corner is `δ`. With `c = sin(θ/2)` of the
-    /// corner's half angle (θ = π when straight), the circle's radius is
-    /// `R = δ·c/(1 − c)` and `v = sqrt(a·R)` keeps the centripetal
-    /// acceleration within `a`.
-    ///
-    /// Chords of a curve turn by a small angle φ every chord length `l`, so
-    /// the tool really follows a curve of radius about `l/φ`. Junction
-    /// deviation alone allows `a·δ/tol` there (5× the limit with GRBL's
-    /// defaults); the second limit `v² ≤ a·l/φ` keeps curves honest.
-    ///
-    /// `a` is the acceleration the axes allow along the direction change
-    /// (the difference of the two unit vectors), not along either move.
-    fn junction_speed(&self, unit: &[f32; AXES], length: f32, curve: bool) -> f32 {
-        if self.prev_nominal <= 0.0 {
-            return 0.0;
-        }
-        let cos = -unit.iter().zip(&self.prev_unit).map(|(a, b)| a * b).sum::<f32>();
-        if cos > 0.999_999 {
-            return 0.0;
-        }
-        if cos < -0.999_999 {
-            return f32::INFINITY;
-        }
-        let d: [f32; AXES] = core::array::from_fn(|i| unit[i] - self.prev_unit[i]);
-        let dn = libm::sqrtf(d.iter().map(|v| v * v).sum());
-        let mut a = f32::INFINITY;
-        for (di, ax) in d.iter().zip(&self.settings.axes) {
-            let c = libm::fabsf(*di) / dn;
-            if c > 1e-6 {
-                a = a.min(ax.max_accel / c);
-            }
-        }
-        let sin_half = libm::sqrtf(0.5 * (1.0 - cos));
-        let r = self.settings.junction_deviation * sin_half / (1.0 - sin_half);
-        let v_jd = libm::sqrtf(a * r);
-        let phi = libm::acosf((-cos).clamp(-1.0, 1.0)).max(1e-9);
-        let l = length.min(self.prev_length);
-        let a_curve = if curve { 0.5 * a } else { a };
-        let v_curve = libm::sqrtf(a_curve * l / phi);
-        v_jd.min(v_curve)
-    }
-
-    /// Apply new override percentages: every block's nominal speed and
-    /// junction limit change, so the whole ring is replanned.
-    pub fn set_overrides(&mut self, feed_pct: u8, rapid_pct: u8) {
-        self.feed_pct = feed_pct as f32 / 100.0;
-        self.rapid_pct = rapid_pct as f32 / 100.0;
-        let mut prev_nominal = None;
-        for k in 0..self.len {
-            let mut b = *self.at(k);
-            b.nominal = self.nominal(&b);
-            if b.kind == BlockKind::Line {
-                let pn = prev_nominal.unwrap_or(b.entry);
-                b.max_entry = b.junction.min(b.nominal).min(pn);
-                prev_nominal = Some(b.nominal);
-            } else {
-                prev_nominal = Some(0.0);
-            }
-            *self.at(k) = b;
-        }
-        if self.prev_nominal > 0.0 {
-            if let Some(p) = prev_nominal {
-                self.prev_nominal = p;
-            }
-        }
-        self.replan(true);
-    }
-
-    /// Backward then forward pass. `full` ignores the early stop.
-    pub fn replan(&mut self, full: bool) {
-        if self.len == 0 {
-            return;
-        }
-        if full {
-            self.planned = 0;
-        }
-        let shape_of = |b: &Block, s: &Settings| b.shape(s);
-        // Backward: the newest block must be able to stop at its end.
-        let mut next_entry = 0.0f32;
-        let mut k = self.len;
-        while k > self.planned + 1 {
-            k -= 1;
-            let st = self.settings;
-            let b = self.at(k);
-            let new = if b.kind == BlockKind::Line {
-                b.max_entry.min(shape_of(b, &st).reach(next_entry, b.length))
-            } else {
-                0.0
-            };
-            let unchanged = new == b.entry;
-            b.entry = new;
-            next_entry = new;
-            if unchanged && !full && k + 1 < self.len {
-                break;
-            }
-        }
-        // Forward: no block may be entered faster than the previous can reach.
-        for k in self.planned + 1..self.len {
-            let st = self.settings;
-            let prev = *self.at(k - 1);
-            let reach = match prev.kind {
-                BlockKind::Line => shape_of(&prev, &st).reach(prev.entry, prev.length),
-                BlockKind::Dwell { .. } => 0.0,
-            };
-            let b = self.at(k);
-            if reach <= b.entry {
-                b.entry = reach;
-                self.planned = k;
-            } else if b.entry >= b.max_entry {
-                self.planned = k;
-            }
-        }
     }
 }

@@ -112,7 +112,10 @@ impl Shape {
         // Last jerk phase, written backwards from the end (point symmetry).
         let w = total - tau;
         let d = 0.5 * (v0 + v1) * total;
-        (v1 - sg * j * w * w / 2.0, d - (v1 * w - sg * j * w * w * w / 6.0))
+        (
+            v1 - sg * j * w * w / 2.0,
+            d - (v1 * w - sg * j * w * w * w / 6.0),
+        )
     }
 }
 
@@ -138,17 +141,26 @@ impl Profile {
     pub fn plan(shape: &Shape, v0: f32, vn: f32, v1: f32, len: f32) -> Profile {
         let len = len.max(0.0);
         let vn = vn.max(1e-6);
-        let ramp = |a: f32, b: f32| Phase { v0: a, v1: b, time: shape.time(b - a), dist: shape.dist(a, b) };
+        let ramp = |a: f32, b: f32| Phase {
+            v0: a,
+            v1: b,
+            time: shape.time(b - a),
+            dist: shape.dist(a, b),
+        };
         let mut v1 = v1.min(vn);
         // Entry too fast to reach the exit speed: slow down as much as possible.
         if v0 > v1 && shape.dist(v0, v1) > len {
             v1 = shape.reach_down(v0, len);
-            return Profile { phases: [ramp(v0, v1), Phase::default(), Phase::default()] };
+            return Profile {
+                phases: [ramp(v0, v1), Phase::default(), Phase::default()],
+            };
         }
         // Entry too slow to reach the exit speed: speed up as much as possible.
         if v1 > v0 && shape.dist(v0, v1) > len {
             v1 = shape.reach(v0, len).min(v1);
-            return Profile { phases: [ramp(v0, v1), Phase::default(), Phase::default()] };
+            return Profile {
+                phases: [ramp(v0, v1), Phase::default(), Phase::default()],
+            };
         }
         let (up, down) = (shape.dist(v0, vn), shape.dist(vn, v1));
         let peak = if up + down <= len {
@@ -171,7 +183,12 @@ impl Profile {
         let a = ramp(v0, peak);
         let c = ramp(peak, v1);
         let cruise_len = (len - a.dist - c.dist).max(0.0);
-        let b = Phase { v0: peak, v1: peak, time: cruise_len / peak.max(1e-6), dist: cruise_len };
+        let b = Phase {
+            v0: peak,
+            v1: peak,
+            time: cruise_len / peak.max(1e-6),
+            dist: cruise_len,
+        };
         Profile { phases: [a, b, c] }
     }
 
@@ -180,6 +197,10 @@ impl Profile {
     }
 
     pub fn exit_speed(&self) -> f32 {
-        self.phases.iter().rev().find(|p| p.time > 0.0).map_or(self.phases[0].v1, |p| p.v1)
+        self.phases
+            .iter()
+            .rev()
+            .find(|p| p.time > 0.0)
+            .map_or(self.phases[0].v1, |p| p.v1)
     }
 }

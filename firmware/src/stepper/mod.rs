@@ -8,8 +8,24 @@
 //! A segment carries a copy of its block's Bresenham numbers, so the
 //! interrupt never reads memory the planner task writes: it only pops the
 //! queue's consumer end and reads [`Realtime`] atomics.
+//!
+//! Wiring (RTIC app and host-sim do the same):
+//! - one `static RT: Realtime`; the USB interrupt calls `feed_hold`,
+//!   `cycle_start`, `set_*_override`, `request_reset` on it;
+//! - `heapless::spsc::Queue<Segment, N>` split once: the parse/plan task owns
+//!   the `Producer` (it implements [`prep::SegmentSink`]) and calls
+//!   `Machine::poll` whenever the step interrupt took a segment or a command
+//!   arrived; the step interrupt owns the `Consumer` and the [`Stepper`]:
+//!   `stepper.on_event(&RT, &mut || consumer.dequeue(), switches)`, writes
+//!   `dir_pins`, then after the setup already folded into the event timing
+//!   raises `step_pins`, lowers them `pulse_ticks` later (compare channel),
+//!   and loads `ticks` into the auto-reload register;
+//! - `ticks == 0` means the stepper went idle: stop the timer. Whenever the
+//!   queue is not empty and the timer is stopped, the task starts it with an
+//!   immediate event (this also lets the stepper drop flushed segments).
 
 pub mod prep;
+pub mod sink;
 
 use crate::realtime::{Realtime, Trip};
 use crate::settings::Settings;
@@ -102,11 +118,26 @@ impl StepConfig {
     }
 }
 
+/// What the interrupt keeps of the running segment, pre-computed once per
+/// segment so an event is a handful of adds and compares.
+#[derive(Clone, Copy, Debug, Default)]
+struct Running {
+    /// Per-event Bresenham increments (steps << (MAX_AMASS - amass)).
+    inc: [u32; AXES],
+    threshold: u32,
+    period: u32,
+    watch: crate::planner::Watch,
+    generation: u32,
+    speed_mm_min: f32,
+    line: u32,
+}
+
 /// The interrupt half: Bresenham over the current segment.
 #[derive(Debug)]
 pub struct Stepper {
     pub cfg: StepConfig,
-    seg: Option<Segment>,
+    run: Running,
+    /// Events left in the running segment (0: none running).
     left: u32,
     acc: [u32; AXES],
     position: [i32; AXES],
@@ -119,7 +150,7 @@ impl Stepper {
     pub fn new(cfg: StepConfig) -> Self {
         Stepper {
             cfg,
-            seg: None,
+            run: Running::default(),
             left: 0,
             acc: [0; AXES],
             position: [0; AXES],
@@ -142,11 +173,11 @@ impl Stepper {
     }
     /// Speed of the running segment, mm/min (0 when idle).
     pub fn speed_mm_min(&self) -> f32 {
-        self.seg.map_or(0.0, |s| s.speed_mm_min)
+        self.run.speed_mm_min
     }
     /// Source line of the running segment.
     pub fn line(&self) -> u32 {
-        self.seg.map_or(0, |s| s.line)
+        self.run.line
     }
     pub fn is_idle(&self) -> bool {
         self.left == 0
@@ -168,7 +199,7 @@ impl Stepper {
         }
         self.last_end = true;
         self.left = 0;
-        self.seg = None;
+        self.run.speed_mm_min = 0.0;
         rt.set_stepper_idle(true);
         self.event(0, 0)
     }
@@ -179,9 +210,43 @@ impl Stepper {
         self.idle(rt)
     }
 
+    /// Take a popped segment; returns a direction-change event if the
+    /// direction pins must settle before its first step.
+    fn load(&mut self, rt: &Realtime, s: &Segment) -> Option<StepEvent> {
+        if let Some(p) = rt.take_new_position() {
+            self.position = p;
+        }
+        rt.set_stepper_idle(false);
+        self.left = s.events;
+        self.last_end = s.end_of_motion;
+        let shift = MAX_AMASS.saturating_sub(s.amass);
+        self.run = Running {
+            inc: s.steps.map(|n| n << shift),
+            threshold: s.count << MAX_AMASS,
+            period: s.period,
+            watch: s.watch,
+            generation: s.generation,
+            speed_mm_min: s.speed_mm_min,
+            line: s.line,
+        };
+        if s.new_block {
+            self.acc = [self.run.threshold / 2; AXES];
+            if s.dir_mask != self.dir {
+                self.dir = s.dir_mask;
+                return Some(self.event(0, self.cfg.dir_setup_ticks));
+            }
+        }
+        None
+    }
+
     /// One timer event. `pop` takes the next segment from the queue;
     /// `sw` are the switch pin levels as read now.
-    pub fn on_event(&mut self, rt: &Realtime, pop: &mut impl FnMut() -> Option<Segment>, sw: Switches) -> StepEvent {
+    pub fn on_event(
+        &mut self,
+        rt: &Realtime,
+        pop: &mut impl FnMut() -> Option<Segment>,
+        sw: Switches,
+    ) -> StepEvent {
         let generation = rt.generation();
         if let Some(g) = self.halted {
             if g == generation {
@@ -190,7 +255,7 @@ impl Stepper {
             self.halted = None;
         }
         // A flush (reset, alarm) stops the running segment at once, not at its end.
-        if self.left > 0 && self.seg.is_some_and(|s| s.generation != generation) {
+        if self.left > 0 && self.run.generation != generation {
             self.left = 0;
             self.last_end = true;
         }
@@ -201,42 +266,30 @@ impl Stepper {
             if s.generation != generation {
                 continue;
             }
-            if let Some(p) = rt.take_new_position() {
-                self.position = p;
-            }
-            rt.set_stepper_idle(false);
-            self.left = s.events;
-            self.last_end = s.end_of_motion;
-            let new_block = s.new_block;
-            self.seg = Some(s);
-            if new_block {
-                let threshold = s.count << MAX_AMASS;
-                self.acc = [threshold / 2; AXES];
-                if s.dir_mask != self.dir {
-                    self.dir = s.dir_mask;
-                    return self.event(0, self.cfg.dir_setup_ticks);
-                }
+            if let Some(ev) = self.load(rt, &s) {
+                return ev;
             }
         }
-        let Some(seg) = self.seg else {
-            return self.idle(rt);
-        };
+        let watch = self.run.watch;
         let lim = sw.limits ^ self.cfg.limit_invert;
-        let probe = sw.probe ^ self.cfg.probe_invert;
-        if seg.watch.limits & lim != 0 {
-            return self.trip(rt, Trip::Homing, seg.watch.limits & lim, generation);
+        if lim != 0 {
+            if watch.limits & lim != 0 {
+                return self.trip(rt, Trip::Homing, watch.limits & lim, generation);
+            }
+            if self.cfg.hard_limits && !watch.homing {
+                return self.trip(rt, Trip::HardLimit, lim, generation);
+            }
         }
-        if (seg.watch.probe == 1 && probe) || (seg.watch.probe == 2 && !probe) {
-            return self.trip(rt, Trip::Probe, 0, generation);
+        if watch.probe != 0 {
+            let probe = sw.probe ^ self.cfg.probe_invert;
+            if (watch.probe == 1 && probe) || (watch.probe == 2 && !probe) {
+                return self.trip(rt, Trip::Probe, 0, generation);
+            }
         }
-        if self.cfg.hard_limits && !seg.watch.homing && lim != 0 {
-            return self.trip(rt, Trip::HardLimit, lim, generation);
-        }
-        let threshold = seg.count << MAX_AMASS;
-        let shift = MAX_AMASS.saturating_sub(seg.amass);
+        let threshold = self.run.threshold;
         let mut mask = 0u8;
         for i in 0..AXES {
-            self.acc[i] += seg.steps[i] << shift;
+            self.acc[i] += self.run.inc[i];
             if self.acc[i] >= threshold {
                 self.acc[i] -= threshold;
                 mask |= 1 << i;
@@ -245,6 +298,6 @@ impl Stepper {
             }
         }
         self.left -= 1;
-        self.event(mask, seg.period)
+        self.event(mask, self.run.period)
     }
 }

@@ -18,37 +18,7 @@ pub const AMASS_FINE_HZ: f32 = 16_000.0;
 /// Longest event period of a dwell segment, seconds.
 const DWELL_CHUNK_S: f32 = 0.01;
 
-/// Where a segment queue's producer end lives: the spsc producer on the
-/// MCU, a plain queue in host-sim.
-pub trait SegmentSink {
-    fn push(&mut self, s: Segment) -> Result<(), Segment>;
-    fn is_full(&self) -> bool;
-    fn is_empty(&self) -> bool;
-}
-
-impl SegmentSink for heapless::spsc::Producer<'_, Segment> {
-    fn push(&mut self, s: Segment) -> Result<(), Segment> {
-        self.enqueue(s)
-    }
-    fn is_full(&self) -> bool {
-        !self.ready()
-    }
-    fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-}
-
-impl<const N: usize> SegmentSink for heapless::spsc::Queue<Segment, N> {
-    fn push(&mut self, s: Segment) -> Result<(), Segment> {
-        self.enqueue(s)
-    }
-    fn is_full(&self) -> bool {
-        heapless::spsc::Queue::is_full(self)
-    }
-    fn is_empty(&self) -> bool {
-        heapless::spsc::Queue::is_empty(self)
-    }
-}
+pub use super::sink::SegmentSink;
 
 /// Feed hold progress.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -141,7 +111,12 @@ impl Preparer {
     }
 
     /// Push segments until the queue is full or there is nothing to prepare.
-    pub fn fill<const N: usize>(&mut self, pl: &mut Planner<N>, rt: &Realtime, sink: &mut impl SegmentSink) {
+    pub fn fill<const N: usize>(
+        &mut self,
+        pl: &mut Planner<N>,
+        rt: &Realtime,
+        sink: &mut impl SegmentSink,
+    ) {
         while !sink.is_full() {
             match self.next_segment(pl, rt) {
                 Some(seg) => {
@@ -155,7 +130,13 @@ impl Preparer {
     }
 
     fn shape(&self) -> Shape {
-        self.block.map_or(Shape { accel: 1.0, jerk: 0.0 }, |b| b.shape(&self.settings))
+        self.block.map_or(
+            Shape {
+                accel: 1.0,
+                jerk: 0.0,
+            },
+            |b| b.shape(&self.settings),
+        )
     }
 
     fn exit_target<const N: usize>(pl: &Planner<N>) -> f32 {
@@ -175,7 +156,13 @@ impl Preparer {
     fn replan<const N: usize>(&mut self, pl: &Planner<N>) {
         let Some(b) = self.block else { return };
         let exit = Self::exit_target(pl);
-        let p = Profile::plan(&self.shape(), self.v, b.nominal, exit, b.length - self.s_done);
+        let p = Profile::plan(
+            &self.shape(),
+            self.v,
+            b.nominal,
+            exit,
+            b.length - self.s_done,
+        );
         self.profile_exit = exit;
         self.profile_nominal = b.nominal;
         self.set_profile(p);
@@ -183,9 +170,16 @@ impl Preparer {
 
     fn plan_hold(&mut self) {
         let sh = self.shape();
-        let ramp = Phase { v0: self.v, v1: 0.0, time: sh.time(self.v), dist: sh.dist(self.v, 0.0) };
+        let ramp = Phase {
+            v0: self.v,
+            v1: 0.0,
+            time: sh.time(self.v),
+            dist: sh.dist(self.v, 0.0),
+        };
         let zero = Phase::default();
-        self.set_profile(Profile { phases: [ramp, zero, zero] });
+        self.set_profile(Profile {
+            phases: [ramp, zero, zero],
+        });
     }
 
     /// An S-curve profile may only be replaced where acceleration is zero.
@@ -193,7 +187,11 @@ impl Preparer {
         self.settings.profile == crate::settings::Profile::Trapezoid
             || self.tau == 0.0
             || self.phase >= 3
-            || self.profile.phases.get(self.phase).is_some_and(|p| p.v0 == p.v1)
+            || self
+                .profile
+                .phases
+                .get(self.phase)
+                .is_some_and(|p| p.v0 == p.v1)
     }
 
     /// Walk the profile for `dt` seconds; returns the time actually walked
@@ -233,7 +231,9 @@ impl Preparer {
     }
 
     fn start_block<const N: usize>(&mut self, pl: &Planner<N>) -> bool {
-        let Some(b) = pl.block(0).copied() else { return false };
+        let Some(b) = pl.block(0).copied() else {
+            return false;
+        };
         self.block = Some(b);
         self.last_line = b.line;
         self.active = true;
@@ -264,7 +264,11 @@ impl Preparer {
         self.block = None;
     }
 
-    fn next_segment<const N: usize>(&mut self, pl: &mut Planner<N>, rt: &Realtime) -> Option<Segment> {
+    fn next_segment<const N: usize>(
+        &mut self,
+        pl: &mut Planner<N>,
+        rt: &Realtime,
+    ) -> Option<Segment> {
         if rt.hold_requested() && self.hold == Hold::Running {
             // `v` carries across block boundaries: between two blocks the
             // tool is still moving and the hold ramp starts in the next one.
@@ -301,7 +305,8 @@ impl Preparer {
             }
             if self.hold == Hold::Running {
                 let exit = Self::exit_target(pl);
-                let changed = exit != self.profile_exit || b.nominal != pl.block(0).map_or(b.nominal, |c| c.nominal);
+                let changed = exit != self.profile_exit
+                    || b.nominal != pl.block(0).map_or(b.nominal, |c| c.nominal);
                 if changed && self.can_replan() {
                     if let Some(c) = pl.block(0) {
                         self.block = Some(*c);
@@ -343,13 +348,18 @@ impl Preparer {
         })
     }
 
-    fn motion_segment<const N: usize>(&mut self, pl: &mut Planner<N>, rt: &Realtime) -> Option<Segment> {
+    fn motion_segment<const N: usize>(
+        &mut self,
+        pl: &mut Planner<N>,
+        rt: &Realtime,
+    ) -> Option<Segment> {
         let b = self.block?;
         let mut time = 0.0f32;
         let (target, block_end, stopped) = loop {
             let (dt, ended) = self.advance(SEGMENT_S);
             time += dt;
-            let block_end = self.s_done >= b.length - 1e-6 || (ended && self.hold != Hold::Decelerating);
+            let block_end =
+                self.s_done >= b.length - 1e-6 || (ended && self.hold != Hold::Decelerating);
             let hold_done = ended && self.hold == Hold::Decelerating && !block_end;
             let target = if block_end {
                 b.count
@@ -363,7 +373,11 @@ impl Preparer {
         };
         let n = target.saturating_sub(self.steps_done);
         self.steps_done = target;
-        let s_steps = if block_end { b.count as f32 } else { self.s_done / b.length * b.count as f32 };
+        let s_steps = if block_end {
+            b.count as f32
+        } else {
+            self.s_done / b.length * b.count as f32
+        };
         // Past the last known line the profile stops (exit speed 0), even if
         // the last segment ends a hair before the ramp's end.
         let next_line = matches!(pl.block(1), Some(n) if n.kind == BlockKind::Line);
@@ -409,8 +423,16 @@ impl Preparer {
         // 2 ms segment at 3.4 steps would run 3 or 4 steps at 3/4.
         let covered = (s_steps - self.frac_prev).max(1e-3);
         self.frac_prev = s_steps;
-        let rate = if time > 0.0 { covered / time } else { self.v / b.length * b.count as f32 };
-        let dominant = if rate > 0.0 { self.cfg.tick_hz as f32 / rate } else { f32::MAX };
+        let rate = if time > 0.0 {
+            covered / time
+        } else {
+            self.v / b.length * b.count as f32
+        };
+        let dominant = if rate > 0.0 {
+            self.cfg.tick_hz as f32 / rate
+        } else {
+            f32::MAX
+        };
         let mut amass = 0u8;
         if minor {
             let fine_min = self.cfg.tick_hz as f32 / AMASS_FINE_HZ;

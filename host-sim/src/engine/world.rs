@@ -35,18 +35,27 @@ impl World {
     pub fn new(cfg: &MachineConfig) -> Self {
         let s = &cfg.settings;
         let spm = |i: usize| s.axes[i].steps_per_mm as f64;
-        let steps = std::array::from_fn(|i| (cfg.start_position_mm[i] as f64 * spm(i)).round() as i64);
+        let steps =
+            std::array::from_fn(|i| (cfg.start_position_mm[i] as f64 * spm(i)).round() as i64);
         let limits = std::array::from_fn(|i| {
             cfg.limits[i].map(|l| Limit {
                 trip: (l.trip_mm as f64 * spm(i)).round() as i64,
                 hysteresis: (l.hysteresis_mm.max(0.0) as f64 * spm(i)).round() as i64,
-                sense: if s.homing_dir_invert & (1 << i) != 0 { -1 } else { 1 },
+                sense: if s.homing_dir_invert & (1 << i) != 0 {
+                    -1
+                } else {
+                    1
+                },
                 closed: false,
             })
         });
         let probe = cfg.probe.filter(|p| p.axis < AXES).map(|p| {
             let sense = if p.towards_negative { -1 } else { 1 };
-            (p.axis, (p.trip_mm as f64 * spm(p.axis)).round() as i64, sense)
+            (
+                p.axis,
+                (p.trip_mm as f64 * spm(p.axis)).round() as i64,
+                sense,
+            )
         });
         let mut watched = 0u8;
         for (i, l) in limits.iter().enumerate() {
@@ -104,7 +113,12 @@ impl World {
                 }
             }
         }
-        let contact = self.probe.is_some_and(|(a, trip, sense)| self.steps[a] * sense >= trip * sense);
-        self.pins = Switches { limits: limits ^ self.limit_invert, probe: contact ^ self.probe_invert };
+        let contact = self
+            .probe
+            .is_some_and(|(a, trip, sense)| self.steps[a] * sense >= trip * sense);
+        self.pins = Switches {
+            limits: limits ^ self.limit_invert,
+            probe: contact ^ self.probe_invert,
+        };
     }
 }

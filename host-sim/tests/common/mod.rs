@@ -22,10 +22,17 @@ pub fn config() -> MachineConfig {
 /// A machine with switches at 0 (homing towards positive) and a probe plate
 /// at Z = -20 mm.
 pub fn config_with_switches() -> MachineConfig {
-    let sw = Some(LimitSwitch { trip_mm: 0.0, hysteresis_mm: 0.05 });
+    let sw = Some(LimitSwitch {
+        trip_mm: 0.0,
+        hysteresis_mm: 0.05,
+    });
     let mut c = config();
     c.limits = [sw, sw, sw, None];
-    c.probe = Some(ProbeSurface { axis: 2, trip_mm: -20.0, towards_negative: true });
+    c.probe = Some(ProbeSurface {
+        axis: 2,
+        trip_mm: -20.0,
+        towards_negative: true,
+    });
     c.settings.homing_enable = true;
     c
 }
@@ -105,7 +112,12 @@ pub fn check_max_rate(info: &RunInfo, events: &[PinEvent]) -> f64 {
             let rate = RATE_WINDOW as f64 / dt;
             let ratio = rate / max_sps;
             worst = worst.max(ratio);
-            assert!(ratio <= tol, "axis {i} at {:.1} steps/s, max {max_sps:.1} (tick {})", rate, w[0].0);
+            assert!(
+                ratio <= tol,
+                "axis {i} at {:.1} steps/s, max {max_sps:.1} (tick {})",
+                rate,
+                w[0].0
+            );
         }
     }
     worst
@@ -168,14 +180,21 @@ pub fn check_max_accel(info: &RunInfo, events: &[PinEvent], corners: &[u64], jd_
             }
             let a = (v1 - v0).abs() / (t1 - t0);
             let v = v0.abs().max(v1.abs());
-            let mut tol = a_max * (1.0 + 0.002 / ACCEL_BIN_S) + 4.0 * v * 125e-6 / (ACCEL_BIN_S * ACCEL_BIN_S);
-            let (lo, hi) = (((t0 - ACCEL_BIN_S) * hz) as u64, ((t1 + ACCEL_BIN_S) * hz) as u64);
+            let mut tol = a_max * (1.0 + 0.002 / ACCEL_BIN_S)
+                + 4.0 * v * 125e-6 / (ACCEL_BIN_S * ACCEL_BIN_S);
+            let (lo, hi) = (
+                ((t0 - ACCEL_BIN_S) * hz) as u64,
+                ((t1 + ACCEL_BIN_S) * hz) as u64,
+            );
             let i0 = corners.partition_point(|&c| c < lo);
             if corners.get(i0).is_some_and(|&c| c <= hi) {
                 tol += (8.0 * a_max * jd_mm).sqrt() / ACCEL_BIN_S;
             }
             worst = worst.max(a / a_max);
-            assert!(a <= tol, "axis {i} accel {a:.1} mm/s² > {tol:.1} at t={t0:.4}s (v {v0:.2} -> {v1:.2})");
+            assert!(
+                a <= tol,
+                "axis {i} accel {a:.1} mm/s² > {tol:.1} at t={t0:.4}s (v {v0:.2} -> {v1:.2})"
+            );
         }
     }
     worst
@@ -192,10 +211,21 @@ pub fn check_pin_timing(info: &RunInfo, events: &[PinEvent]) {
             }
             let d = e.dir_mask >> i & 1;
             if let Some(t) = last_step[i] {
-                assert!(e.tick - t > u64::from(info.pulse_ticks), "axis {i}: pulses {t} and {} overlap", e.tick);
+                assert!(
+                    e.tick - t > u64::from(info.pulse_ticks),
+                    "axis {i}: pulses {t} and {} overlap",
+                    e.tick
+                );
                 if d != last_dir[i] {
-                    assert!(e.dir_changed_tick > t, "axis {i}: direction flipped without a recorded change");
-                    assert!(e.dir_changed_tick >= t + u64::from(info.pulse_ticks), "dir changed during a pulse at {}", e.tick);
+                    assert!(
+                        e.dir_changed_tick > t,
+                        "axis {i}: direction flipped without a recorded change"
+                    );
+                    assert!(
+                        e.dir_changed_tick >= t + u64::from(info.pulse_ticks),
+                        "dir changed during a pulse at {}",
+                        e.tick
+                    );
                 }
             }
             // This axis's direction pin changed before this step (pins start
@@ -206,7 +236,11 @@ pub fn check_pin_timing(info: &RunInfo, events: &[PinEvent]) {
             };
             if changed {
                 let setup = e.tick.saturating_sub(e.dir_changed_tick);
-                assert!(setup >= u64::from(info.dir_setup_ticks), "axis {i}: direction set {setup} ticks before the step at {}", e.tick);
+                assert!(
+                    setup >= u64::from(info.dir_setup_ticks),
+                    "axis {i}: direction set {setup} ticks before the step at {}",
+                    e.tick
+                );
             }
             last_step[i] = Some(e.tick);
             last_dir[i] = d;
@@ -218,12 +252,23 @@ pub fn check_pin_timing(info: &RunInfo, events: &[PinEvent]) {
 /// of the commanded polyline. Returns the worst distance in mm.
 /// Also returns the ticks at which the stepped path passes a corner of the
 /// commanded path (any vertex that is not inside one arc or spline).
-pub fn check_path(info: &RunInfo, start: [f32; AXES], path: &[(u32, MoveKind, [f32; AXES])], events: &[PinEvent], extra_mm: f64) -> (f64, Vec<u64>) {
+pub fn check_path(
+    info: &RunInfo,
+    start: [f32; AXES],
+    path: &[(u32, MoveKind, [f32; AXES])],
+    events: &[PinEvent],
+    extra_mm: f64,
+) -> (f64, Vec<u64>) {
     let spm: Vec<f64> = info.axes.iter().map(|a| a.steps_per_mm as f64).collect();
     // One step on every axis that moves in this trace.
     let moved = events.iter().fold(0u8, |m, e| m | e.step_mask);
-    let step_diag: f64 =
-        spm.iter().enumerate().filter(|(i, _)| moved & (1 << i) != 0).map(|(_, s)| 1.0 / (s * s)).sum::<f64>().sqrt();
+    let step_diag: f64 = spm
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| moved & (1 << i) != 0)
+        .map(|(_, s)| 1.0 / (s * s))
+        .sum::<f64>()
+        .sqrt();
     let mut verts: Vec<[f64; AXES]> = vec![start.map(|v| v as f64)];
     verts.extend(path.iter().map(|p| p.2.map(|v| v as f64)));
     let mut seg = 0usize;
@@ -247,8 +292,15 @@ pub fn check_path(info: &RunInfo, start: [f32; AXES], path: &[(u32, MoveKind, [f
             ap[i] = p[i] - a[i];
         }
         let l2: f64 = ab.iter().map(|v| v * v).sum();
-        let t = if l2 > 0.0 { (ap.iter().zip(&ab).map(|(x, y)| x * y).sum::<f64>() / l2).clamp(0.0, 1.0) } else { 0.0 };
-        (0..AXES).map(|i| (ap[i] - t * ab[i]).powi(2)).sum::<f64>().sqrt()
+        let t = if l2 > 0.0 {
+            (ap.iter().zip(&ab).map(|(x, y)| x * y).sum::<f64>() / l2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        (0..AXES)
+            .map(|i| (ap[i] - t * ab[i]).powi(2))
+            .sum::<f64>()
+            .sqrt()
     };
     for e in events {
         let p: [f64; AXES] = std::array::from_fn(|i| e.pos[i] as f64 / spm[i]);
@@ -278,7 +330,11 @@ pub fn check_path(info: &RunInfo, start: [f32; AXES], path: &[(u32, MoveKind, [f
             }
             seg = best_seg;
             worst = worst.max(best);
-            assert!(best <= step_diag + extra_mm + 1e-6, "stepped point {p:?} is {best:.5} mm off the path (tick {})", e.tick);
+            assert!(
+                best <= step_diag + extra_mm + 1e-6,
+                "stepped point {p:?} is {best:.5} mm off the path (tick {})",
+                e.tick
+            );
         }
     }
     (worst, corners)

@@ -206,7 +206,9 @@ fn plan_block(clock: &mut Clock) -> f32 {
         }
     };
     // Fill the ring and run it to steady state (start point first).
-    let _ = planner.to_steps(&point(0)).map(|t| planner.push_line(t, Speed::Rapid, Watch::default(), 0));
+    let _ = planner
+        .to_steps(&point(0))
+        .map(|t| planner.push_line(t, Speed::Rapid, Watch::default(), 0));
     for _ in 0..2 * PLANNER_BLOCKS {
         push(&mut planner, &mut k);
     }
@@ -232,11 +234,18 @@ fn plan_block(clock: &mut Clock) -> f32 {
     per
 }
 
+/// Ends QEMU with a status; `debug::exit` only returns without a debugger.
+pub fn exit(ok: bool) -> ! {
+    debug::exit(if ok { debug::EXIT_SUCCESS } else { debug::EXIT_FAILURE });
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
 pub fn run() -> ! {
     let Some(cp) = cortex_m::Peripherals::take() else {
         hprintln!("# core peripherals already taken");
-        debug::exit(debug::EXIT_FAILURE);
-        loop {}
+        exit(false)
     };
     let mut clock = Clock::new(cp.SYST);
     hprintln!(
@@ -262,6 +271,5 @@ pub fn run() -> ! {
         CPI,
         ISR_ENTRY_EXIT
     );
-    debug::exit(debug::EXIT_SUCCESS);
-    loop {}
+    exit(true)
 }

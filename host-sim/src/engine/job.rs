@@ -1,0 +1,58 @@
+//! `run_job`: G-code text through the firmware's interpreter into a [`Sim`].
+
+use burin::interp::Interpreter;
+
+use super::Sim;
+use crate::config::MachineConfig;
+use crate::record::{Recorder, RunError, Summary};
+
+/// Simulate a G-code job from source text.
+pub fn run_job(config: &MachineConfig, source: &str, recorder: &mut dyn Recorder) -> Summary {
+    let mut sim = Sim::new(config, recorder);
+    let mut interp = Interpreter::new();
+    interp.set_machine_position(sim.machine.commanded_position());
+    let mut lines = 0u32;
+    let mut gcode_errors = Vec::new();
+    for (i, text) in source.lines().enumerate() {
+        let line_no = i as u32 + 1;
+        lines = line_no;
+        let mut cmds = Vec::new();
+        match interp.execute_line(text.as_bytes(), &mut |c| cmds.push(c)) {
+            Ok(()) => {}
+            Err(e) => {
+                gcode_errors.push(RunError {
+                    line: line_no,
+                    code: e.kind.code(),
+                    message: e.to_string(),
+                });
+                continue;
+            }
+        }
+        for c in cmds {
+            sim.push_command(line_no, c);
+        }
+        if interp.needs_sync() {
+            // Homing and probing end where only the machine knows: run to idle.
+            sim.run();
+            let _ = sim.take_barrier();
+            match sim.stats.probe.take() {
+                Some((pos, contact)) => interp.probe_finished(pos, contact),
+                None => interp.set_machine_position(sim.machine.commanded_position()),
+            }
+        }
+        if sim.machine.alarm().is_some() {
+            sim.run();
+            break;
+        }
+    }
+    sim.run();
+    let mut summary = sim.summary(lines, interp.wco());
+    let mut errors = gcode_errors;
+    errors.append(&mut summary.errors);
+    errors.sort_by_key(|e| e.line);
+    summary.errors = errors;
+    // A recorder's I/O error cannot be reported through the Summary; callers
+    // that care use `Sim` and `finish` directly.
+    let _ = sim.finish(&summary);
+    summary
+}
