@@ -54,7 +54,10 @@ impl Pty {
         let flags = OFlag::from_bits_truncate(flags) | OFlag::O_NONBLOCK;
         fcntl(p.master.as_fd(), FcntlArg::F_SETFL(flags)).map_err(io::Error::from)?;
         drop(p.slave);
-        Ok(Pty { master: File::from(p.master), path })
+        Ok(Pty {
+            master: File::from(p.master),
+            path,
+        })
     }
 
     /// The device path clients open.
@@ -103,7 +106,11 @@ pub fn run(cfg: &MachineConfig, speed: f64, announce: impl FnOnce(&str)) -> io::
     let mut dev = VirtualDevice::new(cfg, &mut rec);
     // The power-up banner is for a client that is there; see the module docs.
     let _ = dev.take_output();
-    let speed = if speed.is_finite() && speed > 0.0 { speed } else { 1.0 };
+    let speed = if speed.is_finite() && speed > 0.0 {
+        speed
+    } else {
+        1.0
+    };
     let hz = f64::from(cfg.tick_hz);
     let chunk = ((CHUNK_S * hz) as u64).max(1);
     let mut connected = false;

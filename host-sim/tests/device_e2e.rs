@@ -10,7 +10,7 @@ use host_sim::record::Discard;
 use protocol::client::grbl::{GrblClient, Pacing, TextEvent};
 use protocol::client::mem::MemPipe;
 use protocol::client::{Client, ClientEvent};
-use protocol::DeviceMsg;
+use protocol::{DeviceMsg, Rt};
 use std::io::{Read, Write};
 
 const DEMO: &str = include_str!("../jobs/demo.gcode");
@@ -39,7 +39,11 @@ fn round(dev: &mut VirtualDevice, pipe: &mut MemPipe, pending: &mut Vec<u8>, ste
 
 fn expected_steps(cfg: &MachineConfig, job: &str) -> [i64; 4] {
     let s = run_job(cfg, job, &mut Discard);
-    assert!(s.errors.is_empty(), "reference run has errors: {:?}", s.errors);
+    assert!(
+        s.errors.is_empty(),
+        "reference run has errors: {:?}",
+        s.errors
+    );
     s.final_position_steps
 }
 
@@ -74,6 +78,21 @@ fn stream_framed(cfg: &MachineConfig, lines: &[&str], cut: Option<usize>) -> (Ve
             dpipe = d2;
             pending.clear();
             client.reconnect(host).expect("reconnect");
+            // A framed job that loses its port is held until told to go on.
+            let mut held = false;
+            for _ in 0..50 {
+                round(&mut dev, &mut dpipe, &mut pending, step);
+                held |= dev.sim.machine.state(&dev.sim.rt) == burin::machine::State::Hold;
+            }
+            let mut told = false;
+            while let Some(ev) = client.poll().expect("poll") {
+                told |= matches!(&ev, ClientEvent::Device(DeviceMsg::Msg(m)) if m.contains("Link lost"));
+            }
+            assert!(
+                held && told,
+                "no hold/report after the disconnect (held {held}, told {told})"
+            );
+            client.realtime(Rt::CycleStart).expect("resume");
         }
         round(&mut dev, &mut dpipe, &mut pending, step);
         while let Some(ev) = client.poll().expect("poll") {
@@ -103,7 +122,10 @@ fn framed_demo_ends_where_run_job_ends() {
     let (log, pos) = stream_framed(&cfg, &lines_of(DEMO), None);
     assert_eq!(pos.map(i64::from), want);
     assert!(!log.is_empty());
-    assert!(log.windows(2).all(|w| w[0] <= w[1]), "commands out of order");
+    assert!(
+        log.windows(2).all(|w| w[0] <= w[1]),
+        "commands out of order"
+    );
 }
 
 /// A job where every line is exactly one move, so the log must be 1..=n.

@@ -147,30 +147,161 @@ fn expect(
     }
 }
 
-/// The end-to-end test: boot the app, send bytes to USART1, expect them back.
+/// A short job and where it must end (machine mm, X Y Z).
+const JOB: [&str; 4] = [
+    "G21 G90 G94",
+    "G1 X10 Y5 F3000",
+    "G1 X12.5 Y-2 Z1",
+    "G0 X3 Y4 Z0",
+];
+const JOB_END: [f64; 3] = [3.0, 4.0, 0.0];
+
+/// The end-to-end test: boot the app and talk to it over USART1. While the
+/// app's parse task still echoes, the echo is checked; once it runs the
+/// device session (a `$I` gets `[VER:`), a job is streamed GRBL-style and
+/// the final position in the status report is checked.
 pub fn run() -> Result<i32> {
     let elf = build_bin("burin-fw", &["board-qemu"])?;
     ensure_installed()?;
     let (mut guard, rx) = spawn(command(&elf))?;
     let mut stdin = guard.0.stdin.take().context("QEMU stdin")?;
     let mut seen = Vec::new();
-    let probes: [&[u8]; 2] = [b"burin echo 1\n", b"G1 X10.5 Y-3.25 F1200\n"];
-    for probe in probes {
-        stdin.write_all(probe)?;
-        stdin.flush()?;
-        if !expect(&rx, &mut seen, probe, Duration::from_secs(10)) {
+    stdin.write_all(b"$I\n")?;
+    stdin.flush()?;
+    let end = Instant::now() + Duration::from_secs(10);
+    let echo = loop {
+        if contains(&seen, b"[VER:") {
+            break false;
+        }
+        if contains(&seen, b"$I\n") {
+            break true;
+        }
+        let left = end.saturating_duration_since(Instant::now());
+        if left.is_zero() {
             bail!(
-                "no echo of {:?} from the app within 10 s; USART1 said {:?}",
-                String::from_utf8_lossy(probe),
+                "no reply to `$I` within 10 s; USART1 said {:?}",
                 String::from_utf8_lossy(&seen)
             );
         }
-        println!("echo ok: {:?}", String::from_utf8_lossy(probe).trim_end());
+        if let Ok(chunk) = rx.recv_timeout(left) {
+            seen.extend(chunk);
+        }
+    };
+    if echo {
+        echo_test(&mut stdin, &rx, &mut seen)?;
+        println!("qemu: the RTIC app booted on {MACHINE} and echoed over USART1 (parse task not yet wired to the device)");
+    } else {
+        job_test(&mut stdin, &rx, &mut seen)?;
+        println!("qemu: the RTIC app ran a job on {MACHINE} over USART1 and ended at {JOB_END:?}");
     }
     if let Some(status) = guard.0.try_wait()? {
         bail!("{QEMU} exited by itself ({status})");
     }
     drop(guard);
-    println!("qemu: the RTIC app booted on {MACHINE} and echoed over USART1; QEMU stopped");
+    println!("qemu: QEMU stopped");
     Ok(0)
+}
+
+fn contains(hay: &[u8], needle: &[u8]) -> bool {
+    hay.windows(needle.len()).any(|w| w == needle)
+}
+
+fn echo_test(
+    stdin: &mut impl Write,
+    rx: &mpsc::Receiver<Vec<u8>>,
+    seen: &mut Vec<u8>,
+) -> Result<()> {
+    let probes: [&[u8]; 2] = [b"burin echo 1\n", b"G1 X10.5 Y-3.25 F1200\n"];
+    for probe in probes {
+        stdin.write_all(probe)?;
+        stdin.flush()?;
+        if !expect(rx, seen, probe, Duration::from_secs(10)) {
+            bail!(
+                "no echo of {:?} from the app within 10 s; USART1 said {:?}",
+                String::from_utf8_lossy(probe),
+                String::from_utf8_lossy(seen)
+            );
+        }
+        println!("echo ok: {:?}", String::from_utf8_lossy(probe).trim_end());
+    }
+    Ok(())
+}
+
+/// Send-response streaming: one line, wait for its `ok`, next line. Then
+/// `?` until the machine is idle, and compare `MPos`.
+fn job_test(
+    stdin: &mut impl Write,
+    rx: &mpsc::Receiver<Vec<u8>>,
+    seen: &mut Vec<u8>,
+) -> Result<()> {
+    // The `$I` reply ends with its `ok`.
+    if !expect(rx, seen, b"ok", Duration::from_secs(10)) {
+        bail!(
+            "`$I` got no ok; USART1 said {:?}",
+            String::from_utf8_lossy(seen)
+        );
+    }
+    for line in JOB {
+        seen.clear();
+        stdin.write_all(format!("{line}\n").as_bytes())?;
+        stdin.flush()?;
+        if !expect(rx, seen, b"ok", Duration::from_secs(10)) || contains(seen, b"error") {
+            bail!(
+                "`{line}` was not accepted: {:?}",
+                String::from_utf8_lossy(seen)
+            );
+        }
+        println!("sent: {line}");
+    }
+    let end = Instant::now() + Duration::from_secs(30);
+    loop {
+        seen.clear();
+        stdin.write_all(b"?")?;
+        stdin.flush()?;
+        if expect(rx, seen, b">", Duration::from_secs(2)) {
+            let text = String::from_utf8_lossy(seen).into_owned();
+            if let Some(report) = text.split('<').nth(1).and_then(|r| r.split('>').next()) {
+                if report.starts_with("Idle") {
+                    let pos = mpos(report).with_context(|| format!("no MPos in <{report}>"))?;
+                    let off = pos.iter().zip(JOB_END).any(|(p, e)| (p - e).abs() > 1e-3);
+                    if pos.len() < 3 || off {
+                        bail!("job ended at <{report}>, expected MPos {JOB_END:?}");
+                    }
+                    println!("status: <{report}>");
+                    return Ok(());
+                }
+                if report.starts_with("Alarm") {
+                    bail!("the machine is in alarm: <{report}>");
+                }
+            }
+        }
+        if Instant::now() > end {
+            bail!(
+                "the job did not finish within 30 s; last: {:?}",
+                String::from_utf8_lossy(seen)
+            );
+        }
+        std::thread::sleep(Duration::from_millis(200));
+    }
+}
+
+/// The numbers after `MPos:` in a status report body.
+fn mpos(report: &str) -> Option<Vec<f64>> {
+    let field = report.split('|').find_map(|f| f.strip_prefix("MPos:"))?;
+    field.split(',').map(|v| v.trim().parse().ok()).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reads_mpos_from_a_grbl_report() {
+        assert_eq!(
+            mpos("Idle|MPos:3.000,4.000,0.000,0.000|FS:0,0"),
+            Some(vec![3.0, 4.0, 0.0, 0.0])
+        );
+        assert_eq!(mpos("Idle|WPos:1,2,3"), None);
+        assert_eq!(mpos("Idle|MPos:1,x,3"), None);
+    }
 }

@@ -37,7 +37,9 @@ fn find_board() -> Result<String> {
     let mut found = Vec::new();
     for e in std::fs::read_dir("/sys/class/tty").context("listing /sys/class/tty")? {
         let e = e?;
-        let Ok(dev) = std::fs::canonicalize(e.path().join("device")) else { continue };
+        let Ok(dev) = std::fs::canonicalize(e.path().join("device")) else {
+            continue;
+        };
         let mut dir: Option<&Path> = Some(&dev);
         while let Some(d) = dir {
             let id = |f: &str| {
@@ -77,8 +79,7 @@ fn status_text(st: &protocol::Status) -> String {
 
 pub fn run(a: StreamArgs) -> Result<i32> {
     let name = a.file.display().to_string();
-    let source =
-        std::fs::read_to_string(&a.file).with_context(|| format!("reading {name}"))?;
+    let source = std::fs::read_to_string(&a.file).with_context(|| format!("reading {name}"))?;
     let lines: Vec<&str> = source.lines().collect();
     let port_name = match a.port {
         Some(p) => p,
@@ -103,9 +104,9 @@ pub fn run(a: StreamArgs) -> Result<i32> {
             .context("installing the Ctrl-C handler")?;
     }
     let pb = ProgressBar::new(lines.len() as u64);
-    if let Ok(style) = ProgressStyle::with_template(
-        "{bar:30} {pos}/{len} lines {percent:>3}% ETA {eta} | {msg}",
-    ) {
+    if let Ok(style) =
+        ProgressStyle::with_template("{bar:30} {pos}/{len} lines {percent:>3}% ETA {eta} | {msg}")
+    {
         pb.set_style(style);
     }
     // seq -> 1-based file line.
@@ -125,7 +126,9 @@ pub fn run(a: StreamArgs) -> Result<i32> {
         if interrupted.swap(false, Ordering::SeqCst) {
             client.realtime(Rt::FeedHold)?;
             let answer = pb.suspend(|| {
-                eprint!("\nfeed hold. [c]ontinue, [r]eset (abort the job), [q]uit leaving it held? ");
+                eprint!(
+                    "\nfeed hold. [c]ontinue, [r]eset (abort the job), [q]uit leaving it held? "
+                );
                 let mut s = String::new();
                 let _ = std::io::stdin().lock().read_line(&mut s);
                 s.trim().to_lowercase()
@@ -148,7 +151,14 @@ pub fn run(a: StreamArgs) -> Result<i32> {
             let seq = match client.send_line(text) {
                 Ok(s) => s,
                 Err(protocol::client::ClientError::LineTooLong) => {
-                    say(&pb, format!("{name}:{}: error: line longer than {} bytes", next + 1, protocol::MAX_LINE));
+                    say(
+                        &pb,
+                        format!(
+                            "{name}:{}: error: line longer than {} bytes",
+                            next + 1,
+                            protocol::MAX_LINE
+                        ),
+                    );
                     errors += 1;
                     client.send_line(b"")?
                 }
@@ -181,13 +191,19 @@ pub fn run(a: StreamArgs) -> Result<i32> {
         let Some(ev) = ev else { continue };
         match ev {
             ClientEvent::Device(DeviceMsg::Ack { next: n, .. }) => {
-                let upto = seq_line.get(&n.wrapping_sub(1)).copied().unwrap_or(acked_to);
+                let upto = seq_line
+                    .get(&n.wrapping_sub(1))
+                    .copied()
+                    .unwrap_or(acked_to);
                 acked_to = acked_to.max(upto);
                 pb.set_position(acked_to as u64);
             }
             ClientEvent::Device(DeviceMsg::Msg(m)) => {
                 let m = m.as_str();
-                let m = m.strip_prefix("[MSG:").and_then(|t| t.strip_suffix(']')).unwrap_or(m);
+                let m = m
+                    .strip_prefix("[MSG:")
+                    .and_then(|t| t.strip_suffix(']'))
+                    .unwrap_or(m);
                 if a.check && m == "Disabled" && done_seq.is_some() {
                     finished = true;
                 }
@@ -203,7 +219,9 @@ pub fn run(a: StreamArgs) -> Result<i32> {
                     None => name.clone(),
                 };
                 let msg = last_msg.take().unwrap_or_else(|| {
-                    protocol::Code::from_code(code).map_or("device error", |c| c.message()).to_string()
+                    protocol::Code::from_code(code)
+                        .map_or("device error", |c| c.message())
+                        .to_string()
                 });
                 say(&pb, format!("{at}: error[{code}]: {msg}"));
             }
@@ -236,7 +254,10 @@ pub fn run(a: StreamArgs) -> Result<i32> {
         if let Some(ClientEvent::Device(DeviceMsg::Status(st))) = client.poll()? {
             pb.set_message(status_text(&st));
             let m = st.mpos;
-            say(&pb, format!("final MPos:{:.3},{:.3},{:.3},{:.3}", m[0], m[1], m[2], m[3]));
+            say(
+                &pb,
+                format!("final MPos:{:.3},{:.3},{:.3},{:.3}", m[0], m[1], m[2], m[3]),
+            );
             break;
         }
     }
@@ -245,7 +266,11 @@ pub fn run(a: StreamArgs) -> Result<i32> {
     let _ = std::io::Write::flush(client.get_mut());
     std::thread::sleep(Duration::from_millis(50));
     pb.finish();
-    eprintln!("{name}: {} lines, {errors} error(s){}", lines.len(), if alarm { ", alarm" } else { "" });
+    eprintln!(
+        "{name}: {} lines, {errors} error(s){}",
+        lines.len(),
+        if alarm { ", alarm" } else { "" }
+    );
     Ok(if errors > 0 || alarm { 1 } else { 0 })
 }
 
@@ -262,7 +287,10 @@ fn send_wait<T: std::io::Read + std::io::Write>(c: &mut Client<T>, text: &[u8]) 
     while c.in_flight() > 0 {
         c.poll()?;
         if t0.elapsed() > Duration::from_secs(3) {
-            bail!("device did not acknowledge {}", String::from_utf8_lossy(text));
+            bail!(
+                "device did not acknowledge {}",
+                String::from_utf8_lossy(text)
+            );
         }
     }
     Ok(seq)

@@ -8,19 +8,19 @@
 //!
 //! # Backpressure: nothing acknowledged is ever lost
 //!
-//! A line is taken from the link only when the device can keep it:
-//!
-//! * the command queue ([`CMD_SLOTS`]) has room for the most commands one
-//!   line can produce ([`LINE_COMMANDS`]), so interpreting never has to drop
-//!   a command;
-//! * in framed mode a line slot ([`LINE_SLOTS`]) is free. Framed lines are
-//!   acknowledged when they enter a slot ("queued for execution") and are
-//!   interpreted in order as the command queue drains; a line that then
-//!   fails is reported with `DeviceMsg::Error { seq, .. }`.
-//!
-//! Otherwise the link is left alone: its ring fills, then USB (or the pty)
-//! pushes back on the sender. In text mode `ok` means what it means in GRBL:
-//! the line was interpreted and its commands are queued.
+//! * Text mode: a line is taken from the link only when the command queue
+//!   ([`CMD_SLOTS`]) has room for the most commands one line can produce
+//!   ([`LINE_COMMANDS`]), so interpreting never has to drop a command.
+//!   Otherwise the link is left alone: its ring fills, then USB (or the
+//!   pty) pushes back on the sender. `ok` means what it means in GRBL: the
+//!   line was interpreted and its commands are queued.
+//! * Framed mode: frames are always taken, so a handshake or a settings
+//!   request is answered even while the machine is held with full queues.
+//!   A line is acknowledged when it enters a free line slot ([`LINE_SLOTS`],
+//!   the credits; "queued for execution"); without one the session refuses
+//!   it (`Nak`, the host resends). Slots are interpreted in order as the
+//!   command queue drains; a line that then fails is reported with
+//!   `DeviceMsg::Error { seq, .. }`.
 //!
 //! # Choices
 //!
@@ -68,6 +68,12 @@ pub trait LinkPort {
     /// ahead of the events): replies to realtime commands and unprompted
     /// reports (alarms) use it. Replies to an event use the event's mode.
     fn framed(&self) -> bool;
+    /// The port was closed or reopened: back to text mode.
+    fn reset(&mut self);
+    /// Mode of the next event (the assembler's): framed events are always
+    /// taken (the session refuses lines without a slot), text lines only
+    /// with room for their commands.
+    fn events_framed(&self) -> bool;
 }
 
 impl LinkPort for Link {
@@ -82,6 +88,12 @@ impl LinkPort for Link {
     }
     fn framed(&self) -> bool {
         self.flags().is_framed()
+    }
+    fn reset(&mut self) {
+        Link::reset(self)
+    }
+    fn events_framed(&self) -> bool {
+        self.mode() == crate::link::LinkMode::Framed
     }
 }
 
@@ -139,8 +151,19 @@ pub struct Device {
     quiet_alarm: bool,
     text_lines: u32,
     spindle_ov: u8,
+    /// The port closed during a framed job; tell the next client.
+    link_lost: LinkLost,
     /// Counters for tests and reports.
     pub stats: Stats,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum LinkLost {
+    No,
+    /// Port closed; its mode-reset marker is still ahead in the ring.
+    Closed,
+    /// Tell whoever sends the next message.
+    Report,
 }
 
 /// What the device did, for tests and benchmarks.
@@ -170,6 +193,7 @@ impl Device {
             quiet_alarm: false,
             text_lines: 0,
             spindle_ov: 100,
+            link_lost: LinkLost::No,
             stats: Stats::default(),
         }
     }
@@ -181,8 +205,17 @@ impl Device {
     }
 
     /// The port was closed or reopened: the link is back in text mode.
-    /// Queued work goes on (GRBL keeps running when the sender goes away).
-    pub fn port_reset(&mut self, link: &mut Link) {
+    /// A framed session (our streamer) that loses its port mid-job is held
+    /// (it reconnects, resends what was not acknowledged and resumes with
+    /// cycle start); the next client is told so. A text session keeps
+    /// running, as GRBL does when its sender goes away: those senders do
+    /// not expect a hold they did not ask for.
+    pub fn port_reset(&mut self, link: &mut impl LinkPort, m: &impl MotionPort) {
+        let busy = !m.motion_idle() || !self.cmds.is_empty() || !self.slots.is_empty();
+        if link.framed() && busy {
+            m.rt().feed_hold();
+            self.link_lost = LinkLost::Closed;
+        }
         link.reset();
     }
 
@@ -227,13 +260,28 @@ impl Device {
         self.watch(m, &mut Out::new(tx, link.framed()));
         loop {
             self.feed(m, tx, link.framed());
-            if !self.can_take() {
+            // The splitter runs ahead: when it is framed, a switch to frames
+            // is on its way and whatever text precedes it has no listener.
+            if !(link.events_framed() || link.framed() || self.can_take()) {
                 break;
             }
             let free = self.free_slots();
             let info = self.info(m);
             let Some(ev) = link.poll() else { break };
-            let mut o = Out::new(tx, matches!(ev, LinkEvent::Frame(_) | LinkEvent::BadFrame(_)));
+            let mut o = Out::new(
+                tx,
+                matches!(ev, LinkEvent::Frame(_) | LinkEvent::BadFrame(_)),
+            );
+            // Events from before the reset still belong to the old client:
+            // the report waits for the mode switch, then the next message.
+            match (self.link_lost, &ev) {
+                (LinkLost::Closed, LinkEvent::Mode(_)) => self.link_lost = LinkLost::Report,
+                (LinkLost::Report, LinkEvent::Mode(_)) | (LinkLost::No | LinkLost::Closed, _) => {}
+                (LinkLost::Report, _) => {
+                    self.link_lost = LinkLost::No;
+                    let _ = crate::link::reply::msg(&mut o, "Link lost: feed hold, '~' resumes");
+                }
+            }
             self.event(ev, free, &info, m, &mut o);
         }
         let free = self.free_slots();
@@ -244,7 +292,7 @@ impl Device {
     }
 
     fn can_take(&self) -> bool {
-        !self.sync && self.cmds.capacity() - self.cmds.len() >= LINE_COMMANDS && !self.slots.is_full()
+        !self.sync && self.cmds.capacity() - self.cmds.len() >= LINE_COMMANDS
     }
 
     /// Alarms and the end of jogs and syncs.
@@ -292,7 +340,9 @@ impl Device {
     fn feed(&mut self, m: &mut impl MotionPort, tx: &mut impl Tx, framed: bool) {
         loop {
             while m.ready() {
-                let Some((line, cmd)) = self.cmds.pop_front() else { break };
+                let Some((line, cmd)) = self.cmds.pop_front() else {
+                    break;
+                };
                 self.stats.commands += 1;
                 if let Err(e) = m.submit(&cmd, line) {
                     sys::report_late(e, line, &mut Out::new(&mut *tx, framed));
@@ -301,12 +351,21 @@ impl Device {
             if self.sync || self.cmds.capacity() - self.cmds.len() < LINE_COMMANDS {
                 return;
             }
-            let Some((seq, text)) = self.slots.pop_front() else { return };
+            let Some((seq, text)) = self.slots.pop_front() else {
+                return;
+            };
             self.line(&text, seq, m, &mut Out::new(&mut *tx, true));
         }
     }
 
-    fn event(&mut self, ev: LinkEvent<'_>, free: u16, info: &DeviceInfo, m: &mut impl MotionPort, o: &mut Out<'_, impl Tx>) {
+    fn event(
+        &mut self,
+        ev: LinkEvent<'_>,
+        free: u16,
+        info: &DeviceInfo,
+        m: &mut impl MotionPort,
+        o: &mut Out<'_, impl Tx>,
+    ) {
         match ev {
             LinkEvent::Line(text) => {
                 self.text_lines = self.text_lines.wrapping_add(1);
@@ -324,12 +383,19 @@ impl Device {
         }
     }
 
-    fn frame(&mut self, msg: HostMsg, free: u16, info: &DeviceInfo, m: &mut impl MotionPort, o: &mut Out<'_, impl Tx>) {
+    fn frame(
+        &mut self,
+        msg: HostMsg,
+        free: u16,
+        info: &DeviceInfo,
+        m: &mut impl MotionPort,
+        o: &mut Out<'_, impl Tx>,
+    ) {
         let action = self.port.on_frame(msg, free, info, &mut |r| o.frame(r));
         match action {
             None | Some(FramedAction::Closed) => {}
             Some(FramedAction::Execute { seq, text }) => {
-                // A slot was free (`free > 0` made the session execute it).
+                // A slot was free: the session executes only with `free > 0`.
                 let _ = self.slots.push_back((seq, text));
             }
             Some(FramedAction::Realtime(r)) => self.realtime(r, protocol::RX_WINDOW as u16, m, o),
@@ -372,6 +438,10 @@ impl Device {
         }
         if self.seen_alarm.is_some() && !self.check && !text.iter().all(u8::is_ascii_whitespace) {
             return self.reply_line(Err(protocol::Code::Locked.code()), seq, o);
+        }
+        if !self.check && !self.can_take() {
+            // Only text that precedes a switch to frames gets here.
+            return self.reply_line(Err(protocol::Code::RxOverflow.code()), seq, o);
         }
         let check = self.check;
         let cmds = &mut self.cmds;

@@ -81,7 +81,9 @@ impl Device {
             machine::State::Homing => MachineState::Home,
             machine::State::Hold => MachineState::Hold,
             _ if self.jogging => MachineState::Jog,
-            machine::State::Idle if self.cmds.is_empty() && self.slots.is_empty() => MachineState::Idle,
+            machine::State::Idle if self.cmds.is_empty() && self.slots.is_empty() => {
+                MachineState::Idle
+            }
             _ => MachineState::Run,
         };
         let (feed, line) = m.feed_and_line();
@@ -104,7 +106,13 @@ impl Device {
         }
     }
 
-    pub(super) fn realtime(&mut self, r: Rt, rx_free: u16, m: &mut impl MotionPort, o: &mut Out<'_, impl Tx>) {
+    pub(super) fn realtime(
+        &mut self,
+        r: Rt,
+        rx_free: u16,
+        m: &mut impl MotionPort,
+        o: &mut Out<'_, impl Tx>,
+    ) {
         let rt = m.rt();
         let feed = u16::from(rt.feed_override());
         match r {
@@ -168,7 +176,12 @@ impl Device {
     }
 
     /// A `$` command; text output goes to `o`, the result becomes `ok`/`error`.
-    pub(super) fn system(&mut self, cmd: SysCmd<'_>, m: &mut impl MotionPort, o: &mut Out<'_, impl Tx>) -> Result<(), u16> {
+    pub(super) fn system(
+        &mut self,
+        cmd: SysCmd<'_>,
+        m: &mut impl MotionPort,
+        o: &mut Out<'_, impl Tx>,
+    ) -> Result<(), u16> {
         let s = *m.settings();
         let f = Format::from_settings(&s);
         let _ = f;
@@ -262,13 +275,22 @@ impl Device {
         let mut count = 0;
         jog.execute_line(&line, &mut |c| {
             count += 1;
-            if let Command::Line { end: e, feed: Feed::PerMin(f) } = c {
+            if let Command::Line {
+                end: e,
+                feed: Feed::PerMin(f),
+            } = c
+            {
                 end = Some((e, f));
             }
         })
         .map_err(|e| u16::from(e.grbl_code()))?;
-        let (Some((e, f)), 1) = (end, count) else { return Err(bad) };
-        let cmd = Command::Line { end: e, feed: Feed::PerMin(f) };
+        let (Some((e, f)), 1) = (end, count) else {
+            return Err(bad);
+        };
+        let cmd = Command::Line {
+            end: e,
+            feed: Feed::PerMin(f),
+        };
         let _ = self.cmds.push_back((0, cmd));
         self.interp.set_machine_position(e);
         self.jogging = true;

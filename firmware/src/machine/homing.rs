@@ -34,6 +34,8 @@ pub enum Action {
     },
     /// Redefine the machine position, steps.
     Redefine { position: [i32; AXES] },
+    /// Stand still while the switch stops bouncing (`$26`).
+    Settle { seconds: f32 },
     /// All cycles done.
     Done { axes: AxisMask, verified: bool },
 }
@@ -49,6 +51,7 @@ pub struct Homing {
     located: [i32; AXES],
     verify: bool,
     line: u32,
+    settled: bool,
 }
 
 impl Homing {
@@ -77,6 +80,7 @@ impl Homing {
             located: [0; AXES],
             verify,
             line,
+            settled: false,
         })
     }
 
@@ -183,6 +187,13 @@ impl Homing {
                             axis: Self::first_axis(self.remaining),
                         });
                     }
+                    if !self.settled && s.homing_debounce_ms > 0 {
+                        self.settled = true;
+                        return Ok(Action::Settle {
+                            seconds: s.homing_debounce_ms as f32 / 1000.0,
+                        });
+                    }
+                    self.settled = false;
                     self.tripped_this_move = false;
                     if self.remaining != 0 {
                         let (len, rate) = if self.phase == Phase::Seek {

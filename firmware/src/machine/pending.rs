@@ -76,6 +76,13 @@ impl<const N: usize> Machine<N> {
                             Err(e) => self.raise_alarm(rt, e, line, obs),
                         }
                     }
+                    Ok(homing::Action::Settle { seconds }) => {
+                        let ticks = (seconds as f64 * self.cfg.tick_hz as f64) as u64;
+                        match self.planner.push_dwell(ticks, line) {
+                            Ok(()) => self.pending = Pending::Homing(h),
+                            Err(e) => self.raise_alarm(rt, e, line, obs),
+                        }
+                    }
                     Ok(homing::Action::Redefine { position }) => {
                         rt.redefine_position(&position);
                         self.planner.clear(position);

@@ -130,6 +130,9 @@ struct Running {
     generation: u32,
     speed_mm_min: f32,
     line: u32,
+    /// False for dwells: a switch that is already closed while standing
+    /// still is not a new event.
+    moving: bool,
 }
 
 /// The interrupt half: Bresenham over the current segment.
@@ -228,6 +231,7 @@ impl Stepper {
             generation: s.generation,
             speed_mm_min: s.speed_mm_min,
             line: s.line,
+            moving: s.steps.iter().any(|&n| n != 0),
         };
         if s.new_block {
             self.acc = [self.run.threshold / 2; AXES];
@@ -272,7 +276,7 @@ impl Stepper {
         }
         let watch = self.run.watch;
         let lim = sw.limits ^ self.cfg.limit_invert;
-        if lim != 0 {
+        if lim != 0 && self.run.moving {
             if watch.limits & lim != 0 {
                 return self.trip(rt, Trip::Homing, watch.limits & lim, generation);
             }

@@ -120,7 +120,13 @@ impl<'r> VirtualDevice<'r> {
         });
         let mut tx = TxBuf::default();
         device.hello(&mut tx);
-        VirtualDevice { sim, link: Link::new(), device, tx, log: None }
+        VirtualDevice {
+            sim,
+            link: Link::new(),
+            device,
+            tx,
+            log: None,
+        }
     }
 
     /// Bytes the device can take now (like the USB endpoint, hold the rest).
@@ -137,10 +143,23 @@ impl<'r> VirtualDevice<'r> {
         n
     }
 
-    /// The host closed the port: the link goes back to text mode. Motion
-    /// goes on, as on a GRBL board whose sender went away.
+    /// The host closed the port: the link goes back to text mode (see
+    /// [`Device::port_reset`] for what happens to a running job).
     pub fn port_closed(&mut self) {
-        self.device.port_reset(&mut self.link);
+        let VirtualDevice {
+            sim,
+            link,
+            device,
+            log,
+            ..
+        } = self;
+        device.port_reset(
+            link,
+            &SimPort {
+                sim,
+                log: log.as_mut(),
+            },
+        );
     }
 
     /// Run the parse/plan task, then virtual time up to `tick`, then the
@@ -153,8 +172,21 @@ impl<'r> VirtualDevice<'r> {
 
     /// One pass of the device session.
     pub fn poll(&mut self) {
-        let VirtualDevice { sim, link, device, tx, log } = self;
-        device.poll(link, &mut SimPort { sim, log: log.as_mut() }, tx);
+        let VirtualDevice {
+            sim,
+            link,
+            device,
+            tx,
+            log,
+        } = self;
+        device.poll(
+            link,
+            &mut SimPort {
+                sim,
+                log: log.as_mut(),
+            },
+            tx,
+        );
     }
 
     /// Take the bytes the device wants to send.
