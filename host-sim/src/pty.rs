@@ -8,12 +8,20 @@
 //!
 //! Connecting and disconnecting: the simulator keeps only the master side
 //! open, so the kernel reports a hangup whenever no client has the slave
-//! open. A hangup resets the link to text mode (as DTR dropping or a USB
-//! reset does on the board) and drops unsent replies; queued motion goes
-//! on, as GRBL keeps running when its sender goes away. When a client
-//! connects and after 50 ms the link is still in text mode, the device
-//! prints the `Grbl` banner (an Arduino GRBL resets when the port opens);
-//! a framed client sends 0x00 at once and gets no banner to trip over.
+//! open. On a hangup the device still takes what the client wrote before
+//! it left (a last soft reset, its `Bye`), then both directions are
+//! flushed (the next client must not receive stale replies glued to its
+//! first frame) and the link resets to text mode, as DTR dropping or a USB
+//! reset does on the board. What happens to a running job is the device
+//! session's rule (`burin::device::Device::port_reset`): a framed job is
+//! held and the next client is told; a text-mode job keeps running, as
+//! GRBL does when its sender goes away.
+//!
+//! When a client connects and after 50 ms the link is still in text mode,
+//! the device prints the `Grbl` banner (an Arduino GRBL resets when the
+//! port opens); a framed client sends 0x00 at once and gets no banner to
+//! trip over. `BURIN_PTY_DEBUG=1` logs connections and received bytes to
+//! stderr.
 
 use std::fs::File;
 use std::io::{self, ErrorKind, Read, Write};

@@ -218,6 +218,30 @@ fn reset_while_moving_alarms_then_banner_and_unlock() {
 }
 
 #[test]
+fn reset_in_a_finished_hold_keeps_the_position_without_alarm() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    assert_eq!(r.cmd("G1 X-100 F1000"), ["ok"]);
+    r.run(50);
+    r.send(b"!");
+    r.run(200);
+    let st = r.status();
+    assert_eq!(st.state, "Hold:1");
+    r.send(&[0x18]);
+    r.run(5);
+    let out = r.lines();
+    assert!(!out.iter().any(|l| l.starts_with("ALARM")), "{out:?}");
+    assert!(out.iter().any(|l| l.starts_with("Grbl 1.1h")), "{out:?}");
+    let after = r.status();
+    assert_eq!(after.state, "Idle");
+    assert_eq!(after.mpos, st.mpos);
+    assert_eq!(r.cmd("G1 X-5 F1000"), ["ok"]);
+    assert_eq!(r.until_idle().mpos, Some(vec![-5.0, 0.0, 0.0, 0.0]));
+}
+
+#[test]
 fn realtime_bytes_act_while_the_line_buffer_is_full() {
     let cfg = origin();
     let mut rec = Discard;

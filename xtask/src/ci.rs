@@ -12,27 +12,85 @@ pub fn run_all() -> Result<i32> {
         run(cargo().args(["fmt", "--all", "--check"]))
     })?;
     step("clippy (host crates)", || {
-        run(cargo().args(["clippy", "--workspace", "--all-targets", "--", "-D", "warnings"]))
+        run(cargo().args([
+            "clippy",
+            "--workspace",
+            "--all-targets",
+            "--",
+            "-D",
+            "warnings",
+        ]))
     })?;
     for board in crate::image::Board::ALL {
         step(&format!("clippy (firmware, {TARGET}, {board})"), || {
             run(cargo()
-                .args(["clippy", "-p", "firmware", "--target", TARGET, "--lib", "--bins"])
+                .args([
+                    "clippy", "-p", "firmware", "--target", TARGET, "--lib", "--bins",
+                ])
                 .args(board.cargo_features())
                 .args(["--", "-D", "warnings"]))
         })?;
     }
+    step(
+        &format!("clippy (firmware, {TARGET}, qemu + bench-target)"),
+        || {
+            run(cargo()
+                .args(["clippy", "-p", "firmware", "--target", TARGET, "--bins"])
+                .args([
+                    "--no-default-features",
+                    "--features",
+                    "board-qemu,bench-target",
+                ])
+                .args(["--", "-D", "warnings"]))
+        },
+    )?;
     step("host tests", || run(cargo().args(["test", "--workspace"])))?;
     for board in crate::image::Board::ALL {
         step(&format!("firmware image + size budget ({board})"), || {
             crate::image::ci_check(board)
         })?;
     }
+    step("corpus conformance (../shared/corpus)", corpus)?;
+    step(
+        "firmware under QEMU (netduinoplus2): cargo xtask qemu",
+        || match crate::qemu::run()? {
+            0 => Ok(()),
+            code => anyhow::bail!("qemu test exited {code}"),
+        },
+    )?;
     eprintln!(
         "\n== ci: all checks passed in {:.0} s ==",
         started.elapsed().as_secs_f64()
     );
     Ok(0)
+}
+
+/// The third-party corpus is not in the repo; it sits beside the clone when
+/// there is one. Its checks print a line per file, so they run visible here.
+fn corpus() -> Result<()> {
+    let dir = crate::util::root().join("../shared/corpus");
+    if !dir.is_dir() {
+        eprintln!("corpus conformance: skipped ({} not found)", dir.display());
+        return Ok(());
+    }
+    run(cargo().args([
+        "test",
+        "-p",
+        "firmware",
+        "--test",
+        "corpus_conformance",
+        "--",
+        "--nocapture",
+    ]))?;
+    run(cargo().args([
+        "test",
+        "-p",
+        "host-sim",
+        "--test",
+        "motion_corpus",
+        "--",
+        "--nocapture",
+    ]))
 }
 
 /// Run one named step, timing it, so a CI log reads as a list of checks.

@@ -97,6 +97,12 @@ pub fn run(a: StreamArgs) -> Result<i32> {
         "{port_name}: burin {} on {}, {} line slots, {} planner blocks",
         info.firmware, info.board, info.line_slots, info.planner_blocks
     );
+    if let Some(st) = query_status(&mut client)? {
+        if matches!(st.state, MachineState::Alarm) {
+            eprintln!("{port_name}: the machine is in alarm; home ($H) or unlock ($X) it first");
+            return Ok(1);
+        }
+    }
     let interrupted = Arc::new(AtomicBool::new(false));
     {
         let flag = interrupted.clone();
@@ -304,4 +310,18 @@ fn say(pb: &ProgressBar, line: String) {
     } else {
         pb.println(line);
     }
+}
+
+/// One status report (None if the device does not answer in time).
+fn query_status<T: std::io::Read + std::io::Write>(
+    c: &mut Client<T>,
+) -> Result<Option<protocol::Status>> {
+    c.realtime(Rt::StatusQuery)?;
+    let t0 = Instant::now();
+    while t0.elapsed() < Duration::from_secs(1) {
+        if let Some(ClientEvent::Device(DeviceMsg::Status(st))) = c.poll()? {
+            return Ok(Some(st));
+        }
+    }
+    Ok(None)
 }

@@ -96,7 +96,7 @@ impl Device {
             spindle: self.interp.state().speed,
             planner_free: m.planner_free(),
             rx_free,
-            line: (line != 0).then_some(line),
+            line: (line != 0 && state != MachineState::Idle).then_some(line),
             overrides: Overrides {
                 feed: m.rt().feed_override(),
                 rapid: m.rt().rapid_override(),
@@ -117,7 +117,12 @@ impl Device {
         let feed = u16::from(rt.feed_override());
         match r {
             Rt::SoftReset => {
-                let moving = !m.motion_idle() || !self.cmds.is_empty();
+                // Stopped in a hold, the position is exact: GRBL raises no
+                // alarm then. The executor alarms whenever anything was
+                // queued, so that alarm is cleared again quietly.
+                let queued = !m.motion_idle();
+                let held = m.state() == machine::State::Hold && m.rt().stepper_idle();
+                let moving = queued && !held;
                 m.rt().request_reset();
                 self.cmds.clear();
                 self.slots.clear();
@@ -127,6 +132,9 @@ impl Device {
                 self.jog_cancel = false;
                 self.sync = true;
                 self.stats.resets += 1;
+                if held && queued && m.alarm().is_none() {
+                    self.quiet_alarm = true;
+                }
                 if moving && m.alarm().is_none() {
                     // Reported now so that it comes before the banner.
                     self.seen_alarm = Some(MachineError::ResetDuringMotion);
@@ -183,8 +191,6 @@ impl Device {
         o: &mut Out<'_, impl Tx>,
     ) -> Result<(), u16> {
         let s = *m.settings();
-        let f = Format::from_settings(&s);
-        let _ = f;
         match cmd {
             SysCmd::Help => {
                 let _ = reply::help(o);
@@ -260,7 +266,7 @@ impl Device {
         if self.check || m.alarm().is_some() {
             return Err(Code::Locked.code());
         }
-        if !(m.motion_idle() && self.cmds.is_empty()) && !self.jogging {
+        if !(self.jogging || m.motion_idle() && self.cmds.is_empty()) {
             return Err(Code::NotIdle.code());
         }
         let allowed = |b: &u8| b" .-+0123456789GXYZAF".contains(&b.to_ascii_uppercase());

@@ -1,0 +1,76 @@
+//! The two seams of the device session: the link decoder and the motion
+//! core, as traits so the RTIC app and host-sim plug in their own halves.
+
+use crate::command::{Command, Pos};
+use crate::link::{Link, LinkEvent, RtSet};
+use crate::machine::{self, MachineError};
+use crate::realtime::Realtime;
+use crate::settings::table::SettingError;
+use crate::settings::Settings;
+
+/// The link decoder as the device sees it ([`Link`] for host-sim; the RTIC
+/// app wraps its `LineAssembler` and ring consumer the same way).
+pub trait LinkPort {
+    fn poll(&mut self) -> Option<LinkEvent<'_>>;
+    fn take_realtime(&mut self) -> RtSet;
+    /// Received bytes not yet turned into events.
+    fn rx_pending(&self) -> usize;
+    /// The receive side's mode right now (the splitter's, which runs
+    /// ahead of the events): replies to realtime commands and unprompted
+    /// reports (alarms) use it. Replies to an event use the event's mode.
+    fn framed(&self) -> bool;
+    /// The port was closed or reopened: back to text mode.
+    fn reset(&mut self);
+    /// Mode of the next event (the assembler's): framed events are always
+    /// taken (the session refuses lines without a slot), text lines only
+    /// with room for their commands.
+    fn events_framed(&self) -> bool;
+}
+
+impl LinkPort for Link {
+    fn poll(&mut self) -> Option<LinkEvent<'_>> {
+        Link::poll(self)
+    }
+    fn take_realtime(&mut self) -> RtSet {
+        Link::take_realtime(self)
+    }
+    fn rx_pending(&self) -> usize {
+        Link::rx_pending(self)
+    }
+    fn framed(&self) -> bool {
+        self.flags().is_framed()
+    }
+    fn reset(&mut self) {
+        Link::reset(self)
+    }
+    fn events_framed(&self) -> bool {
+        self.mode() == crate::link::LinkMode::Framed
+    }
+}
+
+/// The motion core as the device sees it.
+pub trait MotionPort {
+    fn rt(&self) -> &Realtime;
+    /// The executor takes a command now.
+    fn ready(&self) -> bool;
+    fn submit(&mut self, cmd: &Command, line: u32) -> Result<(), MachineError>;
+    fn state(&self) -> machine::State;
+    fn alarm(&self) -> Option<MachineError>;
+    /// Nothing queued, planned or moving.
+    fn motion_idle(&self) -> bool;
+    /// Where the next command starts, machine mm.
+    fn commanded_position(&self) -> Pos;
+    /// Last probe result (machine mm, contact).
+    fn probe_result(&self) -> Option<(Pos, bool)>;
+    /// Current feed, mm/min, and the machine line number executing.
+    fn feed_and_line(&self) -> (f32, u32);
+    fn planner_free(&self) -> u16;
+    fn planner_blocks(&self) -> u16;
+    fn settings(&self) -> &Settings;
+    /// Change a setting (the device calls this only while idle).
+    fn set_setting(&mut self, n: u16, value: f32) -> Result<(), SettingError>;
+    /// Active input pins, `protocol::msg::pins` bits.
+    fn pins(&self) -> u16 {
+        0
+    }
+}
