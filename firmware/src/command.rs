@@ -109,32 +109,62 @@ pub type Message = heapless::String<64>;
 #[derive(Clone, Debug, PartialEq)]
 pub enum Command {
     /// G0: at the rapid rate.
-    Rapid { end: Pos },
+    Rapid {
+        end: Pos,
+    },
     /// G1.
-    Line { end: Pos, feed: Feed },
+    Line {
+        end: Pos,
+        feed: Feed,
+    },
     /// G2/G3.
     Arc(Arc),
     /// G5/G5.1.
     Spline(Spline),
     /// G4: seconds.
-    Dwell { seconds: f32 },
+    Dwell {
+        seconds: f32,
+    },
     /// G28 (home the axes in the mask; all when none were named).
-    Home { axes: AxisMask },
+    Home {
+        axes: AxisMask,
+    },
     /// G27: seek the switches of these axes and compare against the expected position.
-    VerifyHome { axes: AxisMask },
+    VerifyHome {
+        axes: AxisMask,
+    },
     /// G38.x / G30.
-    Probe { end: Pos, feed: Feed, kind: ProbeKind },
+    Probe {
+        end: Pos,
+        feed: Feed,
+        kind: ProbeKind,
+    },
     /// M3/M4/M5 with S (rpm or laser power units).
-    Spindle { dir: SpindleDir, speed: f32 },
+    Spindle {
+        dir: SpindleDir,
+        speed: f32,
+    },
     /// M7/M8/M9 (M9 is both false).
-    Coolant { mist: bool, flood: bool },
+    Coolant {
+        mist: bool,
+        flood: bool,
+    },
     /// M42 / M62–M65 / M106 / M107: aux output `pin` to `value` (0.0–1.0 for PWM).
     /// `synced` outputs change with motion; the others change at once.
-    Aux { pin: u8, value: f32, synced: bool },
+    Aux {
+        pin: u8,
+        value: f32,
+        synced: bool,
+    },
     /// M17 / M18 / M84: stepper drivers on or off.
-    Motors { enable: bool, axes: AxisMask },
+    Motors {
+        enable: bool,
+        axes: AxisMask,
+    },
     /// M0 (and M1 when optional stop is on): pause until cycle start.
-    Pause { optional: bool },
+    Pause {
+        optional: bool,
+    },
     /// M2 / M30.
     ProgramEnd,
     /// M400: wait until all motion is done.
@@ -144,9 +174,13 @@ pub enum Command {
     /// M114 / M115 / M119 requests for a report.
     Report(ReportKind),
     /// M220: feed override percent.
-    FeedOverride { percent: u16 },
+    FeedOverride {
+        percent: u16,
+    },
     /// T word (no tool changer; reported and remembered).
-    Tool { number: u32 },
+    Tool {
+        number: u32,
+    },
     /// M500 / M501.
     SaveSettings,
     LoadSettings,

@@ -15,12 +15,12 @@
 pub mod arc;
 pub mod command;
 pub mod device;
-pub mod machine;
-pub mod planner;
-pub mod realtime;
 pub mod gcode;
 pub mod interp;
 pub mod link;
+pub mod machine;
+pub mod planner;
+pub mod realtime;
 pub mod seams;
 pub mod settings;
 pub mod stepper;

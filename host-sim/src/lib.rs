@@ -4,14 +4,14 @@
 //! the firmware library's job. host-sim supplies a virtual clock, recording
 //! pins, simulated switches and files.
 
+pub mod check;
 pub mod config;
+pub mod device_sim;
 pub mod engine;
 pub mod outputs;
 pub mod plot;
+pub mod pty;
 pub mod record;
 pub mod report;
 pub mod trace;
 pub mod vcd;
-pub mod check;
-pub mod device_sim;
-pub mod pty;

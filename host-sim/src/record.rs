@@ -106,7 +106,9 @@ impl Recorder for Tee<'_> {
         self.0.iter_mut().for_each(|r| r.step_event(ev));
     }
     fn commanded(&mut self, line: u32, kind: MoveKind, to_mm: [f32; AXES]) {
-        self.0.iter_mut().for_each(|r| r.commanded(line, kind, to_mm));
+        self.0
+            .iter_mut()
+            .for_each(|r| r.commanded(line, kind, to_mm));
     }
     fn velocity(&mut self, tick: u64, mm_per_min: f32) {
         self.0.iter_mut().for_each(|r| r.velocity(tick, mm_per_min));

@@ -13,7 +13,10 @@ mod util;
 use clap::{Parser, Subcommand};
 
 #[derive(Parser)]
-#[command(name = "cargo xtask", about = "burin build, test, flash, sim and stream tasks")]
+#[command(
+    name = "cargo xtask",
+    about = "burin build, test, flash, sim and stream tasks"
+)]
 struct Cli {
     #[command(subcommand)]
     cmd: Cmd,

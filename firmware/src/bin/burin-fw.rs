@@ -64,9 +64,7 @@ static FLAGS: burin::link::RtFlags = burin::link::RtFlags::new();
 #[rtic::app(device = stm32f4xx_hal::pac, peripherals = true, dispatchers = [USART6])]
 mod app {
     use crate::boards::board;
-    use crate::session::{
-        AppLink, AppMotion, TxRing, PLANNER_BLOCKS, SEGMENT_SLOTS, TX_RING,
-    };
+    use crate::session::{AppLink, AppMotion, TxRing, PLANNER_BLOCKS, SEGMENT_SLOTS, TX_RING};
     use crate::step::{StepDriver, Tim5, STEPPING};
     #[cfg(feature = "board-qemu")]
     use crate::usart::UsartLink as Link;
@@ -170,24 +168,11 @@ mod app {
         let mut aux = pins.aux;
         aux.all_off();
 
-        // Motion core: executor on the default settings, stepper with the
-        // same pin timing, the step port with the same inverts.
-        let timer = Tim5::new(dp.TIM5, &mut rcc);
-        let settings = Settings::default();
-        let machine = Machine::new(settings, burin::seams::StepTimer::tick_hz(&timer));
-        let cfg = machine.step_config();
-        let mut steppers = pins.steppers;
-        steppers.set_invert(cfg.step_invert, cfg.dir_invert, settings.enable_invert);
-
         // Rings between the tasks, split once: producer and consumer each
         // go to the one task that uses that end.
         let (rx_send, rx_tokens) = cx.local.rx_ring.split();
         let (tx_bytes, tx_recv) = cx.local.tx_ring.split();
         let (segments, seg_recv) = cx.local.seg_ring.split();
-        // The step timer stays stopped until `parse` queues segments.
-        let driver = StepDriver::new(timer, steppers, Stepper::new(cfg), seg_recv, cfg.pulse_ticks);
-        let (wake_step, wake) = rtic_sync::make_channel!((), 1);
-
         // USB: serial number from the 96-bit unique ID, then the CDC port.
         #[cfg(not(feature = "board-qemu"))]
         let serial = serial_from_uid(read_uid(), cx.local.serial);
@@ -205,13 +190,36 @@ mod app {
         #[cfg(not(feature = "board-qemu"))]
         let link = Link::new(bus, serial, rx_send, tx_recv);
         // QEMU: USART1 at BAUD 8N1 (the first `-serial` of the machine).
+        // Early in init: QEMU drops what the host sends before UE is set.
         #[cfg(feature = "board-qemu")]
-        let uart = match dp.USART1.serial(pins.usart_pins, crate::usart::BAUD.bps(), &mut rcc) {
+        let uart = match dp
+            .USART1
+            .serial(pins.usart_pins, crate::usart::BAUD.bps(), &mut rcc)
+        {
             Ok(serial) => Link::new(serial, rx_send, tx_recv),
             Err(_) => defmt::panic!("USART1 cannot run at {} baud", crate::usart::BAUD),
         };
         #[cfg(feature = "board-qemu")]
         let serial = "-";
+
+        // Motion core: executor on the default settings, stepper with the
+        // same pin timing, the step port with the same inverts.
+        let timer = Tim5::new(dp.TIM5, &mut rcc);
+        let settings = Settings::default();
+        let machine = Machine::new(settings, burin::seams::StepTimer::tick_hz(&timer));
+        let cfg = machine.step_config();
+        let mut steppers = pins.steppers;
+        steppers.set_invert(cfg.step_invert, cfg.dir_invert, settings.enable_invert);
+
+        // The step timer stays stopped until `parse` queues segments.
+        let driver = StepDriver::new(
+            timer,
+            steppers,
+            Stepper::new(cfg),
+            seg_recv,
+            cfg.pulse_ticks,
+        );
+        let (wake_step, wake) = rtic_sync::make_channel!((), 1);
 
         // Heartbeat: SysTick at HEARTBEAT_HZ from the core clock.
         let sysclk = rcc.clocks.sysclk().raw();
@@ -312,13 +320,31 @@ mod app {
         asm: LineAssembler = LineAssembler::new()])]
     async fn parse(cx: parse::Context) {
         let parse::LocalResources {
-            wake, rx_tokens, tx_bytes, segments, machine, device, asm, ..
+            wake,
+            rx_tokens,
+            tx_bytes,
+            segments,
+            machine,
+            device,
+            asm,
+            ..
         } = cx.local;
-        let mut tx = TxRing { ring: tx_bytes, dropped: 0 };
+        let mut tx = TxRing {
+            ring: tx_bytes,
+            dropped: 0,
+        };
         device.hello(&mut tx);
         loop {
-            let mut link = AppLink { asm: &mut *asm, rx: &mut *rx_tokens, flags: &crate::FLAGS };
-            let mut motion = AppMotion { machine: &mut *machine, segments: &mut *segments, rt: &crate::RT };
+            let mut link = AppLink {
+                asm: &mut *asm,
+                rx: &mut *rx_tokens,
+                flags: &crate::FLAGS,
+            };
+            let mut motion = AppMotion {
+                machine: &mut *machine,
+                segments: &mut *segments,
+                rt: &crate::RT,
+            };
             #[cfg(not(feature = "board-qemu"))]
             if crate::usb::PORT_CLOSED.swap(false, Ordering::AcqRel) {
                 device.port_reset(&mut link, &motion);
@@ -353,7 +379,12 @@ mod app {
     #[task(binds = SysTick, priority = 1, local = [led, inputs, wake_beat, ticks: u32 = 0, last: u8 = 0])]
     fn heartbeat(cx: heartbeat::Context) {
         let heartbeat::LocalResources {
-            led, inputs, wake_beat, ticks, last, ..
+            led,
+            inputs,
+            wake_beat,
+            ticks,
+            last,
+            ..
         } = cx.local;
         *ticks = ticks.wrapping_add(1);
         if *ticks % (crate::HEARTBEAT_HZ / 2) == 0 {
@@ -372,7 +403,10 @@ mod app {
             crate::RT.request_reset();
         }
         if closed != *last {
-            defmt::info!("inputs closed: {=u8:07b} (bit 0 X limit .. 6 e-stop)", closed);
+            defmt::info!(
+                "inputs closed: {=u8:07b} (bit 0 X limit .. 6 e-stop)",
+                closed
+            );
             *last = closed;
         }
     }

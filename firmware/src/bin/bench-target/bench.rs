@@ -239,7 +239,11 @@ fn plan_block(clock: &mut Clock) -> f32 {
 
 /// Ends QEMU with a status; `debug::exit` only returns without a debugger.
 pub fn exit(ok: bool) -> ! {
-    debug::exit(if ok { debug::EXIT_SUCCESS } else { debug::EXIT_FAILURE });
+    debug::exit(if ok {
+        debug::EXIT_SUCCESS
+    } else {
+        debug::EXIT_FAILURE
+    });
     loop {
         cortex_m::asm::wfi();
     }

@@ -71,7 +71,7 @@ impl AppMotion<'_> {
     }
     /// Segments are waiting for the step interrupt.
     pub fn queued(&self) -> bool {
-        self.segments.len() > 0
+        !self.segments.is_empty()
     }
 }
 
@@ -95,7 +95,7 @@ impl MotionPort for AppMotion<'_> {
         self.machine.ready()
             && self.machine.planner.is_empty()
             && self.machine.prep.is_idle()
-            && self.segments.len() == 0
+            && self.segments.is_empty()
             && self.rt.stepper_idle()
     }
     fn commanded_position(&self) -> Pos {

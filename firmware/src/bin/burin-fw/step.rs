@@ -158,7 +158,8 @@ impl StepPort {
     /// `dir_setup` ahead of the first step) plus the step pins that rise.
     #[inline(always)]
     pub fn fire(&mut self, dir_mask: u8, step_mask: u8) {
-        let word = self.dirs[usize::from(dir_mask & 0xF)] | self.step_on[usize::from(step_mask & 0xF)];
+        let word =
+            self.dirs[usize::from(dir_mask & 0xF)] | self.step_on[usize::from(step_mask & 0xF)];
         self.write(word);
     }
 }
@@ -218,8 +219,12 @@ impl Tim5 {
         self.tim.cnt().reset();
         // UG copies the preloaded ARR into the shadow register now.
         self.tim.egr().write(|w| w.ug().set_bit());
-        self.tim.sr().write(|w| w.uif().clear_bit().cc1if().clear_bit());
-        self.tim.dier().write(|w| w.uie().set_bit().cc1ie().set_bit());
+        self.tim
+            .sr()
+            .write(|w| w.uif().clear_bit().cc1if().clear_bit());
+        self.tim
+            .dier()
+            .write(|w| w.uie().set_bit().cc1ie().set_bit());
         self.tim.cr1().modify(|_, w| w.cen().set_bit());
     }
 

@@ -29,7 +29,13 @@ pub mod f411;
 #[cfg(all(feature = "board-f411", not(feature = "board-f401")))]
 pub use f411 as board;
 
-#[cfg(all(feature = "board-qemu", not(any(feature = "board-f411", feature = "board-f401"))))]
+#[cfg(all(
+    feature = "board-qemu",
+    not(any(feature = "board-f411", feature = "board-f401"))
+))]
 pub mod qemu;
-#[cfg(all(feature = "board-qemu", not(any(feature = "board-f411", feature = "board-f401"))))]
+#[cfg(all(
+    feature = "board-qemu",
+    not(any(feature = "board-f411", feature = "board-f401"))
+))]
 pub use qemu as board;
