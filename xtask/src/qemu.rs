@@ -166,10 +166,17 @@ pub fn run() -> Result<i32> {
     let (mut guard, rx) = spawn(command(&elf))?;
     let mut stdin = guard.0.stdin.take().context("QEMU stdin")?;
     let mut seen = Vec::new();
-    stdin.write_all(b"$I\n")?;
-    stdin.flush()?;
-    let end = Instant::now() + Duration::from_secs(10);
+    // QEMU's USART model drops bytes that arrive before the firmware has
+    // enabled the peripheral, and boot time varies with the host's load:
+    // ask again every half second until something answers.
+    let end = Instant::now() + Duration::from_secs(20);
+    let mut next_ask = Instant::now();
     let echo = loop {
+        if Instant::now() >= next_ask {
+            stdin.write_all(b"$I\n")?;
+            stdin.flush()?;
+            next_ask = Instant::now() + Duration::from_millis(500);
+        }
         if contains(&seen, b"[VER:") {
             break false;
         }
@@ -179,14 +186,18 @@ pub fn run() -> Result<i32> {
         let left = end.saturating_duration_since(Instant::now());
         if left.is_zero() {
             bail!(
-                "no reply to `$I` within 10 s; USART1 said {:?}",
+                "no reply to `$I` within 20 s; USART1 said {:?}",
                 String::from_utf8_lossy(&seen)
             );
         }
-        if let Ok(chunk) = rx.recv_timeout(left) {
+        if let Ok(chunk) = rx.recv_timeout(left.min(Duration::from_millis(100))) {
             seen.extend(chunk);
         }
     };
+    // Let the answers to any repeated `$I` arrive before the real test.
+    while let Ok(chunk) = rx.recv_timeout(Duration::from_millis(700)) {
+        seen.extend(chunk);
+    }
     if echo {
         echo_test(&mut stdin, &rx, &mut seen)?;
         println!("qemu: the RTIC app booted on {MACHINE} and echoed over USART1 (parse task not yet wired to the device)");
