@@ -43,7 +43,13 @@ pub fn ensure_installed() -> Result<()> {
     if !root {
         bail!("{QEMU} is missing: install it with `sudo apt-get install -y qemu-system-arm`");
     }
-    let install = || util::run(Command::new("apt-get").args(["install", "-y", "qemu-system-arm"]));
+    let install = || {
+        util::run(
+            Command::new("apt-get")
+                .env("DEBIAN_FRONTEND", "noninteractive")
+                .args(["install", "-y", "qemu-system-arm"]),
+        )
+    };
     if install().is_err() {
         util::run(Command::new("apt-get").arg("update"))?;
         install()?;
