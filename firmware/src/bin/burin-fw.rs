@@ -1,15 +1,21 @@
 //! burin's RTIC app (built only for thumbv7em-none-eabihf).
 //!
 //! Priorities, highest first, as DESIGN.md lays them out:
-//! 3. `step` (TIM5): one step event, one BSRR write, next period into ARR;
-//! 2. `usb` (OTG_FS): the USB port, bytes in and out;
-//! 1. `parse` (async software task): parse and plan; for now an echo.
-//!    `heartbeat` (SysTick, 10 Hz) shares this level: LED, input watch.
+//! 3. `step` (TIM5): the core's `Stepper` on the segment queue's consumer:
+//!    one BSRR write per event, next period into ARR, pulse end on CC1;
+//! 2. `usb` (OTG_FS, or `usart` on QEMU): bytes through the link's
+//!    `RxSplitter` into the token ring (realtime bytes flag at once), reply
+//!    bytes out of the TX ring;
+//! 1. `parse` (async software task): the device session (`burin::device`:
+//!    parser, interpreter, executor) and `Machine::poll` (planner, segment
+//!    preparer). It sleeps on a wake channel the other tasks signal.
+//!    `heartbeat` (SysTick, 10 Hz) shares this level: LED, panel inputs.
 //!
 //! `idle` feeds the watchdog and sleeps. It runs only when every task is
 //! done, so a task that hogs the CPU starves the watchdog and the chip resets.
-//! No resource is shared between priorities: every task owns its state, so
-//! nothing a higher task needs is ever behind a lower task's lock.
+//! No resource is shared between priorities: every task owns its state and
+//! the tasks meet only in lock-free spsc rings and the `RT`/`FLAGS` atomics,
+//! so nothing a higher task needs is ever behind a lower task's lock.
 #![cfg_attr(target_os = "none", no_std, no_main)]
 #![deny(unsafe_op_in_unsafe_fn)]
 
@@ -22,6 +28,9 @@ fn main() {
 #[cfg(target_os = "none")]
 #[path = "burin-fw/boards/mod.rs"]
 mod boards;
+#[cfg(target_os = "none")]
+#[path = "burin-fw/session.rs"]
+mod session;
 #[cfg(target_os = "none")]
 #[path = "burin-fw/step.rs"]
 mod step;
@@ -36,9 +45,6 @@ mod usb;
 #[cfg(target_os = "none")]
 use {defmt_rtt as _, panic_probe as _};
 
-/// Step rate of the stand-in pulse train on X (see `step::FixedRate`).
-#[cfg(target_os = "none")]
-const DEMO_STEP_HZ: u32 = 1_000;
 /// SysTick rate; the watchdog timeout must be several of these periods.
 #[cfg(target_os = "none")]
 const HEARTBEAT_HZ: u32 = 10;
@@ -46,19 +52,35 @@ const HEARTBEAT_HZ: u32 = 10;
 #[cfg(target_os = "none")]
 const WATCHDOG_MS: u32 = 500;
 
+/// Realtime state shared by every priority (atomics only).
+#[cfg(target_os = "none")]
+static RT: burin::realtime::Realtime = burin::realtime::Realtime::new();
+/// Realtime commands the link interrupt picked out of the byte stream.
+#[cfg(target_os = "none")]
+static FLAGS: burin::link::RtFlags = burin::link::RtFlags::new();
+
 // USART6 is only a dispatcher: its pins (PA11/PA12) carry USB on this board.
 #[cfg(target_os = "none")]
 #[rtic::app(device = stm32f4xx_hal::pac, peripherals = true, dispatchers = [USART6])]
 mod app {
     use crate::boards::board;
-    use crate::step::{FixedRate, StepPort, Tim5};
+    use crate::session::{AppLink, AppMotion, TxRing, PLANNER_BLOCKS, SEGMENT_SLOTS, TX_RING};
+    use crate::step::{StepDriver, Tim5, STEPPING};
     #[cfg(feature = "board-qemu")]
-    use crate::usart::{Packet, RxReceiver, TxSender, UsartLink as Link, RX_PACKETS, TX_PACKETS};
+    use crate::usart::UsartLink as Link;
     #[cfg(not(feature = "board-qemu"))]
-    use crate::usb::{Packet, RxReceiver, TxSender, UsbLink as Link, RX_PACKETS, TX_PACKETS};
+    use crate::usb::UsbLink as Link;
+    use burin::device::{Device, Identity};
+    use burin::link::{LineAssembler, RxToken, RX_RING};
+    use burin::machine::Machine;
+    use burin::settings::Settings;
+    use burin::stepper::{Segment, Stepper};
     #[cfg(not(feature = "board-qemu"))]
     use burin::usb_ids::{serial_from_uid, USB_SERIAL_LEN};
+    use core::sync::atomic::Ordering;
     use cortex_m::peripheral::syst::SystClkSource;
+    use heapless::spsc::{Consumer, Producer, Queue};
+    use rtic_sync::channel::{Receiver, Sender};
     #[cfg(not(feature = "board-qemu"))]
     use stm32f4xx_hal::otg_fs::{UsbBus, UsbBusType, USB};
     use stm32f4xx_hal::{
@@ -76,28 +98,43 @@ mod app {
     #[cfg(feature = "board-qemu")]
     const LINK_IRQ: pac::Interrupt = crate::usart::IRQ;
 
+    /// "Something changed, run the session": a one-slot channel, so any
+    /// number of signals before the task runs cost one pass.
+    type Wake = Sender<'static, (), 1>;
+
     #[shared]
     struct Shared {}
 
     #[local]
     struct Local {
-        timer: Tim5,
-        steppers: StepPort,
-        pulses: FixedRate,
+        driver: StepDriver,
+        wake_step: Wake,
         /// USB-CDC (`usb.rs`), or USART1 on QEMU (`usart.rs`). Two names
         /// because RTIC checks task locals before cfg removes a task.
         #[cfg(not(feature = "board-qemu"))]
         link: Link,
+        #[cfg(not(feature = "board-qemu"))]
+        wake_usb: Wake,
         #[cfg(feature = "board-qemu")]
         uart: Link,
-        rx: RxReceiver,
-        tx: TxSender,
+        #[cfg(feature = "board-qemu")]
+        wake_uart: Wake,
+        wake: Receiver<'static, (), 1>,
+        rx_tokens: Consumer<'static, RxToken>,
+        tx_bytes: Producer<'static, u8>,
+        segments: Producer<'static, Segment>,
+        machine: Machine<PLANNER_BLOCKS>,
+        device: Device,
         led: PC13<Output>,
         inputs: board::Inputs,
+        wake_beat: Wake,
         watchdog: IndependentWatchdog,
     }
 
     #[init(local = [
+        rx_ring: Queue<RxToken, RX_RING> = Queue::new(),
+        tx_ring: Queue<u8, TX_RING> = Queue::new(),
+        seg_ring: Queue<Segment, SEGMENT_SLOTS> = Queue::new(),
         #[cfg(not(feature = "board-qemu"))]
         ep_memory: [u32; 1024] = [0; 1024],
         #[cfg(not(feature = "board-qemu"))]
@@ -131,19 +168,11 @@ mod app {
         let mut aux = pins.aux;
         aux.all_off();
 
-        // Step timer: TIM5 at the timer clock, first event one half period
-        // from now. Its interrupt is unmasked by RTIC when init returns.
-        let mut timer = Tim5::new(dp.TIM5, &mut rcc);
-        let pulses = FixedRate::new(
-            crate::DEMO_STEP_HZ,
-            burin::seams::StepTimer::tick_hz(&timer),
-        );
-        timer.start(pulses.first());
-
-        // Channels between the USB interrupt and the parse task.
-        let (rx_send, rx) = rtic_sync::make_channel!(Packet, RX_PACKETS);
-        let (tx, tx_recv) = rtic_sync::make_channel!(Packet, TX_PACKETS);
-
+        // Rings between the tasks, split once: producer and consumer each
+        // go to the one task that uses that end.
+        let (rx_send, rx_tokens) = cx.local.rx_ring.split();
+        let (tx_bytes, tx_recv) = cx.local.tx_ring.split();
+        let (segments, seg_recv) = cx.local.seg_ring.split();
         // USB: serial number from the 96-bit unique ID, then the CDC port.
         #[cfg(not(feature = "board-qemu"))]
         let serial = serial_from_uid(read_uid(), cx.local.serial);
@@ -161,6 +190,7 @@ mod app {
         #[cfg(not(feature = "board-qemu"))]
         let link = Link::new(bus, serial, rx_send, tx_recv);
         // QEMU: USART1 at BAUD 8N1 (the first `-serial` of the machine).
+        // Early in init: QEMU drops what the host sends before UE is set.
         #[cfg(feature = "board-qemu")]
         let uart = match dp
             .USART1
@@ -172,6 +202,25 @@ mod app {
         #[cfg(feature = "board-qemu")]
         let serial = "-";
 
+        // Motion core: executor on the default settings, stepper with the
+        // same pin timing, the step port with the same inverts.
+        let timer = Tim5::new(dp.TIM5, &mut rcc);
+        let settings = Settings::default();
+        let machine = Machine::new(settings, burin::seams::StepTimer::tick_hz(&timer));
+        let cfg = machine.step_config();
+        let mut steppers = pins.steppers;
+        steppers.set_invert(cfg.step_invert, cfg.dir_invert, settings.enable_invert);
+
+        // The step timer stays stopped until `parse` queues segments.
+        let driver = StepDriver::new(
+            timer,
+            steppers,
+            Stepper::new(cfg),
+            seg_recv,
+            cfg.pulse_ticks,
+        );
+        let (wake_step, wake) = rtic_sync::make_channel!((), 1);
+
         // Heartbeat: SysTick at HEARTBEAT_HZ from the core clock.
         let sysclk = rcc.clocks.sysclk().raw();
         core.SYST.set_clock_source(SystClkSource::Core);
@@ -182,7 +231,7 @@ mod app {
         core.SYST.enable_interrupt();
         core.SYST.enable_counter();
 
-        // The parse task waits on the RX channel from the start.
+        // The parse task prints the banner, then waits for a wake-up.
         if parse::spawn().is_err() {
             defmt::error!("parse task already running");
         }
@@ -201,17 +250,28 @@ mod app {
         (
             Shared {},
             Local {
-                timer,
-                steppers: pins.steppers,
-                pulses,
+                driver,
+                wake_step: wake_step.clone(),
                 #[cfg(not(feature = "board-qemu"))]
                 link,
+                #[cfg(not(feature = "board-qemu"))]
+                wake_usb: wake_step.clone(),
                 #[cfg(feature = "board-qemu")]
                 uart,
-                rx,
-                tx,
+                #[cfg(feature = "board-qemu")]
+                wake_uart: wake_step.clone(),
+                wake,
+                rx_tokens,
+                tx_bytes,
+                segments,
+                machine,
+                device: Device::new(Identity {
+                    board: board::NAME,
+                    caps: 0,
+                }),
                 led: pins.led,
                 inputs: pins.inputs,
+                wake_beat: wake_step,
                 watchdog,
             },
         )
@@ -226,55 +286,102 @@ mod app {
         }
     }
 
-    /// One step event. The generator decides pins and the next period; this
-    /// task only acknowledges the timer and lends it the two seams.
-    #[task(binds = TIM5, priority = 3, local = [timer, steppers, pulses])]
+    /// Step events, pulse ends and restarts (see `step::StepDriver`). The
+    /// switches are one IDR read; a taken segment or a stop wakes `parse`.
+    #[task(binds = TIM5, priority = 3, local = [driver, wake_step])]
     fn step(cx: step::Context) {
-        let step::LocalResources {
-            timer,
-            steppers,
-            pulses,
+        if cx.local.driver.on_interrupt(&crate::RT, board::switches()) {
+            let _ = cx.local.wake_step.try_send(());
+        }
+    }
+
+    /// The USB port: enumeration, bytes to the splitter, replies out.
+    #[cfg(not(feature = "board-qemu"))]
+    #[task(binds = OTG_FS, priority = 2, local = [link, wake_usb])]
+    fn usb(cx: usb::Context) {
+        if cx.local.link.service(&crate::FLAGS) {
+            let _ = cx.local.wake_usb.try_send(());
+        }
+    }
+
+    /// The same for the USART link (QEMU).
+    #[cfg(feature = "board-qemu")]
+    #[task(binds = USART1, priority = 2, local = [uart, wake_uart])]
+    fn usart(cx: usart::Context) {
+        if cx.local.uart.service(&crate::FLAGS) {
+            let _ = cx.local.wake_uart.try_send(());
+        }
+    }
+
+    /// Parser -> interpreter -> planner -> segment preparer, one pass per
+    /// wake-up. The session runs only with room for its replies in the TX
+    /// ring (otherwise the link is not read: backpressure, no lost `ok`).
+    #[task(priority = 1, local = [wake, rx_tokens, tx_bytes, segments, machine, device,
+        asm: LineAssembler = LineAssembler::new()])]
+    async fn parse(cx: parse::Context) {
+        let parse::LocalResources {
+            wake,
+            rx_tokens,
+            tx_bytes,
+            segments,
+            machine,
+            device,
+            asm,
             ..
         } = cx.local;
-        timer.clear_update();
-        pulses.on_event(steppers, timer);
-    }
-
-    /// The USB port: enumeration, received packets to `parse`, replies out.
-    #[cfg(not(feature = "board-qemu"))]
-    #[task(binds = OTG_FS, priority = 2, local = [link])]
-    fn usb(cx: usb::Context) {
-        cx.local.link.service();
-    }
-
-    /// The same for the USART link (QEMU): bytes in, replies out.
-    #[cfg(feature = "board-qemu")]
-    #[task(binds = USART1, priority = 2, local = [uart])]
-    fn usart(cx: usart::Context) {
-        cx.local.uart.service();
-    }
-
-    /// Will run parser -> interpreter -> planner -> segment preparer. Until
-    /// those land it echoes every packet back. After queueing a reply it
-    /// pends OTG_FS, because an idle USB core raises no interrupt by itself.
-    #[task(priority = 1, local = [rx, tx])]
-    async fn parse(cx: parse::Context) {
-        while let Ok(packet) = cx.local.rx.recv().await {
-            if cx.local.tx.send(packet).await.is_err() {
+        let mut tx = TxRing {
+            ring: tx_bytes,
+            dropped: 0,
+        };
+        device.hello(&mut tx);
+        loop {
+            let mut link = AppLink {
+                asm: &mut *asm,
+                rx: &mut *rx_tokens,
+                flags: &crate::FLAGS,
+            };
+            let mut motion = AppMotion {
+                machine: &mut *machine,
+                segments: &mut *segments,
+                rt: &crate::RT,
+            };
+            #[cfg(not(feature = "board-qemu"))]
+            if crate::usb::PORT_CLOSED.swap(false, Ordering::AcqRel) {
+                device.port_reset(&mut link, &motion);
+            }
+            // Session, executor, session again: it reacts to what the
+            // executor did (sync points, alarms) in the same wake-up.
+            for _ in 0..2 {
+                if tx.has_room() {
+                    device.poll(&mut link, &mut motion, &mut tx);
+                }
+                motion.poll(board::switches());
+            }
+            // Segments waiting and the timer stopped: TIM5 starts itself.
+            if motion.queued() && !STEPPING.load(Ordering::Acquire) {
+                rtic::pend(pac::Interrupt::TIM5);
+            }
+            // Replies out (an idle port raises no interrupt by itself).
+            rtic::pend(LINK_IRQ);
+            if tx.dropped > 0 {
+                defmt::error!("{} reply bytes dropped", core::mem::take(&mut tx.dropped));
+            }
+            if wake.recv().await.is_err() {
                 break;
             }
-            rtic::pend(LINK_IRQ);
         }
-        defmt::error!("link channel closed; parse task ends");
+        defmt::error!("wake channel closed; parse task ends");
     }
 
-    /// 10 Hz housekeeping: blink the LED at 1 Hz (alive) and log input
-    /// changes, so the wiring can be checked switch by switch with a probe.
-    #[task(binds = SysTick, priority = 1, local = [led, inputs, ticks: u32 = 0, last: u8 = 0])]
+    /// 10 Hz housekeeping: blink the LED at 1 Hz (alive), wake `parse`
+    /// (status cadence, timeouts), and turn panel buttons into realtime
+    /// commands: a 100 ms sample is their debounce.
+    #[task(binds = SysTick, priority = 1, local = [led, inputs, wake_beat, ticks: u32 = 0, last: u8 = 0])]
     fn heartbeat(cx: heartbeat::Context) {
         let heartbeat::LocalResources {
             led,
             inputs,
+            wake_beat,
             ticks,
             last,
             ..
@@ -283,7 +390,18 @@ mod app {
         if *ticks % (crate::HEARTBEAT_HZ / 2) == 0 {
             led.toggle();
         }
-        let closed = inputs.closed();
+        let _ = wake_beat.try_send(());
+        let closed = board::panel(inputs);
+        let pressed = closed & !*last;
+        if pressed & board::FEED_HOLD != 0 {
+            crate::RT.feed_hold();
+        }
+        if pressed & board::CYCLE_START != 0 {
+            crate::RT.cycle_start();
+        }
+        if pressed & board::ESTOP != 0 {
+            crate::RT.request_reset();
+        }
         if closed != *last {
             defmt::info!(
                 "inputs closed: {=u8:07b} (bit 0 X limit .. 6 e-stop)",

@@ -1,8 +1,12 @@
 //! The step seams on real registers: [`StepPort`] drives every step, direction
-//! and enable pin of one GPIO port with single BSRR writes, and [`Tim5`] is the
-//! 32-bit step timer. The TIM5 task only ever talks to these two through
-//! `burin::seams`, so the motion core's step generator drops in unchanged.
+//! and enable pin of one GPIO port with single BSRR writes, [`Tim5`] is the
+//! 32-bit step timer, and [`StepDriver`] runs the motion core's [`Stepper`]
+//! on them from the TIM5 interrupt.
+use burin::realtime::Realtime;
 use burin::seams::{StepPins, StepTimer};
+use burin::stepper::{Segment, StepEvent, Stepper, Switches};
+use core::sync::atomic::{AtomicBool, Ordering};
+use heapless::spsc::Consumer;
 use stm32f4xx_hal::{pac, rcc::Rcc, timer::Timer};
 
 /// Pin numbers (0..=15) on the step port. Axis n is X, Y, Z, A for n = 0..3.
@@ -148,22 +152,47 @@ impl StepPins for StepPort {
     }
 }
 
+impl StepPort {
+    /// One step event in ONE store: direction pins of every axis (a no-op
+    /// unless they changed, and the stepper gives a change its own event
+    /// `dir_setup` ahead of the first step) plus the step pins that rise.
+    #[inline(always)]
+    pub fn fire(&mut self, dir_mask: u8, step_mask: u8) {
+        let word =
+            self.dirs[usize::from(dir_mask & 0xF)] | self.step_on[usize::from(step_mask & 0xF)];
+        self.write(word);
+    }
+}
+
 /// Shortest period the step timer accepts: below this the ISR could not
 /// finish before the next update (about 1 µs at 96 MHz).
 pub const MIN_TICKS: u32 = 96;
+
+/// True while TIM5 runs step events. The parse task reads it to know when
+/// the queue needs a kick (pend TIM5 while stopped, see [`StepDriver`]).
+pub static STEPPING: AtomicBool = AtomicBool::new(false);
 
 /// TIM5 as the step timer: prescaler 1, so one tick is one timer-clock cycle
 /// (96 MHz on the F411, 84 MHz on the F401), and a 32-bit auto-reload, so
 /// even a 1 step/min move is a single period.
 ///
-/// Each event is an update (overflow). The next period goes into ARR with
-/// ARPE set: the write lands in the preload register and takes effect at the
-/// next update, so it can never be "missed" by a counter that already passed
-/// it (which would wrap through 2^32 ticks, 45 s). The price is a pipeline
-/// of one: the period written at event k is the one from event k+1 to k+2.
+/// Each step event is an update (overflow). The next period goes into ARR
+/// with ARPE set: the write lands in the preload register and takes effect
+/// at the next update, so it can never be "missed" by a counter that
+/// already passed it (which would wrap through 2^32 ticks, 45 s). The price
+/// is a pipeline of one, which [`StepDriver`] absorbs by computing each
+/// event one period ahead. Compare channel 1 ends the step pulse: the
+/// counter restarts at every update, so a fixed CCR1 = pulse width fires
+/// exactly that long after each event, with no busy-wait in the ISR.
 pub struct Tim5 {
     tim: pac::TIM5,
     tick_hz: u32,
+}
+
+/// Which of the timer's events raised the interrupt.
+pub struct Flags {
+    pub update: bool,
+    pub pulse_end: bool,
 }
 
 impl Tim5 {
@@ -179,22 +208,41 @@ impl Tim5 {
         Tim5 { tim, tick_hz }
     }
 
+    /// Pulse width in ticks (`$0`): CC1 fires this long after each update.
+    pub fn set_pulse(&mut self, ticks: u32) {
+        self.tim.ccr1().write(|w| w.ccr().set(ticks.max(1)));
+    }
+
     /// Starts firing update events, the first after `first_ticks`.
     pub fn start(&mut self, first_ticks: u32) {
         self.schedule_in(first_ticks);
         self.tim.cnt().reset();
         // UG copies the preloaded ARR into the shadow register now.
         self.tim.egr().write(|w| w.ug().set_bit());
-        self.clear_update();
-        self.tim.dier().write(|w| w.uie().set_bit());
+        self.tim
+            .sr()
+            .write(|w| w.uif().clear_bit().cc1if().clear_bit());
+        self.tim
+            .dier()
+            .write(|w| w.uie().set_bit().cc1ie().set_bit());
         self.tim.cr1().modify(|_, w| w.cen().set_bit());
     }
 
-    /// Acknowledges the update event (first thing in the ISR, so that a
-    /// late write cannot clear the next event's flag).
+    /// Reads and acknowledges the pending events (first thing in the ISR,
+    /// so that a late write cannot clear the next event's flag).
     #[inline(always)]
-    pub fn clear_update(&mut self) {
-        self.tim.sr().write(|w| w.uif().clear_bit());
+    pub fn take_flags(&mut self) -> Flags {
+        let sr = self.tim.sr().read();
+        let flags = Flags {
+            update: sr.uif().bit_is_set(),
+            pulse_end: sr.cc1if().bit_is_set(),
+        };
+        // rc_w0 bits: writing 1 leaves a flag alone, 0 clears it.
+        self.tim.sr().write(|w| {
+            w.uif().bit(!flags.update);
+            w.cc1if().bit(!flags.pulse_end)
+        });
+        flags
     }
 }
 
@@ -210,40 +258,108 @@ impl StepTimer for Tim5 {
     }
     fn stop(&mut self) {
         self.tim.cr1().modify(|_, w| w.cen().clear_bit());
+        // Stopping happens a whole period after the last event, so its
+        // pulse (ended by CC1 at `pulse_ticks`) is already over.
     }
 }
 
-/// Stand-in for the motion core's step generator until it is wired in: a
-/// square wave on X at a fixed rate, with the drivers left disabled so that
-/// nothing moves. It has the generator's shape, one call per timer event
-/// through the seams, so replacing it changes no other code.
-pub struct FixedRate {
-    half_period: u32,
-    high: bool,
+/// The TIM5 task's state: the core's [`Stepper`] fed from the segment queue,
+/// its events on [`StepPort`] and [`Tim5`].
+///
+/// Pipeline: at update k the event computed at update k-1 is applied (one
+/// BSRR write) and event k+1 is computed, its period going into ARR's
+/// preload, which the hardware loads at update k+1: exactly when it is due.
+/// So switches are sampled one event ahead of the pulse they gate; a trip
+/// still stops pulses within one step event.
+pub struct StepDriver {
+    timer: Tim5,
+    port: StepPort,
+    stepper: Stepper,
+    queue: Consumer<'static, Segment>,
+    next: Option<StepEvent>,
 }
 
-impl FixedRate {
-    pub fn new(step_hz: u32, tick_hz: u32) -> Self {
-        let half_period = (tick_hz / step_hz.max(1) / 2).max(MIN_TICKS);
-        FixedRate {
-            half_period,
-            high: false,
+impl StepDriver {
+    pub fn new(
+        mut timer: Tim5,
+        port: StepPort,
+        stepper: Stepper,
+        queue: Consumer<'static, Segment>,
+        pulse_ticks: u32,
+    ) -> Self {
+        timer.set_pulse(pulse_ticks);
+        StepDriver {
+            timer,
+            port,
+            stepper,
+            queue,
+            next: None,
         }
     }
 
-    /// Ticks to the first event.
-    pub fn first(&self) -> u32 {
-        self.half_period
+    /// The whole TIM5 interrupt. Returns true when the planner should run
+    /// (a segment was taken, so there is room, or the timer stopped).
+    pub fn on_interrupt(&mut self, rt: &Realtime, sw: Switches) -> bool {
+        let flags = self.timer.take_flags();
+        if flags.pulse_end {
+            self.port.step_low();
+        }
+        if flags.update {
+            return match self.next.take() {
+                Some(ev) if ev.ticks > 0 => {
+                    self.port.fire(ev.dir_mask, ev.step_mask);
+                    self.prepare(rt, sw)
+                }
+                // The last period has elapsed: go on if more was queued
+                // meanwhile, else stop.
+                _ => self.begin(rt, sw),
+            };
+        }
+        // A pend from the parse task (segments queued while stopped).
+        if !flags.pulse_end && !STEPPING.load(Ordering::Acquire) {
+            return self.begin(rt, sw);
+        }
+        false
+    }
+
+    /// Fires the first event now and primes the pipeline, or stops.
+    fn begin(&mut self, rt: &Realtime, sw: Switches) -> bool {
+        let (ev, took) = self.step(rt, sw);
+        if ev.ticks == 0 {
+            self.timer.stop();
+            STEPPING.store(false, Ordering::Release);
+            return true;
+        }
+        STEPPING.store(true, Ordering::Release);
+        self.port.set_enabled(true);
+        self.port.fire(ev.dir_mask, ev.step_mask);
+        self.timer.start(ev.ticks);
+        self.prepare(rt, sw) | took
+    }
+
+    /// Computes the next event and queues its period.
+    fn prepare(&mut self, rt: &Realtime, sw: Switches) -> bool {
+        let (ev, took) = self.step(rt, sw);
+        if ev.ticks > 0 {
+            self.timer.schedule_in(ev.ticks);
+        }
+        self.next = Some(ev);
+        took
     }
 
     #[inline(always)]
-    pub fn on_event(&mut self, pins: &mut impl StepPins, timer: &mut impl StepTimer) {
-        if self.high {
-            pins.step_low();
-        } else {
-            pins.step_high(0b0001);
-        }
-        self.high = !self.high;
-        timer.schedule_in(self.half_period);
+    fn step(&mut self, rt: &Realtime, sw: Switches) -> (StepEvent, bool) {
+        let queue = &mut self.queue;
+        let mut took = false;
+        let ev = self.stepper.on_event(
+            rt,
+            &mut || {
+                let s = queue.dequeue();
+                took |= s.is_some();
+                s
+            },
+            sw,
+        );
+        (ev, took)
     }
 }

@@ -1,42 +1,39 @@
 //! The USB side of the link: a CDC-ACM port serviced entirely from the
-//! OTG_FS interrupt. Received packets go to the parse task through a
-//! channel; the parse task's replies come back through another and are fed
-//! to the port whenever the USB core can take them.
+//! OTG_FS interrupt. Received packets go through the link's [`RxSplitter`]
+//! into the token ring (realtime bytes become flags at once); replies come
+//! from the TX byte ring and are fed to the port whenever it can take them.
+use burin::link::{RtFlags, RxSplitter, RxToken};
 use burin::usb_ids::{USB_MANUFACTURER, USB_PID, USB_PRODUCT, USB_VID};
-use rtic_sync::channel::{Receiver, Sender};
+use core::sync::atomic::{AtomicBool, Ordering};
+use heapless::spsc::{Consumer, Producer};
 use stm32f4xx_hal::otg_fs::UsbBusType;
 use usb_device::{bus::UsbBusAllocator, prelude::*};
 use usbd_serial::SerialPort;
 
-/// One full-speed bulk packet, the unit moved between tasks.
-pub type Packet = heapless::Vec<u8, 64>;
-/// Packets the parse task may lag behind reception (512 bytes).
-pub const RX_PACKETS: usize = 8;
-/// Reply packets waiting for the USB core.
-pub const TX_PACKETS: usize = 4;
-
-pub type RxSender = Sender<'static, Packet, RX_PACKETS>;
-pub type RxReceiver = Receiver<'static, Packet, RX_PACKETS>;
-pub type TxSender = Sender<'static, Packet, TX_PACKETS>;
-pub type TxReceiver = Receiver<'static, Packet, TX_PACKETS>;
+/// Set when the host closed the port (DTR dropped) or the bus was reset;
+/// the parse task tells the device session (`Device::port_reset`).
+pub static PORT_CLOSED: AtomicBool = AtomicBool::new(false);
 
 pub struct UsbLink {
     dev: UsbDevice<'static, UsbBusType>,
     serial: SerialPort<'static, UsbBusType>,
-    rx: RxSender,
-    tx: TxReceiver,
-    /// Reply being written and how much of it the port has taken.
-    pending: Packet,
+    splitter: RxSplitter,
+    rx: Producer<'static, RxToken>,
+    tx: Consumer<'static, u8>,
+    /// Reply bytes taken from the ring and how many the port has taken.
+    pending: [u8; 64],
+    len: usize,
     sent: usize,
-    overruns: u32,
+    /// The port was open (DTR high, configured) at the last interrupt.
+    open: bool,
 }
 
 impl UsbLink {
     pub fn new(
         bus: &'static UsbBusAllocator<UsbBusType>,
         serial_number: &'static str,
-        rx: RxSender,
-        tx: TxReceiver,
+        rx: Producer<'static, RxToken>,
+        tx: Consumer<'static, u8>,
     ) -> Self {
         // The class must be allocated before the device is built.
         let serial = SerialPort::new(bus);
@@ -54,56 +51,73 @@ impl UsbLink {
         UsbLink {
             dev,
             serial,
+            splitter: RxSplitter::new(),
             rx,
             tx,
-            pending: Packet::new(),
+            pending: [0; 64],
+            len: 0,
             sent: 0,
-            overruns: 0,
+            open: false,
         }
     }
 
     /// Everything the OTG_FS interrupt does. Reads are never deferred: an
     /// unread OUT packet keeps the core's RX-level interrupt asserted, which
     /// would starve the lower-priority parse task that is meant to free room.
-    pub fn service(&mut self) {
+    /// (A character-counting or credit-paced sender never overfills the
+    /// ring; if one does, the splitter marks the overflow in the stream.)
+    /// Returns true when the parse task has something new to do.
+    pub fn service(&mut self, flags: &RtFlags) -> bool {
+        let mut news = false;
         if self.dev.poll(&mut [&mut self.serial]) {
-            self.receive();
+            news |= self.receive(flags);
         }
-        self.transmit();
+        let open = self.dev.state() == UsbDeviceState::Configured && self.serial.dtr();
+        if self.open && !open {
+            // Port closed or bus reset: back to text mode at this point of
+            // the stream; replies still queued have no reader.
+            self.splitter.reset(&mut self.rx, flags);
+            while self.tx.dequeue().is_some() {}
+            (self.len, self.sent) = (0, 0);
+            PORT_CLOSED.store(true, Ordering::Release);
+            news = true;
+        }
+        self.open = open;
+        news | self.transmit()
     }
 
-    fn receive(&mut self) {
+    fn receive(&mut self, flags: &RtFlags) -> bool {
         let mut buf = [0u8; 64];
+        let mut any = false;
         while let Ok(n @ 1..) = self.serial.read(&mut buf) {
-            // Realtime bytes (? ! ~ 0x18) will be picked out here, before
-            // queueing, so they act even when the job stream is backed up.
-            let bytes = buf.get(..n).unwrap_or(&[]);
-            let Ok(packet) = Packet::from_slice(bytes) else {
-                continue;
-            };
-            if self.rx.try_send(packet).is_err() {
-                // Senders pace themselves by credits / GRBL character
-                // counting; landing here means the host overran the buffer
-                // it was told about. Count it; the protocol layer reports it.
-                self.overruns = self.overruns.wrapping_add(1);
-                defmt::warn!("usb rx overrun #{}: {} bytes dropped", self.overruns, n);
-            }
+            self.splitter
+                .feed(buf.get(..n).unwrap_or(&[]), &mut self.rx, flags);
+            any = true;
         }
+        any
     }
 
-    fn transmit(&mut self) {
+    /// Returns true when reply bytes left the ring (room for the parse task).
+    fn transmit(&mut self) -> bool {
+        let mut freed = false;
         loop {
-            if self.sent >= self.pending.len() {
-                match self.tx.try_recv() {
-                    Ok(packet) => (self.pending, self.sent) = (packet, 0),
-                    Err(_) => return,
+            if self.sent >= self.len {
+                (self.len, self.sent) = (0, 0);
+                for slot in self.pending.iter_mut() {
+                    let Some(b) = self.tx.dequeue() else { break };
+                    *slot = b;
+                    self.len += 1;
                 }
+                if self.len == 0 {
+                    return freed;
+                }
+                freed = true;
             }
-            let rest = self.pending.get(self.sent..).unwrap_or(&[]);
+            let rest = self.pending.get(self.sent..self.len).unwrap_or(&[]);
             match self.serial.write(rest) {
                 Ok(n) if n > 0 => self.sent += n,
                 // Port buffer full: the IN-complete interrupt calls us again.
-                _ => return,
+                _ => return freed,
             }
         }
     }

@@ -25,6 +25,7 @@
 //! (JTAG pins with reset pull-ups, spare). PB11 does not exist on this package.
 use super::super::step::{PortPins, StepPort};
 use burin::seams::StepPins;
+use burin::stepper::Switches;
 use stm32f4xx_hal::{
     gpio::{
         gpioa, gpiob, gpioc, Input, Output, PinState, Speed, PA0, PA1, PA11, PA12, PA2, PA3, PA4,
@@ -78,6 +79,30 @@ impl Inputs {
         .iter()
         .enumerate()
         .fold(0, |acc, (i, &low)| acc | (u8::from(low) << i))
+    }
+}
+
+/// Bits of [`Inputs::closed`] that are panel buttons (realtime commands).
+pub const FEED_HOLD: u8 = 1 << 4;
+pub const CYCLE_START: u8 = 1 << 5;
+pub const ESTOP: u8 = 1 << 6;
+
+/// Panel inputs for the heartbeat's edge detection: every closed input.
+pub fn panel(inputs: &Inputs) -> u8 {
+    inputs.closed()
+}
+
+/// Limit and probe levels for the step interrupt, in one IDR read: bit set
+/// = switch closed (pin low). `$5`/`$6` invert in the stepper.
+#[inline(always)]
+pub fn switches() -> Switches {
+    // SAFETY: a single read of GPIOA's input data register, which has no
+    // side effects; PA3..PA6 are inputs configured in `split`.
+    let idr = unsafe { (*pac::GPIOA::ptr()).idr().read().bits() };
+    let closed = !idr;
+    Switches {
+        limits: ((closed >> 4) & 0b111) as u8,
+        probe: closed & (1 << 3) != 0,
     }
 }
 

@@ -20,7 +20,20 @@ use stm32f4xx_hal::{
     rcc::{Config, Rcc},
 };
 
-pub use super::blackpill::Inputs;
+pub use super::blackpill::{Inputs, CYCLE_START, ESTOP, FEED_HOLD};
+use burin::stepper::Switches;
+
+/// GPIO reads 0 under QEMU, which would look like every switch closed:
+/// all inputs count as open here.
+pub fn panel(_inputs: &Inputs) -> u8 {
+    0
+}
+
+/// Limits and probe: open (see [`panel`]).
+#[inline(always)]
+pub fn switches() -> Switches {
+    Switches::default()
+}
 
 /// Human-readable board name for the startup log and `$I`.
 pub const NAME: &str = "QEMU netduinoplus2 (STM32F405)";
