@@ -116,7 +116,7 @@ pub fn build_and_check(board: Board) -> Result<Sizes> {
 }
 
 /// Builds the release image for `board` and returns the ELF, copied to
-/// `<target>/thumbv7em-none-eabihf/release/burin-fw-<board>.elf` so that the
+/// `<target>/thumbv7em-none-eabihf/firmware/burin-fw-<board>.elf` so that the
 /// two boards' images (same cargo output path) can sit side by side.
 pub fn build_board(board: Board) -> Result<PathBuf> {
     util::ensure_target()?;
@@ -127,12 +127,13 @@ pub fn build_board(board: Board) -> Result<PathBuf> {
         "firmware",
         "--bin",
         "burin-fw",
-        "--release",
+        "--profile",
+        util::FW_PROFILE,
     ]);
     cmd.args(["--target", util::TARGET]);
     cmd.args(board.cargo_features());
     util::run(&mut cmd)?;
-    let out = util::target_dir().join(util::TARGET).join("release");
+    let out = util::target_dir().join(util::TARGET).join(util::FW_PROFILE);
     let built = out.join("burin-fw");
     let elf = out.join(format!("burin-fw-{}.elf", board.name()));
     std::fs::copy(&built, &elf).with_context(|| format!("copying {}", built.display()))?;

@@ -48,6 +48,9 @@ pub fn have(tool: &str) -> bool {
 
 /// The embedded target every firmware build uses.
 pub const TARGET: &str = "thumbv7em-none-eabihf";
+/// Cargo profile of every firmware image (Cargo.toml: size-optimised, unlike
+/// `release`, which host benchmarks inherit).
+pub const FW_PROFILE: &str = "firmware";
 
 /// Install the thumb target when rustup lacks it (RUSTUP_AUTO_INSTALL=0 here).
 pub fn ensure_target() -> Result<()> {

@@ -168,6 +168,17 @@ impl StepPort {
 /// finish before the next update (about 1 µs at 96 MHz).
 pub const MIN_TICKS: u32 = 96;
 
+/// QEMU 7.2's TIM2-5 model (`stm32f2xx_timer`) counts at a fixed 1 GHz,
+/// whatever RCC says, and has no ARR preload: an ARR write schedules the
+/// next update ARR ticks after the write. It also adds the counter's offset
+/// (set by a CNT or UG write, the time of that write) to every delay, so
+/// the QEMU variant never writes CNT or EGR: the offset then stays at its
+/// reset value, 0, and periods are what ARR says. Writing the period from
+/// the ISR moves each event by the ISR's latency and the pipeline applies
+/// each period one event early; QEMU runs jobs, it does not measure timing.
+#[cfg(feature = "board-qemu")]
+pub const QEMU_TICK_HZ: u32 = 1_000_000_000;
+
 /// True while TIM5 runs step events. The parse task reads it to know when
 /// the queue needs a kick (pend TIM5 while stopped, see [`StepDriver`]).
 pub static STEPPING: AtomicBool = AtomicBool::new(false);
@@ -200,7 +211,10 @@ impl Tim5 {
         // Timer::new enables and resets the peripheral clock; from here on
         // the registers are driven directly (Counter::start would reset CNT).
         let tim = Timer::new(tim, rcc).release();
+        #[cfg(not(feature = "board-qemu"))]
         let tick_hz = rcc.clocks.timclk1().raw();
+        #[cfg(feature = "board-qemu")]
+        let tick_hz = QEMU_TICK_HZ;
         tim.psc().write(|w| w.psc().set(0));
         // URS: only a real overflow raises the update interrupt, not the UG
         // used below to load the first period.
@@ -216,9 +230,13 @@ impl Tim5 {
     /// Starts firing update events, the first after `first_ticks`.
     pub fn start(&mut self, first_ticks: u32) {
         self.schedule_in(first_ticks);
-        self.tim.cnt().reset();
-        // UG copies the preloaded ARR into the shadow register now.
-        self.tim.egr().write(|w| w.ug().set_bit());
+        // UG copies the preloaded ARR into the shadow register now. Not on
+        // QEMU: see [`QEMU_TICK_HZ`].
+        #[cfg(not(feature = "board-qemu"))]
+        {
+            self.tim.cnt().reset();
+            self.tim.egr().write(|w| w.ug().set_bit());
+        }
         self.tim
             .sr()
             .write(|w| w.uif().clear_bit().cc1if().clear_bit());
