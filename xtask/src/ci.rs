@@ -44,7 +44,10 @@ pub fn run_all() -> Result<i32> {
                 .args(["--", "-D", "warnings"]))
         },
     )?;
-    step("host tests", || run(cargo().args(["test", "--workspace"])))?;
+    // The corpus tests run in their own step below, visibly.
+    step("host tests", || {
+        run(cargo().args(["test", "--workspace", "--", "--skip", "corpus_"]))
+    })?;
     for board in crate::image::Board::ALL {
         step(&format!("firmware image + size budget ({board})"), || {
             crate::image::ci_check(board)
@@ -73,19 +76,13 @@ fn corpus() -> Result<()> {
         eprintln!("corpus conformance: skipped ({} not found)", dir.display());
         return Ok(());
     }
+    // `--workspace`, as in the host-test step: the same features, so the
+    // test binaries built there are reused instead of rebuilt.
     run(cargo().args([
         "test",
-        "-p",
-        "firmware",
+        "--workspace",
         "--test",
         "corpus_conformance",
-        "--",
-        "--nocapture",
-    ]))?;
-    run(cargo().args([
-        "test",
-        "-p",
-        "host-sim",
         "--test",
         "motion_corpus",
         "--",
