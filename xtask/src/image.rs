@@ -31,11 +31,16 @@ impl Board {
         }
     }
     /// Cargo arguments selecting this board for the firmware package.
+    /// Cargo flags that select the board.
     pub fn cargo_features(self) -> &'static [&'static str] {
         match self {
             Board::F411 => &[],
             Board::F401 => &["--no-default-features", "--features", "board-f401"],
         }
+    }
+    /// The board's cargo feature when it is not the default one.
+    pub fn features(self) -> Option<&'static str> {
+        self.cargo_features().get(2).copied()
     }
     /// probe-rs' name for the chip.
     pub fn chip(self) -> &'static str {
@@ -115,29 +120,9 @@ pub fn build_and_check(board: Board) -> Result<Sizes> {
     Ok(sizes)
 }
 
-/// Builds the release image for `board` and returns the ELF, copied to
-/// `<target>/thumbv7em-none-eabihf/firmware/burin-fw-<board>.elf` so that the
-/// two boards' images (same cargo output path) can sit side by side.
+/// Builds the image for `board` (`burin-fw-<board>.elf`).
 pub fn build_board(board: Board) -> Result<PathBuf> {
-    util::ensure_target()?;
-    let mut cmd = util::cargo();
-    cmd.args([
-        "build",
-        "--package",
-        "firmware",
-        "--bin",
-        "burin-fw",
-        "--profile",
-        util::FW_PROFILE,
-    ]);
-    cmd.args(["--target", util::TARGET]);
-    cmd.args(board.cargo_features());
-    util::run(&mut cmd)?;
-    let out = util::target_dir().join(util::TARGET).join(util::FW_PROFILE);
-    let built = out.join("burin-fw");
-    let elf = out.join(format!("burin-fw-{}.elf", board.name()));
-    std::fs::copy(&built, &elf).with_context(|| format!("copying {}", built.display()))?;
-    Ok(elf)
+    util::build_firmware("burin-fw", board.features(), board.name())
 }
 
 /// Bytes per region, plus the sections behind them.

@@ -14,28 +14,9 @@ use std::time::{Duration, Instant};
 const QEMU: &str = "qemu-system-arm";
 const MACHINE: &str = "netduinoplus2";
 
-/// Builds `bin` of the firmware package for the QEMU board (firmware
-/// profile) and returns the ELF, copied to `<bin>-qemu.elf` beside it so a
-/// later `cargo xtask build` of a real board cannot be mistaken for it.
+/// Builds `bin` for the QEMU board (`<bin>-qemu.elf`).
 pub fn build_bin(bin: &str, features: &[&str]) -> Result<PathBuf> {
-    util::ensure_target()?;
-    let mut cmd = util::cargo();
-    cmd.args([
-        "build",
-        "--package",
-        "firmware",
-        "--bin",
-        bin,
-        "--profile",
-        util::FW_PROFILE,
-    ]);
-    cmd.args(["--target", util::TARGET, "--no-default-features"]);
-    cmd.args(["--features", &features.join(",")]);
-    util::run(&mut cmd)?;
-    let out = util::target_dir().join(util::TARGET).join(util::FW_PROFILE);
-    let elf = out.join(format!("{bin}-qemu.elf"));
-    std::fs::copy(out.join(bin), &elf).with_context(|| format!("copying {bin}"))?;
-    Ok(elf)
+    util::build_firmware(bin, Some(&features.join(",")), "qemu")
 }
 
 /// Installs QEMU's ARM system emulator when it is missing (Debian package

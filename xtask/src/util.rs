@@ -84,3 +84,22 @@ pub fn target_dir() -> PathBuf {
         None => root().join("target"),
     }
 }
+
+/// Builds firmware binary `bin` in the firmware profile with `features`
+/// (`None`: the default board) and copies the ELF to `<bin>-<tag>.elf`
+/// beside cargo's output, so images of different boards (same cargo path)
+/// sit side by side and one cannot be mistaken for another.
+pub fn build_firmware(bin: &str, features: Option<&str>, tag: &str) -> Result<PathBuf> {
+    ensure_target()?;
+    let mut cmd = cargo();
+    cmd.args(["build", "--package", "firmware", "--bin", bin]);
+    cmd.args(["--profile", FW_PROFILE, "--target", TARGET]);
+    if let Some(features) = features {
+        cmd.args(["--no-default-features", "--features", features]);
+    }
+    run(&mut cmd)?;
+    let out = target_dir().join(TARGET).join(FW_PROFILE);
+    let elf = out.join(format!("{bin}-{tag}.elf"));
+    std::fs::copy(out.join(bin), &elf).with_context(|| format!("copying {bin}"))?;
+    Ok(elf)
+}
