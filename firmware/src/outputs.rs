@@ -156,7 +156,8 @@ impl Outputs {
             return 0.0;
         }
         let span = self.rpm_max - self.rpm_min;
-        if !(span > 0.0) || s >= self.rpm_max {
+        // A NaN span (never from the settings table) counts as degenerate.
+        if span.is_nan() || span <= 0.0 || s >= self.rpm_max {
             return 1.0;
         }
         ((s - self.rpm_min) / span).clamp(MIN_DUTY, 1.0)

@@ -110,7 +110,8 @@ pub fn closed_now() -> u8 {
 /// E-stop: spindle enable, PWM, flood and mist off in three stores, from
 /// the e-stop interrupt, before the parse task hears of it.
 pub fn kill_aux() {
-    const OFF: u32 = (1 << (16 + 0)) | (1 << (16 + 9)) | (1 << (16 + 10));
+    // Reset half of BSRR: bit 16 + n resets pin n.
+    const OFF: u32 = (1 << 16) | (1 << (16 + 9)) | (1 << (16 + 10));
     // SAFETY: BSRR is write-only set/reset: this store only resets PB0,
     // PB9 and PB10 (spindle enable, flood, mist, see `Aux`) and touches no
     // other pin. CCR1 of TIM1 is the spindle PWM compare value; a single

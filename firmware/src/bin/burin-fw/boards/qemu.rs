@@ -11,7 +11,7 @@
 //!
 //! Everything else is the Black Pill's pin map, so the same code paths run.
 use super::super::step::StepPort;
-use super::blackpill::{Aux, PORT_PINS};
+use super::blackpill::PORT_PINS;
 use burin::seams::StepPins;
 use stm32f4xx_hal::{
     gpio::{gpioa, gpiob, gpioc, Output, PinState, PA10, PA9, PC13},
