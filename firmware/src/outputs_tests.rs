@@ -2,11 +2,12 @@ use super::*;
 use crate::command::Command;
 
 fn settings(laser: bool) -> Settings {
-    let mut s = Settings::default();
-    s.spindle_max = 10_000.0;
-    s.spindle_min = 0.0;
-    s.laser_mode = laser;
-    s
+    Settings {
+        spindle_max: 10_000.0,
+        spindle_min: 0.0,
+        laser_mode: laser,
+        ..Settings::default()
+    }
 }
 
 fn spindle(dir: SpindleDir, speed: f32) -> Command {
@@ -18,7 +19,7 @@ const FEED: Motion = Motion::Feed { ratio: 1.0 };
 #[test]
 fn m3_m4_m5_drive_enable_dir_and_duty() {
     let mut o = Outputs::new(&settings(false));
-    assert_eq!(o.spindle(Motion::Stopped).enable, false);
+    assert!(!o.spindle(Motion::Stopped).enable);
     assert!(o.apply(&spindle(SpindleDir::Cw, 5_000.0)));
     let s = o.spindle(Motion::Stopped);
     assert!(s.enable && !s.ccw);
@@ -28,7 +29,7 @@ fn m3_m4_m5_drive_enable_dir_and_duty() {
     assert!(s.enable && s.ccw);
     assert_eq!(s.duty, 1.0);
     assert!(o.apply(&spindle(SpindleDir::Off, 10_000.0)));
-    assert_eq!(o.spindle(FEED).enable, false);
+    assert!(!o.spindle(FEED).enable);
     assert_eq!(o.spindle(FEED).duty, 0.0);
 }
 
@@ -110,7 +111,7 @@ fn program_end_and_alarm_switch_everything_off() {
     };
     on(&mut o);
     assert!(o.apply(&Command::ProgramEnd));
-    assert_eq!(o.spindle(FEED).enable, false);
+    assert!(!o.spindle(FEED).enable);
     assert!(!o.mist && !o.flood);
     on(&mut o);
     o.all_off();
@@ -126,7 +127,7 @@ fn laser_fires_only_on_feed_moves() {
     let mut o = Outputs::new(&settings(true));
     o.apply(&spindle(SpindleDir::Cw, 5_000.0));
     assert_eq!(o.spindle(Motion::Rapid).duty, 0.0, "off on G0");
-    assert_eq!(o.spindle(Motion::Rapid).enable, false);
+    assert!(!o.spindle(Motion::Rapid).enable);
     assert_eq!(o.spindle(Motion::Stopped).duty, 0.0, "off while stopped");
     let s = o.spindle(Motion::Feed { ratio: 0.2 });
     assert!(
