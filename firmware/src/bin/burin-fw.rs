@@ -70,7 +70,7 @@ use {defmt_rtt as _, panic_probe as _};
 /// SysTick rate; the watchdog timeout must be several of these periods.
 #[cfg(target_os = "none")]
 const HEARTBEAT_HZ: u32 = 100;
-/// Watchdog timeout. Idle feeds it at least every heartbeat (100 ms).
+/// Watchdog timeout. Idle feeds it at least every heartbeat (10 ms).
 #[cfg(target_os = "none")]
 const WATCHDOG_MS: u32 = 500;
 
