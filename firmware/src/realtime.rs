@@ -171,6 +171,25 @@ impl Realtime {
         self.trip_mask.store(mask, Relaxed);
         self.trip.store(trip as u8, Relaxed);
     }
+    /// A limit-switch interrupt saw a limit close during motion. It records
+    /// the same trip the stepper would at its next event (unless a trip is
+    /// already there) and makes the queued segments stale, so the stepper
+    /// stops at its next event whatever the pin reads by then (a bouncing
+    /// switch may read open again). The planner task raises the alarm and
+    /// flushes as for the stepper's own trip.
+    pub fn hard_limit(&self, mask: u8) {
+        if self.trip() == Trip::None {
+            self.set_trip(Trip::HardLimit, mask, &self.position());
+        }
+        self.halt_stepper();
+    }
+    /// Stops the stepper at its next event (e-stop, hard limit): the
+    /// running segment and everything queued become an old generation.
+    /// Only the planner task's flush (reset or alarm) makes the machine
+    /// consistent again; this only stops the pulses early.
+    pub fn halt_stepper(&self) {
+        self.bump_generation();
+    }
     pub(crate) fn clear_trip(&self) {
         self.trip.store(0, Relaxed);
         self.trip_mask.store(0, Relaxed);
@@ -207,5 +226,65 @@ impl Realtime {
         } else {
             None
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::planner::Watch;
+    use crate::settings::Settings;
+    use crate::stepper::{Segment, StepConfig, Stepper, Switches};
+
+    fn segment(generation: u32) -> Segment {
+        Segment {
+            events: 100,
+            period: 1000,
+            amass: 0,
+            new_block: true,
+            steps: [100, 0, 0, 0],
+            count: 100,
+            dir_mask: 0,
+            watch: Watch::default(),
+            end_of_motion: true,
+            generation,
+            speed_mm_min: 600.0,
+            line: 7,
+        }
+    }
+
+    #[test]
+    fn hard_limit_from_an_interrupt_stops_the_next_event() {
+        let rt = Realtime::new();
+        let mut st = Stepper::new(StepConfig::new(&Settings::default(), 1_000_000));
+        let mut queue = [
+            Some(segment(rt.generation())),
+            Some(segment(rt.generation())),
+        ];
+        let mut pop = || queue.iter_mut().find_map(Option::take);
+        let open = Switches::default();
+        assert!(st.on_event(&rt, &mut pop, open).ticks > 0);
+        assert!(st.on_event(&rt, &mut pop, open).ticks > 0);
+        let pos = rt.position();
+        // The switch closed and bounced open again before the next event.
+        rt.hard_limit(0b001);
+        assert_eq!(rt.trip(), Trip::HardLimit);
+        assert_eq!(rt.trip_mask(), 0b001);
+        assert_eq!(rt.trip_position(), pos);
+        let ev = st.on_event(&rt, &mut pop, open);
+        assert_eq!((ev.ticks, ev.step_mask), (0, 0), "no step after the trip");
+        assert!(rt.stepper_idle());
+        assert_eq!(rt.position(), pos);
+    }
+
+    #[test]
+    fn hard_limit_keeps_an_earlier_trip() {
+        let rt = Realtime::new();
+        rt.set_trip(Trip::Probe, 0, &[5; AXES]);
+        let g = rt.generation();
+        rt.hard_limit(0b100);
+        assert_eq!(rt.trip(), Trip::Probe);
+        assert_eq!(rt.trip_position(), [5; AXES]);
+        assert_ne!(rt.generation(), g, "the stepper still stops");
     }
 }

@@ -1,15 +1,31 @@
 //! burin's RTIC app (built only for thumbv7em-none-eabihf).
 //!
 //! Priorities, highest first, as DESIGN.md lays them out:
+//! 4. `limit_x`, `limit_yz` (EXTI4, EXTI9_5), `estop` (EXTI2): a limit or
+//!    e-stop edge acts in its interrupt, on the first edge, even while the
+//!    step interrupt runs: hard-limit trip / reset in the `RT` atomics, and
+//!    the stepper stops at its next event (`Realtime::hard_limit`,
+//!    `halt_stepper`). Above the step timer because acting late is the one
+//!    thing these must not do; each runs a few dozen instructions, once per
+//!    switch change (the line is masked until the contact settles), so the
+//!    step timing pays nothing in normal running. The step interrupt's own
+//!    IDR read at every event remains the guarantee that a closed limit
+//!    stops pulses within one step event;
 //! 3. `step` (TIM5): the core's `Stepper` on the segment queue's consumer:
 //!    one BSRR write per event, next period into ARR, pulse end on CC1;
 //! 2. `usb` (OTG_FS, or `usart` on QEMU): bytes through the link's
 //!    `RxSplitter` into the token ring (realtime bytes flag at once), reply
 //!    bytes out of the TX ring;
+//!    `cycle_start`, `feed_hold`, `probe` (EXTI0, EXTI1, EXTI3) share this
+//!    level: they only mask their line and record the edge; the heartbeat
+//!    acts once the level has settled (a button must not act on a glitch,
+//!    and their action goes through the session like `~`/`!` anyway);
 //! 1. `parse` (async software task): the device session (`burin::device`:
 //!    parser, interpreter, executor) and `Machine::poll` (planner, segment
 //!    preparer). It sleeps on a wake channel the other tasks signal.
-//!    `heartbeat` (SysTick, 10 Hz) shares this level: LED, panel inputs.
+//!    `heartbeat` (SysTick, 100 Hz) shares this level: LED, input debounce
+//!    (`inputs.rs`), the clock of the stepper idle-disable timer. The parse
+//!    task drives spindle, coolant and stepper enable (`outputs.rs`).
 //!
 //! `idle` feeds the watchdog and sleeps. It runs only when every task is
 //! done, so a task that hogs the CPU starves the watchdog and the chip resets.
@@ -29,6 +45,12 @@ fn main() {
 #[path = "burin-fw/boards/mod.rs"]
 mod boards;
 #[cfg(target_os = "none")]
+#[path = "burin-fw/inputs.rs"]
+mod inputs;
+#[cfg(target_os = "none")]
+#[path = "burin-fw/outputs.rs"]
+mod outputs;
+#[cfg(target_os = "none")]
 #[path = "burin-fw/session.rs"]
 mod session;
 #[cfg(target_os = "none")]
@@ -47,8 +69,8 @@ use {defmt_rtt as _, panic_probe as _};
 
 /// SysTick rate; the watchdog timeout must be several of these periods.
 #[cfg(target_os = "none")]
-const HEARTBEAT_HZ: u32 = 10;
-/// Watchdog timeout. Idle feeds it at least every heartbeat (100 ms).
+const HEARTBEAT_HZ: u32 = 100;
+/// Watchdog timeout. Idle feeds it at least every heartbeat (10 ms).
 #[cfg(target_os = "none")]
 const WATCHDOG_MS: u32 = 500;
 
@@ -64,6 +86,7 @@ static FLAGS: burin::link::RtFlags = burin::link::RtFlags::new();
 #[rtic::app(device = stm32f4xx_hal::pac, peripherals = true, dispatchers = [USART6])]
 mod app {
     use crate::boards::board;
+    use crate::outputs::Io;
     use crate::session::{AppLink, AppMotion, TxRing, PLANNER_BLOCKS, SEGMENT_SLOTS, TX_RING};
     use crate::step::{StepDriver, Tim5, STEPPING};
     #[cfg(feature = "board-qemu")]
@@ -71,8 +94,9 @@ mod app {
     #[cfg(not(feature = "board-qemu"))]
     use crate::usb::UsbLink as Link;
     use burin::device::{Device, Identity};
+    use burin::inputs::{self as inp, Debounce};
     use burin::link::{LineAssembler, RxToken, RX_RING};
-    use burin::machine::Machine;
+    use burin::machine::{Machine, State};
     use burin::settings::Settings;
     use burin::stepper::{Segment, Stepper};
     #[cfg(not(feature = "board-qemu"))]
@@ -87,6 +111,7 @@ mod app {
         gpio::{Output, PC13},
         pac,
         prelude::*,
+        syscfg::SysCfgExt,
         watchdog::IndependentWatchdog,
     };
     #[cfg(not(feature = "board-qemu"))]
@@ -126,8 +151,12 @@ mod app {
         machine: Machine<PLANNER_BLOCKS>,
         device: Device,
         led: PC13<Output>,
-        inputs: board::Inputs,
+        debounce: Debounce,
+        io: Io,
         wake_beat: Wake,
+        wake_limit_x: Wake,
+        wake_limit_yz: Wake,
+        wake_estop: Wake,
         watchdog: IndependentWatchdog,
     }
 
@@ -164,9 +193,8 @@ mod app {
         let gpioa = dp.GPIOA.split(&mut rcc);
         let gpiob = dp.GPIOB.split(&mut rcc);
         let gpioc = dp.GPIOC.split(&mut rcc);
-        let pins = board::split(gpioa, gpiob, gpioc, dp.TIM1, &mut rcc);
-        let mut aux = pins.aux;
-        aux.all_off();
+        let mut pins = board::split(gpioa, gpiob, gpioc, dp.TIM1, &mut rcc);
+        pins.aux.all_off();
 
         // Rings between the tasks, split once: producer and consumer each
         // go to the one task that uses that end.
@@ -210,6 +238,20 @@ mod app {
         let cfg = machine.step_config();
         let mut steppers = pins.steppers;
         steppers.set_invert(cfg.step_invert, cfg.dir_invert, settings.enable_invert);
+        // Outputs: spindle, coolant, and the enable pin for the idle timer
+        // (same `$4` polarity as the step port, fixed until reset like it).
+        let io = Io::new(
+            pins.aux,
+            board::enable_pin(settings.enable_invert),
+            &settings,
+        );
+        // Inputs: EXTI on both edges; the levels at power-up are settled.
+        crate::inputs::publish(settings.limit_invert, settings.probe_invert, false);
+        let mut syscfg = dp.SYSCFG.constrain(&mut rcc);
+        let mut exti = dp.EXTI;
+        let mut inputs = pins.inputs;
+        board::enable_exti(&mut inputs, &mut syscfg, &mut exti);
+        let debounce = Debounce::new(crate::inputs::SETTLE_MS, crate::inputs::active_now());
 
         // The step timer stays stopped until `parse` queues segments.
         let driver = StepDriver::new(
@@ -270,7 +312,11 @@ mod app {
                     caps: 0,
                 }),
                 led: pins.led,
-                inputs: pins.inputs,
+                debounce,
+                io,
+                wake_limit_x: wake_step.clone(),
+                wake_limit_yz: wake_step.clone(),
+                wake_estop: wake_step.clone(),
                 wake_beat: wake_step,
                 watchdog,
             },
@@ -295,6 +341,50 @@ mod app {
         }
     }
 
+    /// X limit (PA4): trips at once while armed motion runs.
+    #[task(binds = EXTI4, priority = 4, local = [wake_limit_x])]
+    fn limit_x(cx: limit_x::Context) {
+        if crate::inputs::on_limit(pac::Interrupt::EXTI4, inp::LIMIT_X) {
+            let _ = cx.local.wake_limit_x.try_send(());
+        }
+    }
+
+    /// Y and Z limits (PA5, PA6) share EXTI9_5.
+    #[task(binds = EXTI9_5, priority = 4, local = [wake_limit_yz])]
+    fn limit_yz(cx: limit_yz::Context) {
+        if crate::inputs::on_limit(pac::Interrupt::EXTI9_5, inp::LIMIT_Y | inp::LIMIT_Z) {
+            let _ = cx.local.wake_limit_yz.try_send(());
+        }
+    }
+
+    /// Reset / e-stop (PA2): pulses, spindle and coolant stop at once.
+    #[task(binds = EXTI2, priority = 4, local = [wake_estop])]
+    fn estop(cx: estop::Context) {
+        if crate::inputs::on_estop() {
+            let _ = cx.local.wake_estop.try_send(());
+        }
+    }
+
+    /// Cycle start (PA0, the board's KEY): masked until the heartbeat
+    /// has seen it settle.
+    #[task(binds = EXTI0, priority = 2)]
+    fn cycle_start(_: cycle_start::Context) {
+        crate::inputs::take_edges(pac::Interrupt::EXTI0, inp::CYCLE_START);
+    }
+
+    /// Feed hold (PA1), as cycle start.
+    #[task(binds = EXTI1, priority = 2)]
+    fn feed_hold(_: feed_hold::Context) {
+        crate::inputs::take_edges(pac::Interrupt::EXTI1, inp::FEED_HOLD);
+    }
+
+    /// Probe (PA3): only its `Pn:` bit; probing itself is timed by the
+    /// step interrupt's read at every event.
+    #[task(binds = EXTI3, priority = 2)]
+    fn probe(_: probe::Context) {
+        crate::inputs::take_edges(pac::Interrupt::EXTI3, inp::PROBE);
+    }
+
     /// The USB port: enumeration, bytes to the splitter, replies out.
     #[cfg(not(feature = "board-qemu"))]
     #[task(binds = OTG_FS, priority = 2, local = [link, wake_usb])]
@@ -316,7 +406,7 @@ mod app {
     /// Parser -> interpreter -> planner -> segment preparer, one pass per
     /// wake-up. The session runs only with room for its replies in the TX
     /// ring (otherwise the link is not read: backpressure, no lost `ok`).
-    #[task(priority = 1, local = [wake, rx_tokens, tx_bytes, segments, machine, device,
+    #[task(priority = 1, local = [wake, rx_tokens, tx_bytes, segments, machine, device, io,
         asm: LineAssembler = LineAssembler::new()])]
     async fn parse(cx: parse::Context) {
         let parse::LocalResources {
@@ -326,6 +416,7 @@ mod app {
             segments,
             machine,
             device,
+            io,
             asm,
             ..
         } = cx.local;
@@ -334,6 +425,7 @@ mod app {
             dropped: 0,
         };
         device.hello(&mut tx);
+        let mut resets = device.stats.resets;
         loop {
             let mut link = AppLink {
                 asm: &mut *asm,
@@ -344,6 +436,7 @@ mod app {
                 machine: &mut *machine,
                 segments: &mut *segments,
                 rt: &crate::RT,
+                outputs: &mut io.state,
             };
             #[cfg(not(feature = "board-qemu"))]
             if crate::usb::PORT_CLOSED.swap(false, Ordering::AcqRel) {
@@ -355,10 +448,27 @@ mod app {
                 if tx.has_room() {
                     device.poll(&mut link, &mut motion, &mut tx);
                 }
+                // A soft reset (0x18, e-stop) stops spindle and coolant.
+                if device.stats.resets != resets {
+                    resets = device.stats.resets;
+                    motion.outputs.all_off();
+                }
                 motion.poll(board::switches());
             }
-            // Segments waiting and the timer stopped: TIM5 starts itself.
-            if motion.queued() && !STEPPING.load(Ordering::Acquire) {
+            let queued = motion.queued();
+            let stepping = STEPPING.load(Ordering::Acquire);
+            let state = motion.machine.state(&crate::RT);
+            let settings = *motion.machine.settings();
+            // Hard limits for the limit interrupts: off while homing (it
+            // seeks the switches) and in alarm. Published before TIM5 is
+            // pended below, so no homing step runs armed.
+            let armed = settings.hard_limits && !matches!(state, State::Homing | State::Alarm);
+            crate::inputs::publish(settings.limit_invert, settings.probe_invert, armed);
+            let busy = queued || stepping || !crate::RT.stepper_idle();
+            io.update(crate::inputs::now_ms(), busy, state, &settings);
+            // Segments waiting, drivers awake and the timer stopped: TIM5
+            // starts itself.
+            if queued && !stepping && io.may_step() {
                 rtic::pend(pac::Interrupt::TIM5);
             }
             // Replies out (an idle port raises no interrupt by itself).
@@ -373,42 +483,46 @@ mod app {
         defmt::error!("wake channel closed; parse task ends");
     }
 
-    /// 10 Hz housekeeping: blink the LED at 1 Hz (alive), wake `parse`
-    /// (status cadence, timeouts), and turn panel buttons into realtime
-    /// commands: a 100 ms sample is their debounce.
-    #[task(binds = SysTick, priority = 1, local = [led, inputs, wake_beat, ticks: u32 = 0, last: u8 = 0])]
+    /// 100 Hz housekeeping: blink the LED at 1 Hz (alive), wake `parse`
+    /// (status cadence, timeouts, the idle-disable timer), and re-check the
+    /// inputs whose edge interrupt masked them (`inputs::poll`): settled
+    /// button presses become realtime commands through the same flags as
+    /// `!` and `~` from the host.
+    #[task(binds = SysTick, priority = 1, local = [led, debounce, wake_beat, ticks: u32 = 0])]
     fn heartbeat(cx: heartbeat::Context) {
         let heartbeat::LocalResources {
             led,
-            inputs,
+            debounce,
             wake_beat,
             ticks,
-            last,
             ..
         } = cx.local;
         *ticks = ticks.wrapping_add(1);
+        let now = ticks.wrapping_mul(1000 / crate::HEARTBEAT_HZ);
+        crate::inputs::set_now(now);
         if *ticks % (crate::HEARTBEAT_HZ / 2) == 0 {
             led.toggle();
         }
-        let _ = wake_beat.try_send(());
-        let closed = board::panel(inputs);
-        let pressed = closed & !*last;
-        if pressed & board::FEED_HOLD != 0 {
-            crate::RT.feed_hold();
+        let change = crate::inputs::poll(debounce, now);
+        if change.pressed & inp::FEED_HOLD != 0 {
+            crate::FLAGS.raise(protocol::Rt::FeedHold);
         }
-        if pressed & board::CYCLE_START != 0 {
-            crate::RT.cycle_start();
+        if change.pressed & inp::CYCLE_START != 0 {
+            crate::FLAGS.raise(protocol::Rt::CycleStart);
         }
-        if pressed & board::ESTOP != 0 {
-            crate::RT.request_reset();
+        // Instant inputs whose interrupt read them open (a bounce) and
+        // that settled closed: act now, late rather than never.
+        if change.pressed & inp::ESTOP != 0 {
+            crate::inputs::estop();
         }
-        if closed != *last {
+        crate::inputs::limits_closed(change.pressed);
+        if change.pressed | change.released != 0 {
             defmt::info!(
-                "inputs closed: {=u8:07b} (bit 0 X limit .. 6 e-stop)",
-                closed
+                "inputs active: {=u8:07b} (bit 0 X limit .. 6 e-stop)",
+                debounce.stable()
             );
-            *last = closed;
         }
+        let _ = wake_beat.try_send(());
     }
 
     /// The chip's 96-bit unique ID, lowest address first.

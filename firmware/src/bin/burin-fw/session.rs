@@ -5,7 +5,8 @@
 use burin::command::{Command, Pos};
 use burin::device::{LinkPort, MotionPort, Tx};
 use burin::link::{LineAssembler, LinkEvent, LinkMode, RtFlags, RtSet, RxToken};
-use burin::machine::{self, Machine, MachineError};
+use burin::machine::{self, Machine, MachineError, Note};
+use burin::outputs::Outputs;
 use burin::realtime::Realtime;
 use burin::settings::table::SettingError;
 use burin::settings::Settings;
@@ -62,12 +63,24 @@ pub struct AppMotion<'a> {
     pub machine: &'a mut Machine<PLANNER_BLOCKS>,
     pub segments: &'a mut Producer<'static, Segment>,
     pub rt: &'static Realtime,
+    /// Spindle and coolant as the executed commands left them.
+    pub outputs: &'a mut Outputs,
+}
+
+/// Spindle and coolant commands reach the outputs as the executor runs
+/// them: in program order, synced with motion.
+fn record(outputs: &mut Outputs, note: &Note) {
+    if let Note::Executed { command, .. } = note {
+        outputs.apply(command);
+    }
 }
 
 impl AppMotion<'_> {
     /// Background work of the executor: fill the segment queue.
     pub fn poll(&mut self, sw: Switches) {
-        self.machine.poll(self.rt, self.segments, sw, &mut |_| {});
+        let outputs = &mut *self.outputs;
+        self.machine
+            .poll(self.rt, self.segments, sw, &mut |n| record(outputs, &n));
     }
     /// Segments are waiting for the step interrupt.
     pub fn queued(&self) -> bool {
@@ -83,7 +96,9 @@ impl MotionPort for AppMotion<'_> {
         self.machine.ready()
     }
     fn submit(&mut self, cmd: &Command, line: u32) -> Result<(), MachineError> {
-        self.machine.submit(self.rt, cmd, line, &mut |_| {})
+        let outputs = &mut *self.outputs;
+        self.machine
+            .submit(self.rt, cmd, line, &mut |n| record(outputs, &n))
     }
     fn state(&self) -> machine::State {
         self.machine.state(self.rt)
@@ -117,6 +132,9 @@ impl MotionPort for AppMotion<'_> {
     }
     fn settings(&self) -> &Settings {
         self.machine.settings()
+    }
+    fn pins(&self) -> u16 {
+        crate::inputs::report_pins()
     }
     /// Rebuilds the executor with the new settings (only ever called while
     /// idle), keeping the position. The step interrupt keeps the pin timing

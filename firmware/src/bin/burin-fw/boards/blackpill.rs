@@ -23,17 +23,19 @@
 //! PC14/PC15 (32 kHz crystal), PB2 (BOOT1), PA9/PA10 (USART1, which the ROM
 //! bootloader also probes; PA10 needs to stay low for USB DFU), PB3/PA15
 //! (JTAG pins with reset pull-ups, spare). PB11 does not exist on this package.
+use super::super::outputs::EnablePin;
 use super::super::step::{PortPins, StepPort};
 use burin::seams::StepPins;
 use burin::stepper::Switches;
 use stm32f4xx_hal::{
     gpio::{
-        gpioa, gpiob, gpioc, Input, Output, PinState, Speed, PA0, PA1, PA11, PA12, PA2, PA3, PA4,
-        PA5, PA6, PB0, PB1, PB10, PB9, PC13,
+        gpioa, gpiob, gpioc, Edge, ExtiPin, Input, Output, PinState, Speed, PA0, PA1, PA11, PA12,
+        PA2, PA3, PA4, PA5, PA6, PB0, PB1, PB10, PB9, PC13,
     },
     pac,
     prelude::*,
     rcc::Rcc,
+    syscfg::SysCfg,
     timer::PwmChannel,
 };
 
@@ -64,32 +66,69 @@ pub struct Inputs {
 }
 
 impl Inputs {
-    /// Which inputs are pulled low (closed to GND): bit 0-2 X/Y/Z limit,
-    /// 3 probe, 4 feed hold, 5 cycle start, 6 reset/e-stop.
-    pub fn closed(&self) -> u8 {
-        [
-            self.limit_x.is_low(),
-            self.limit_y.is_low(),
-            self.limit_z.is_low(),
-            self.probe.is_low(),
-            self.feed_hold.is_low(),
-            self.cycle_start.is_low(),
-            self.estop.is_low(),
-        ]
-        .iter()
-        .enumerate()
-        .fold(0, |acc, (i, &low)| acc | (u8::from(low) << i))
+    /// Routes PA0-PA6 to EXTI lines 0-6, both edges (a limit may be wired
+    /// normally closed: `$5` decides which edge closes it). The NVIC
+    /// vectors are unmasked by RTIC after init.
+    pub fn enable_exti(&mut self, syscfg: &mut SysCfg, exti: &mut pac::EXTI) {
+        macro_rules! line {
+            ($($pin:ident),*) => {$(
+                self.$pin.make_interrupt_source(syscfg);
+                self.$pin.trigger_on_edge(exti, Edge::RisingFalling);
+                self.$pin.clear_interrupt_pending_bit();
+                self.$pin.enable_interrupt(exti);
+            )*};
+        }
+        line!(
+            limit_x,
+            limit_y,
+            limit_z,
+            probe,
+            feed_hold,
+            cycle_start,
+            estop
+        );
     }
 }
 
-/// Bits of [`Inputs::closed`] that are panel buttons (realtime commands).
-pub const FEED_HOLD: u8 = 1 << 4;
-pub const CYCLE_START: u8 = 1 << 5;
-pub const ESTOP: u8 = 1 << 6;
+/// See [`Inputs::enable_exti`] (QEMU's board has no EXTI inputs).
+pub fn enable_exti(inputs: &mut Inputs, syscfg: &mut SysCfg, exti: &mut pac::EXTI) {
+    inputs.enable_exti(syscfg, exti);
+}
 
-/// Panel inputs for the heartbeat's edge detection: every closed input.
-pub fn panel(inputs: &Inputs) -> u8 {
-    inputs.closed()
+/// Which inputs are pulled low (closed to GND) now, in one IDR read, as
+/// `burin::inputs` bits: 0-2 X/Y/Z limit, 3 probe, 4 feed hold, 5 cycle
+/// start, 6 reset/e-stop.
+#[inline]
+pub fn closed_now() -> u8 {
+    // SAFETY: a single read of GPIOA's input data register, which has no
+    // side effects; PA0..PA6 are inputs configured in `split`.
+    let closed = !unsafe { (*pac::GPIOA::ptr()).idr().read().bits() };
+    let bit = |pin: u32, to: u32| (((closed >> pin) & 1) << to) as u8;
+    (((closed >> 4) & 0b111) as u8) | bit(3, 3) | bit(1, 4) | bit(0, 5) | bit(2, 6)
+}
+
+/// E-stop: spindle enable, PWM, flood and mist off in three stores, from
+/// the e-stop interrupt, before the parse task hears of it.
+pub fn kill_aux() {
+    // Reset half of BSRR: bit 16 + n resets pin n.
+    const OFF: u32 = (1 << 16) | (1 << (16 + 9)) | (1 << (16 + 10));
+    // SAFETY: BSRR is write-only set/reset: this store only resets PB0,
+    // PB9 and PB10 (spindle enable, flood, mist, see `Aux`) and touches no
+    // other pin. CCR1 of TIM1 is the spindle PWM compare value; a single
+    // store of 0 is the duty the parse task also writes for "off".
+    unsafe {
+        (*pac::GPIOB::ptr()).bsrr().write(|w| w.bits(OFF));
+        (*pac::TIM1::ptr()).ccr1().write(|w| w.bits(0));
+    }
+}
+
+/// The stepper-enable pin on its own (PB8), for the idle-disable timer;
+/// `active_high` is `$4` (default: active low).
+pub fn enable_pin(active_high: bool) -> EnablePin {
+    // SAFETY: only forms the address of GPIOB's BSRR from the PAC's fixed
+    // base pointer; no register is accessed here.
+    let bsrr = unsafe { (*pac::GPIOB::ptr()).bsrr().as_ptr() };
+    EnablePin::new(bsrr, PORT_PINS.enable, active_high)
 }
 
 /// Limit and probe levels for the step interrupt, in one IDR read: bit set

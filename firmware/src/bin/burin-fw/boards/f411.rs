@@ -1,7 +1,7 @@
 //! WeAct Black Pill V3 with an STM32F411CEU6 (the default board).
 use stm32f4xx_hal::{prelude::*, rcc::Config};
 
-pub use super::blackpill::{panel, split, switches, Inputs, CYCLE_START, ESTOP, FEED_HOLD};
+pub use super::blackpill::{closed_now, enable_exti, enable_pin, kill_aux, split, switches, Aux};
 
 /// Human-readable board name for the startup log and `$I`.
 pub const NAME: &str = "WeAct Black Pill STM32F411CEU6";

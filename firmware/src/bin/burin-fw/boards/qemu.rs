@@ -11,7 +11,7 @@
 //!
 //! Everything else is the Black Pill's pin map, so the same code paths run.
 use super::super::step::StepPort;
-use super::blackpill::{Aux, PORT_PINS};
+use super::blackpill::PORT_PINS;
 use burin::seams::StepPins;
 use stm32f4xx_hal::{
     gpio::{gpioa, gpiob, gpioc, Output, PinState, PA10, PA9, PC13},
@@ -20,16 +20,21 @@ use stm32f4xx_hal::{
     rcc::{Config, Rcc},
 };
 
-pub use super::blackpill::{Inputs, CYCLE_START, ESTOP, FEED_HOLD};
+pub use super::blackpill::{enable_pin, kill_aux, Aux, Inputs};
 use burin::stepper::Switches;
+use stm32f4xx_hal::syscfg::SysCfg;
 
 /// GPIO reads 0 under QEMU, which would look like every switch closed:
 /// all inputs count as open here.
-pub fn panel(_inputs: &Inputs) -> u8 {
+pub fn closed_now() -> u8 {
     0
 }
 
-/// Limits and probe: open (see [`panel`]).
+/// No edge interrupts: the pins never change under QEMU, and open is what
+/// [`closed_now`] reports.
+pub fn enable_exti(_inputs: &mut Inputs, _syscfg: &mut SysCfg, _exti: &mut pac::EXTI) {}
+
+/// Limits and probe: open (see [`closed_now`]).
 #[inline(always)]
 pub fn switches() -> Switches {
     Switches::default()

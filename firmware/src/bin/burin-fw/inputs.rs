@@ -1,0 +1,192 @@
+//! Switch inputs on EXTI: the interrupt halves (tiny, lock-free) and the
+//! heartbeat's re-check (`burin::inputs::Debounce`).
+//!
+//! A line is masked in the NVIC, not in EXTI_IMR: NVIC's set/clear-enable
+//! registers are one store each, while IMR is read-modify-write and shared
+//! by every line, which would race between the interrupt priorities. The
+//! flip side: EXTI9_5 carries both Y and Z limits and is masked for both.
+//!
+//! Who acts when:
+//! - limits (EXTI4, EXTI9_5) and e-stop (EXTI2) act in their interrupt on
+//!   the first edge: hard-limit trip / reset, then mask the line;
+//! - feed hold, cycle start (EXTI1, EXTI0) and the probe (EXTI3) only mask
+//!   their line and leave the edge to the heartbeat, which acts once the
+//!   level has settled;
+//! - the heartbeat unmasks a line once `Debounce` says it settled.
+use crate::boards::board;
+use burin::inputs::{self as inp, Change, Debounce};
+use core::sync::atomic::{AtomicBool, AtomicU16, AtomicU32, AtomicU8, Ordering::Relaxed};
+use cortex_m::peripheral::NVIC;
+use stm32f4xx_hal::pac::{self, Interrupt};
+
+/// Settle time of every input. Switch contacts bounce for 1-5 ms; 20 ms
+/// with a 10 ms re-check means two equal samples before a button acts.
+pub const SETTLE_MS: u32 = 20;
+
+/// Low byte: inputs whose edge interrupt fired and masked its line; high
+/// byte: instant inputs whose interrupt saw them active and acted. One
+/// word, so the heartbeat takes both halves of one interrupt together.
+/// Bits as in `burin::inputs`.
+static EDGES: AtomicU16 = AtomicU16::new(0);
+/// `$5` limit invert, `$6` probe invert, published by the parse task.
+static LIMIT_INVERT: AtomicU8 = AtomicU8::new(0);
+static PROBE_INVERT: AtomicBool = AtomicBool::new(false);
+/// Hard limits apply (`$21` on, not homing, not in alarm): the parse task
+/// clears it before it queues a homing move.
+static LIMITS_ARMED: AtomicBool = AtomicBool::new(false);
+/// Debounced active inputs as `Pn:` bits, for the status report.
+static PINS: AtomicU16 = AtomicU16::new(0);
+
+/// Milliseconds since boot, as the heartbeat counts them (wrapping).
+static NOW_MS: AtomicU32 = AtomicU32::new(0);
+
+/// Heartbeat: advance the millisecond clock.
+pub fn set_now(ms: u32) {
+    NOW_MS.store(ms, Relaxed);
+}
+
+/// The heartbeat's millisecond clock (its resolution: one heartbeat).
+pub fn now_ms() -> u32 {
+    NOW_MS.load(Relaxed)
+}
+
+/// Parse task: what the interrupts need of the settings and the state.
+pub fn publish(limit_invert: u8, probe_invert: bool, limits_armed: bool) {
+    LIMIT_INVERT.store(limit_invert, Relaxed);
+    PROBE_INVERT.store(probe_invert, Relaxed);
+    LIMITS_ARMED.store(limits_armed, Relaxed);
+}
+
+/// Debounced inputs for `MotionPort::pins`.
+pub fn report_pins() -> u16 {
+    PINS.load(Relaxed)
+}
+
+/// Active inputs now (one IDR read, inverts applied).
+pub fn active_now() -> u8 {
+    inp::active(
+        board::closed_now(),
+        LIMIT_INVERT.load(Relaxed),
+        PROBE_INVERT.load(Relaxed),
+    )
+}
+
+/// The NVIC vector of each input bit (0-2 X/Y/Z limit, 3 probe, 4 feed
+/// hold, 5 cycle start, 6 e-stop) and its EXTI line (the pin number).
+const VECTORS: [(Interrupt, u32); 7] = [
+    (Interrupt::EXTI4, 4),
+    (Interrupt::EXTI9_5, 5),
+    (Interrupt::EXTI9_5, 6),
+    (Interrupt::EXTI3, 3),
+    (Interrupt::EXTI1, 1),
+    (Interrupt::EXTI0, 0),
+    (Interrupt::EXTI2, 2),
+];
+
+fn exti() -> &'static pac::exti::RegisterBlock {
+    // SAFETY: EXTI's PR is the only register used through this reference;
+    // it is write-1-to-clear, so each store touches only the lines whose
+    // bits it sets, and each line is cleared by one context at a time (its
+    // interrupt while unmasked, the heartbeat while masked).
+    unsafe { &*pac::EXTI::ptr() }
+}
+
+/// Interrupt half, for the inputs in `mine` (the bits this vector serves):
+/// acknowledges and masks the vector, records the edges for the heartbeat
+/// and returns which of `mine` fired.
+pub fn take_edges(irq: Interrupt, mine: u8) -> u8 {
+    let lines = lines_of(mine);
+    let pr = exti().pr().read().bits() & lines;
+    // SAFETY: write-1-to-clear of this vector's own pending lines.
+    exti().pr().write(|w| unsafe { w.bits(pr) });
+    NVIC::mask(irq);
+    let fired = VECTORS
+        .iter()
+        .enumerate()
+        .filter(|(i, (_, line))| mine & (1 << i) != 0 && pr & (1 << line) != 0)
+        .fold(0u8, |acc, (i, _)| acc | (1 << i));
+    EDGES.fetch_or(u16::from(fired), Relaxed);
+    fired
+}
+
+/// Limit interrupt: a limit that closed during armed motion trips at once.
+pub fn on_limit(irq: Interrupt, mine: u8) -> bool {
+    let fired = take_edges(irq, mine);
+    let act = inp::acts_now(fired, active_now());
+    EDGES.fetch_or(u16::from(act) << 8, Relaxed);
+    limits_closed(act)
+}
+
+/// A hard-limit trip for the active limits in `act`, if hard limits are
+/// armed and the stepper is moving (a switch touched at rest is not a
+/// crash, and the stepper ignores it too).
+pub fn limits_closed(act: u8) -> bool {
+    let act = act & inp::LIMITS;
+    let trip = act != 0 && LIMITS_ARMED.load(Relaxed) && !crate::RT.stepper_idle();
+    if trip {
+        crate::RT.hard_limit(act);
+    }
+    trip
+}
+
+/// E-stop interrupt: acts if the e-stop reads active after its edge.
+pub fn on_estop() -> bool {
+    let fired = take_edges(Interrupt::EXTI2, inp::ESTOP);
+    let act = inp::acts_now(fired, active_now()) & inp::ESTOP != 0;
+    if act {
+        EDGES.fetch_or(u16::from(inp::ESTOP) << 8, Relaxed);
+        estop();
+    }
+    act
+}
+
+/// Stop the pulses and the spindle now, then let the session do the rest
+/// of a soft reset (exactly as a 0x18 from the host).
+pub fn estop() {
+    crate::RT.halt_stepper();
+    board::kill_aux();
+    crate::FLAGS.raise(protocol::Rt::SoftReset);
+}
+
+fn lines_of(inputs: u8) -> u32 {
+    VECTORS
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| inputs & (1 << i) != 0)
+        .fold(0, |acc, (_, (_, line))| acc | (1 << line))
+}
+
+/// The heartbeat's half: takes the interrupts' edges, re-checks the masked
+/// inputs at `now` (ms) and unmasks the settled ones. Returns the settled
+/// changes: button presses, and presses of instant inputs whose interrupt
+/// read them open (a bounce), for the caller to act on.
+pub fn poll(deb: &mut Debounce, now: u32) -> Change {
+    let taken = EDGES.swap(0, Relaxed);
+    let (edges, seen) = (taken as u8, (taken >> 8) as u8);
+    // Pending bits of masked lines are stale: clear them before sampling,
+    // so an edge after the sample stays pending and fires on unmask.
+    let masked = deb.masked() | edges;
+    // SAFETY: write-1-to-clear of lines whose vector is masked.
+    exti().pr().write(|w| unsafe { w.bits(lines_of(masked)) });
+    let active = active_now();
+    // Presses the interrupts acted on are not reported again.
+    let first = deb.edge(edges, active, now);
+    let mut change = deb.poll(active, now);
+    change.pressed |= first.pressed & !seen;
+    let still = deb.masked();
+    for (i, (irq, _)) in VECTORS.iter().enumerate() {
+        let shared = VECTORS
+            .iter()
+            .enumerate()
+            .filter(|(_, (v, _))| v == irq)
+            .fold(0u8, |acc, (j, _)| acc | (1 << j));
+        if change.rearm & (1 << i) != 0 && still & shared == 0 {
+            NVIC::unpend(*irq);
+            // SAFETY: RTIC masks by priority (BASEPRI), never through the
+            // NVIC enable bits, so unmasking breaks no critical section.
+            unsafe { NVIC::unmask(*irq) };
+        }
+    }
+    PINS.store(inp::report_pins(deb.stable()), Relaxed);
+    change
+}
