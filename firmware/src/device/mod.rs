@@ -38,6 +38,7 @@
 //!   hold decelerated).
 
 mod out;
+mod persist;
 mod ports;
 mod sys;
 
@@ -48,6 +49,9 @@ use crate::command::Command;
 use crate::interp::{Interpreter, LINE_COMMANDS};
 use crate::link::{FramedAction, FramedPort, LinkEvent};
 use crate::machine::{self, MachineError};
+use crate::persist::{Loaded, Persist, Report};
+use crate::seams::{NoStorage, Storage};
+use crate::settings::Settings;
 use heapless::Deque;
 use protocol::{DeviceInfo, DeviceMsg, HostMsg, LineText};
 
@@ -63,9 +67,9 @@ pub struct Identity {
     pub caps: u32,
 }
 
-/// The session state.
+/// The session state. `S` is where settings and offsets persist.
 #[derive(Debug)]
-pub struct Device {
+pub struct Device<S: Storage = NoStorage> {
     pub interp: Interpreter,
     port: FramedPort,
     ident: Identity,
@@ -87,6 +91,11 @@ pub struct Device {
     link_lost: LinkLost,
     /// Counters for tests and reports.
     pub stats: Stats,
+    persist: Persist<S>,
+    /// Writes (and an M501) waiting for the machine to be idle.
+    pending: persist::Pending,
+    /// What the boot's load found, told once after the banner.
+    boot_report: Report,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -108,9 +117,27 @@ pub struct Stats {
 }
 
 impl Device {
+    /// A session without storage: settings and offsets live until reset.
     pub fn new(ident: Identity) -> Self {
+        Device::with_storage(
+            ident,
+            Persist::new(NoStorage, Settings::default()),
+            None,
+        )
+    }
+}
+
+impl<S: Storage> Device<S> {
+    /// A session over `persist`. `boot` is what `persist.load()` gave
+    /// before the machine was built with its settings: its offsets go to
+    /// the interpreter, its report follows the first banner.
+    pub fn with_storage(ident: Identity, persist: Persist<S>, boot: Option<&Loaded>) -> Self {
+        let mut interp = Interpreter::new();
+        if let Some(b) = boot {
+            interp.set_offsets(&b.offsets);
+        }
         Device {
-            interp: Interpreter::new(),
+            interp,
             port: FramedPort::new(),
             ident,
             cmds: Deque::new(),
@@ -127,13 +154,23 @@ impl Device {
             spindle_ov: 100,
             link_lost: LinkLost::No,
             stats: Stats::default(),
+            persist,
+            pending: persist::Pending::default(),
+            boot_report: boot.map(|b| b.report).unwrap_or_default(),
         }
+    }
+
+    /// The storage layer (host-sim hands its flash to a "rebooted" device).
+    pub fn persist(&mut self) -> &mut Persist<S> {
+        &mut self.persist
     }
 
     /// The banner, as after power-up or a reset (text mode only).
     pub fn hello(&mut self, tx: &mut impl Tx) {
         let mut o = Out::new(tx, false);
         let _ = crate::link::reply::banner(&mut o);
+        let report = core::mem::take(&mut self.boot_report);
+        persist::tell(&report, &mut o);
     }
 
     /// The port was closed or reopened: the link is back in text mode.
@@ -256,6 +293,7 @@ impl Device {
                 self.sync = true;
             }
             if self.sync && m.ready() {
+                self.flush_storage(m, o);
                 self.sync = false;
                 // Any alarm of our own flush has come and gone by now.
                 self.quiet_alarm = false;
@@ -338,7 +376,7 @@ impl Device {
                 None => sys::reply(Err(protocol::Code::InvalidStatement.code()), None, o),
             },
             Some(FramedAction::SetSetting { n, value }) => {
-                let r = self.set_setting(n, value, m);
+                let r = self.set_setting(n, value, m, o);
                 match r {
                     Ok(()) => o.frame(&DeviceMsg::Setting { n, value }),
                     Err(c) => sys::reply(Err(c), None, o),
@@ -355,11 +393,20 @@ impl Device {
         }
     }
 
-    fn set_setting(&mut self, n: u16, value: f32, m: &mut impl MotionPort) -> Result<(), u16> {
+    /// `$n=`: only while idle (GRBL's rule), and persisted at once.
+    fn set_setting(
+        &mut self,
+        n: u16,
+        value: f32,
+        m: &mut impl MotionPort,
+        o: &mut Out<'_, impl Tx>,
+    ) -> Result<(), u16> {
         if !m.motion_idle() {
             return Err(protocol::Code::NotIdle.code());
         }
-        m.set_setting(n, value).map_err(|e| e.code().code())
+        m.set_setting(n, value).map_err(|e| e.code().code())?;
+        self.save_settings(m, o);
+        Ok(())
     }
 
     /// One job line (text mode) or one framed line leaving its slot.
@@ -380,8 +427,9 @@ impl Device {
         let check = self.check;
         let cmds = &mut self.cmds;
         let mut probe = false;
+        let mut store = persist::Pending::default();
         let r = self.interp.execute_line(text, &mut |c| {
-            if !check {
+            if !check && !store.take_command(&c) {
                 probe |= matches!(c, Command::Probe { .. });
                 // Room for a whole line was checked before taking it.
                 let _ = cmds.push_back((n, c));
@@ -393,6 +441,7 @@ impl Device {
                     self.sync = true;
                     self.probe_sync = probe;
                 }
+                self.after_line(store, m, o);
                 self.reply_line(Ok(()), seq, o)
             }
             Err(e) => {
