@@ -119,11 +119,7 @@ pub struct Stats {
 impl Device {
     /// A session without storage: settings and offsets live until reset.
     pub fn new(ident: Identity) -> Self {
-        Device::with_storage(
-            ident,
-            Persist::new(NoStorage, Settings::default()),
-            None,
-        )
+        Device::with_storage(ident, Persist::new(NoStorage, Settings::default()), None)
     }
 }
 

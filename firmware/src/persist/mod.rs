@@ -54,7 +54,11 @@ impl Report {
 impl core::fmt::Display for Report {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         if self.defaulted > 0 {
-            write!(f, "Stored settings: {} restored to defaults", self.defaulted)?;
+            write!(
+                f,
+                "Stored settings: {} restored to defaults",
+                self.defaulted
+            )?;
         }
         if self.failed {
             if self.defaulted > 0 {
@@ -169,7 +173,9 @@ impl<S: Storage> Persist<S> {
             report.defaulted += u16::from(!ok);
         }
         if report.defaulted > 0 {
-            let wrote = self.save_settings(&settings).and(self.save_offsets(&offsets));
+            let wrote = self
+                .save_settings(&settings)
+                .and(self.save_offsets(&offsets));
             report.failed |= wrote.is_err();
         }
         Loaded {
