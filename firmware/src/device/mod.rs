@@ -49,7 +49,7 @@ use crate::command::Command;
 use crate::interp::{Interpreter, LINE_COMMANDS};
 use crate::link::{FramedAction, FramedPort, LinkEvent};
 use crate::machine::{self, MachineError};
-use crate::persist::{Loaded, Persist, Report};
+use crate::persist::{Persist, Report};
 use crate::seams::{NoStorage, Storage};
 use crate::settings::Settings;
 use heapless::Deque;
@@ -124,43 +124,6 @@ impl Device {
 }
 
 impl<S: Storage> Device<S> {
-    /// A session over `persist`. `boot` is what `persist.load()` gave
-    /// before the machine was built with its settings: its offsets go to
-    /// the interpreter, its report follows the first banner.
-    pub fn with_storage(ident: Identity, persist: Persist<S>, boot: Option<&Loaded>) -> Self {
-        let mut interp = Interpreter::new();
-        if let Some(b) = boot {
-            interp.set_offsets(&b.offsets);
-        }
-        Device {
-            interp,
-            port: FramedPort::new(),
-            ident,
-            cmds: Deque::new(),
-            slots: Deque::new(),
-            cadence: Default::default(),
-            check: false,
-            jogging: false,
-            jog_cancel: false,
-            sync: true,
-            probe_sync: false,
-            seen_alarm: None,
-            quiet_alarm: false,
-            text_lines: 0,
-            spindle_ov: 100,
-            link_lost: LinkLost::No,
-            stats: Stats::default(),
-            persist,
-            pending: persist::Pending::default(),
-            boot_report: boot.map(|b| b.report).unwrap_or_default(),
-        }
-    }
-
-    /// The storage layer (host-sim hands its flash to a "rebooted" device).
-    pub fn persist(&mut self) -> &mut Persist<S> {
-        &mut self.persist
-    }
-
     /// The banner, as after power-up or a reset (text mode only).
     pub fn hello(&mut self, tx: &mut impl Tx) {
         let mut o = Out::new(tx, false);
@@ -268,6 +231,7 @@ impl<S: Storage> Device<S> {
             if let Some(e) = alarm {
                 self.cmds.clear();
                 self.slots.clear();
+                self.pending.cancel_queued();
                 self.sync = true;
                 if core::mem::take(&mut self.quiet_alarm) {
                     // Our own flush (jog cancel, reset in a hold): clear it.

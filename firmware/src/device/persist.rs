@@ -13,18 +13,21 @@
 //! * Offsets changed through their parameters (`#5221=…`) are not saved
 //!   by themselves: M500 saves them, M501 (or a reset of the board)
 //!   discards them. Settings have no such unsaved state: `$n=` saves.
-//! * A soft reset cancels an M500/M501 still waiting for its sync point,
-//!   as it cancels the motion before it; offsets already changed are
-//!   still saved when the machine next stops.
+//! * A soft reset or an alarm cancels an M500/M501 still waiting for its
+//!   sync point, as it cancels the queued motion; offsets already changed
+//!   are still saved when the machine next stops.
 //! * Check mode (`$C`) writes nothing.
 
-use super::{Device, MotionPort, Out, Tx};
+use super::{Device, Identity, LinkLost, MotionPort, Out, Stats, Tx};
 use crate::command::Command;
-use crate::interp::Offsets;
+use crate::interp::{Interpreter, Offsets};
 use crate::link::syscmd::Restore;
+use crate::link::FramedPort;
 use crate::persist::Report;
+use crate::persist::{Loaded, Persist};
 use crate::seams::Storage;
 use core::fmt::Write;
+use heapless::Deque;
 
 /// Storage work waiting for the machine to stop.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -69,6 +72,43 @@ fn not_saved(o: &mut Out<'_, impl Tx>) {
 }
 
 impl<S: Storage> Device<S> {
+    /// A session over `persist`. `boot` is what `persist.load()` gave
+    /// before the machine was built with its settings: its offsets go to
+    /// the interpreter, its report follows the first banner.
+    pub fn with_storage(ident: Identity, persist: Persist<S>, boot: Option<&Loaded>) -> Self {
+        let mut interp = Interpreter::new();
+        if let Some(b) = boot {
+            interp.set_offsets(&b.offsets);
+        }
+        Device {
+            interp,
+            port: FramedPort::new(),
+            ident,
+            cmds: Deque::new(),
+            slots: Deque::new(),
+            cadence: Default::default(),
+            check: false,
+            jogging: false,
+            jog_cancel: false,
+            sync: true,
+            probe_sync: false,
+            seen_alarm: None,
+            quiet_alarm: false,
+            text_lines: 0,
+            spindle_ov: 100,
+            link_lost: LinkLost::No,
+            stats: Stats::default(),
+            persist,
+            pending: Pending::default(),
+            boot_report: boot.map(|b| b.report).unwrap_or_default(),
+        }
+    }
+
+    /// The storage layer (host-sim hands its flash to a "rebooted" device).
+    pub fn persist(&mut self) -> &mut Persist<S> {
+        &mut self.persist
+    }
+
     /// After a line interpreted cleanly: note what it asks to persist, and
     /// do it now if nothing is moving, else at the sync point.
     pub(super) fn after_line(
