@@ -21,6 +21,7 @@ pub mod interp;
 pub mod link;
 pub mod machine;
 pub mod outputs;
+pub mod persist;
 pub mod planner;
 pub mod realtime;
 pub mod seams;

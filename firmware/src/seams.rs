@@ -27,14 +27,33 @@ pub trait StepTimer {
     fn stop(&mut self);
 }
 
-/// Persistent settings: a small key/value store (flash sectors on the MCU,
-/// a file or memory on the host).
+/// Persistent records: a small key/value store (a sequential-storage map
+/// in flash on the MCU, RAM on QEMU and in host-sim; see `persist`). It is
+/// blocking on purpose: a flash write stalls the CPU anyway (code runs from
+/// flash), so the device calls it only while no motion runs.
 pub trait Storage {
     type Error: core::fmt::Debug;
-    /// Read the record for `key` into `buf`, returning its length, or `None`.
+    /// Read the newest record for `key` into `buf`, returning its length,
+    /// or `None` when there is none (a torn last write leaves the one before).
     fn load(&mut self, key: u16, buf: &mut [u8]) -> Result<Option<usize>, Self::Error>;
-    /// Write the record for `key`.
+    /// Write the record for `key`; it replaces the previous one only once
+    /// it is complete.
     fn store(&mut self, key: u16, data: &[u8]) -> Result<(), Self::Error>;
+}
+
+/// No storage: nothing is ever found, writes vanish. Devices built with
+/// `Device::new` (tests, tools) use it.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoStorage;
+
+impl Storage for NoStorage {
+    type Error = core::convert::Infallible;
+    fn load(&mut self, _key: u16, _buf: &mut [u8]) -> Result<Option<usize>, Self::Error> {
+        Ok(None)
+    }
+    fn store(&mut self, _key: u16, _data: &[u8]) -> Result<(), Self::Error> {
+        Ok(())
+    }
 }
 
 /// Byte link to the PC (USB-CDC on the MCU; a pty or pipe on the host).

@@ -1,5 +1,10 @@
 //! `cargo xtask flash`: build, check the image, then flash it with probe-rs
 //! (SWD probe) or dfu-util (the ROM's USB DFU bootloader).
+//!
+//! Neither may touch flash sectors 1-2 (the settings, [`image::SETTINGS`]):
+//! probe-rs erases only the sectors it writes; dfu-util gets the image as
+//! its pieces (vector table; code and data from sector 3), one download
+//! each, instead of one .bin whose 0xFF gap would erase the settings.
 use crate::image::{self, Board, FLASH_BASE};
 use crate::util;
 use anyhow::{bail, Context, Result};
@@ -23,42 +28,65 @@ pub fn run(a: &FlashArgs) -> Result<i32> {
     let elf = image::build_board(a.board)?;
     let sizes = image::size_report(&elf)?;
     image::print_sizes(a.board, &elf, &sizes);
-    let (bin, boot) = image::boot_image(&elf, a.board)?;
+    // The padded raw image is only checked (boot vectors), never written.
+    let (_bin, boot) = image::boot_image(&elf, a.board)?;
     println!(
-        "  boot: vector table at {FLASH_BASE:#010x}, initial SP {:#010x}, reset {:#010x}, image {} B fits {} B",
+        "  boot: vector table at {FLASH_BASE:#010x}, initial SP {:#010x}, reset {:#010x}, image ends at +{} B of {} B",
         boot.initial_sp,
         boot.reset,
         boot.len,
         a.board.flash_bytes()
     );
 
-    let (tool, install, mut cmd) = if a.dfu {
-        let path = elf.with_extension("bin");
-        std::fs::write(&path, &bin).with_context(|| format!("writing {}", path.display()))?;
-        println!("  raw image: {} ({} B)", path.display(), bin.len());
-        let mut c = Command::new("dfu-util");
-        c.args(["-a", "0", "-s", &format!("{FLASH_BASE:#010x}:leave"), "-D"])
-            .arg(&path);
+    let (tool, install, cmds) = if a.dfu {
+        let pieces = image::flash_pieces(&elf, a.board)?;
+        let last = pieces.len().saturating_sub(1);
+        let mut cmds = Vec::new();
+        for (i, p) in pieces.iter().enumerate() {
+            let path = elf.with_extension(format!("{:08x}.bin", p.addr));
+            std::fs::write(&path, &p.data)
+                .with_context(|| format!("writing {}", path.display()))?;
+            println!(
+                "  piece: {} ({} B at {:#010x})",
+                path.display(),
+                p.data.len(),
+                p.addr
+            );
+            // The last download leaves DFU and starts the firmware.
+            let leave = if i == last { ":leave" } else { "" };
+            let mut c = Command::new("dfu-util");
+            c.args(["-a", "0", "-s", &format!("{:#010x}{leave}", p.addr), "-D"])
+                .arg(&path);
+            cmds.push(c);
+        }
         (
             "dfu-util",
             "apt-get install dfu-util (or your OS's dfu-util package)",
-            c,
+            cmds,
         )
     } else {
         // `probe-rs run` flashes, resets and then streams the defmt log;
-        // Ctrl-C detaches and the board keeps running.
+        // Ctrl-C detaches and the board keeps running. It erases only the
+        // sectors the ELF's segments cover, so the settings stay.
         let mut c = Command::new("probe-rs");
         c.args(["run", "--chip", a.board.chip()]).arg(&elf);
-        ("probe-rs", "cargo install probe-rs-tools --locked", c)
+        ("probe-rs", "cargo install probe-rs-tools --locked", vec![c])
     };
 
     if a.dry_run {
-        println!("dry run, would run: {}", util::show(&cmd));
+        for cmd in &cmds {
+            println!("dry run, would run: {}", util::show(cmd));
+        }
         return Ok(0);
     }
     if !util::have(tool) {
         bail!("`{tool}` not found on PATH; install it with: {install}");
     }
-    let status = cmd.status().with_context(|| format!("starting {tool}"))?;
-    Ok(status.code().unwrap_or(1))
+    for mut cmd in cmds {
+        let status = cmd.status().with_context(|| format!("starting {tool}"))?;
+        if !status.success() {
+            return Ok(status.code().unwrap_or(1));
+        }
+    }
+    Ok(0)
 }

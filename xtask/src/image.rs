@@ -10,6 +10,12 @@ use object::{Object, ObjectSection, ObjectSymbol};
 use std::path::{Path, PathBuf};
 
 pub const FLASH_BASE: u32 = 0x0800_0000;
+/// Flash sectors 1 and 2 of both Black Pills: the settings and work
+/// offsets (firmware/src/bin/burin-fw/storage.rs). The image leaves them
+/// out (`_stext` in memory-f4x1.x) and flashing must never write them.
+pub const SETTINGS: std::ops::Range<u32> = 0x0800_4000..0x0800_C000;
+/// Segments closer than this are written as one piece, the gap as 0xFF.
+const MERGE_GAP: u32 = 1024;
 pub const RAM_BASE: u32 = 0x2000_0000;
 const KIB: u32 = 1024;
 
@@ -129,7 +135,8 @@ pub fn build_board(board: Board) -> Result<PathBuf> {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Sizes {
     /// Everything programmed into flash: PT_LOAD file bytes at flash addresses
-    /// (vector table, .text, .rodata and the .data initialisers).
+    /// (vector table, .text, .rodata and the .data initialisers); not the
+    /// settings sectors between the vector table and .text.
     pub flash: u32,
     /// Static RAM: allocated sections in RAM (.data, .bss, .uninit). The
     /// stack gets the rest of the chip's RAM.
@@ -158,7 +165,7 @@ pub fn size_report(elf: &Path) -> Result<Sizes> {
 fn sizes_of(file: &ElfFile32<'_>) -> Result<Sizes> {
     let endian = file.endian();
     let mut s = Sizes {
-        flash: image_len(&load_segments(file)?)?,
+        flash: image_bytes(&load_segments(file)?)?,
         ..Sizes::default()
     };
     for section in file.elf_section_table().iter() {
@@ -336,6 +343,76 @@ fn image_len(segments: &[Segment<'_>]) -> Result<u32> {
     Ok(end - FLASH_BASE)
 }
 
+/// Bytes programmed: the loaded segments, without the gaps between them.
+fn image_bytes(segments: &[Segment<'_>]) -> Result<u32> {
+    image_len(segments)?;
+    let mut n = 0u32;
+    for s in segments {
+        n = n
+            .checked_add(u32::try_from(s.data.len()).context("segment too large")?)
+            .context("image too large")?;
+    }
+    Ok(n)
+}
+
+/// One contiguous run of flash to write.
+#[derive(Debug, PartialEq, Eq)]
+pub struct Piece {
+    pub addr: u32,
+    pub data: Vec<u8>,
+}
+
+/// The image as the runs a flasher writes: segments merged across small
+/// gaps (filled with 0xFF), split across large ones such as the settings
+/// sectors, which no piece may touch.
+pub fn pieces(segments: &[Segment<'_>], flash_bytes: u32) -> Result<Vec<Piece>> {
+    let len = image_len(segments)?;
+    if len > flash_bytes {
+        bail!("image is {len} B but the chip has {flash_bytes} B of flash");
+    }
+    let mut order: Vec<&Segment<'_>> = segments.iter().collect();
+    order.sort_by_key(|s| s.paddr);
+    let mut out: Vec<Piece> = Vec::new();
+    for s in order {
+        match out.last_mut() {
+            Some(p) if s.paddr >= p.addr && s.paddr - p.addr <= p.data.len() as u32 + MERGE_GAP => {
+                let at = (s.paddr - p.addr) as usize;
+                if p.data.len() < at {
+                    p.data.resize(at, 0xFF);
+                }
+                let end = at + s.data.len();
+                if p.data.len() < end {
+                    p.data.resize(end, 0xFF);
+                }
+                p.data[at..end].copy_from_slice(s.data);
+            }
+            _ => out.push(Piece {
+                addr: s.paddr,
+                data: s.data.to_vec(),
+            }),
+        }
+    }
+    for p in &out {
+        let end = p.addr + p.data.len() as u32;
+        if p.addr < SETTINGS.end && SETTINGS.start < end {
+            bail!(
+                "image piece {:#010x}..{end:#010x} overlaps the settings sectors {:#010x}..{:#010x}",
+                p.addr,
+                SETTINGS.start,
+                SETTINGS.end
+            );
+        }
+    }
+    Ok(out)
+}
+
+/// [`pieces`] of an ELF.
+pub fn flash_pieces(elf: &Path, board: Board) -> Result<Vec<Piece>> {
+    let bytes = read(elf)?;
+    let file = parse(&bytes)?;
+    pieces(&load_segments(&file)?, board.flash_bytes())
+}
+
 /// The raw flash image from FLASH_BASE, gaps filled with 0xFF (erased
 /// flash), which is what dfu-util writes at 0x0800_0000.
 pub fn raw_image(segments: &[Segment<'_>], flash_bytes: u32) -> Result<Vec<u8>> {
@@ -439,6 +516,40 @@ mod tests {
         ];
         let bin = raw_image(&segs, 512 * KIB).unwrap();
         assert_eq!(bin, [1, 2, 3, 4, 0xFF, 0xFF, 0xFF, 0xFF, 9, 8]);
+    }
+
+    #[test]
+    fn pieces_skip_the_settings_sectors_and_sizes_count_bytes() {
+        let table = [0xAAu8; 0x198];
+        let text = [1u8; 64];
+        let rodata = [2u8; 8];
+        let segs = [
+            Segment {
+                paddr: FLASH_BASE,
+                data: &table,
+            },
+            Segment {
+                paddr: SETTINGS.end + 64 + 4,
+                data: &rodata,
+            },
+            Segment {
+                paddr: SETTINGS.end,
+                data: &text,
+            },
+        ];
+        let p = pieces(&segs, 512 * KIB).unwrap();
+        assert_eq!(p.len(), 2);
+        assert_eq!((p[0].addr, p[0].data.len()), (FLASH_BASE, 0x198));
+        assert_eq!((p[1].addr, p[1].data.len()), (SETTINGS.end, 64 + 4 + 8));
+        assert_eq!(p[1].data[64..68], [0xFF; 4]);
+        assert_eq!(p[1].data[68], 2);
+        assert_eq!(image_bytes(&segs).unwrap(), 0x198 + 64 + 8);
+        // Code placed in the settings sectors is refused.
+        let bad = [Segment {
+            paddr: SETTINGS.start + 16,
+            data: &text,
+        }];
+        assert!(pieces(&bad, 512 * KIB).is_err());
     }
 
     #[test]

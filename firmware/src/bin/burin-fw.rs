@@ -56,6 +56,9 @@ mod session;
 #[cfg(target_os = "none")]
 #[path = "burin-fw/step.rs"]
 mod step;
+#[cfg(target_os = "none")]
+#[path = "burin-fw/storage.rs"]
+mod storage;
 // The link: USB-CDC on the real boards, USART1 on QEMU (no OTG model).
 #[cfg(all(target_os = "none", feature = "board-qemu"))]
 #[path = "burin-fw/usart.rs"]
@@ -70,9 +73,11 @@ use {defmt_rtt as _, panic_probe as _};
 /// SysTick rate; the watchdog timeout must be several of these periods.
 #[cfg(target_os = "none")]
 const HEARTBEAT_HZ: u32 = 100;
-/// Watchdog timeout. Idle feeds it at least every heartbeat (10 ms).
+/// Watchdog timeout. Idle feeds it at least every heartbeat (10 ms), but
+/// not while a settings write erases a 16 KiB flash sector (up to 0.8 s,
+/// the CPU stalled); the LSI it counts may run 1.5x fast.
 #[cfg(target_os = "none")]
-const WATCHDOG_MS: u32 = 500;
+const WATCHDOG_MS: u32 = 2000;
 
 /// Realtime state shared by every priority (atomics only).
 #[cfg(target_os = "none")]
@@ -97,6 +102,7 @@ mod app {
     use burin::inputs::{self as inp, Debounce};
     use burin::link::{LineAssembler, RxToken, RX_RING};
     use burin::machine::{Machine, State};
+    use burin::persist::Persist;
     use burin::settings::Settings;
     use burin::stepper::{Segment, Stepper};
     #[cfg(not(feature = "board-qemu"))]
@@ -149,7 +155,7 @@ mod app {
         tx_bytes: Producer<'static, u8>,
         segments: Producer<'static, Segment>,
         machine: Machine<PLANNER_BLOCKS>,
-        device: Device,
+        device: Device<crate::storage::Store>,
         led: PC13<Output>,
         debounce: Debounce,
         io: Io,
@@ -233,7 +239,18 @@ mod app {
         // Motion core: executor on the default settings, stepper with the
         // same pin timing, the step port with the same inverts.
         let timer = Tim5::new(dp.TIM5, &mut rcc);
-        let settings = Settings::default();
+        // Settings and offsets from flash, before the machine is built on
+        // them (flash sectors 1-2; RAM on QEMU, see storage.rs).
+        let mut persist = Persist::new(crate::storage::open(dp.FLASH), Settings::default());
+        let boot = persist.load();
+        if !boot.report.is_clean() {
+            defmt::warn!(
+                "settings: {} items defaulted, storage error: {}",
+                boot.report.defaulted,
+                boot.report.failed
+            );
+        }
+        let settings = boot.settings;
         let machine = Machine::new(settings, burin::seams::StepTimer::tick_hz(&timer));
         let cfg = machine.step_config();
         let mut steppers = pins.steppers;
@@ -307,10 +324,14 @@ mod app {
                 tx_bytes,
                 segments,
                 machine,
-                device: Device::new(Identity {
-                    board: board::NAME,
-                    caps: 0,
-                }),
+                device: Device::with_storage(
+                    Identity {
+                        board: board::NAME,
+                        caps: 0,
+                    },
+                    persist,
+                    Some(&boot),
+                ),
                 led: pins.led,
                 debounce,
                 io,

@@ -38,6 +38,7 @@
 //!   hold decelerated).
 
 mod out;
+mod persist;
 mod ports;
 mod sys;
 
@@ -48,6 +49,9 @@ use crate::command::Command;
 use crate::interp::{Interpreter, LINE_COMMANDS};
 use crate::link::{FramedAction, FramedPort, LinkEvent};
 use crate::machine::{self, MachineError};
+use crate::persist::{Persist, Report};
+use crate::seams::{NoStorage, Storage};
+use crate::settings::Settings;
 use heapless::Deque;
 use protocol::{DeviceInfo, DeviceMsg, HostMsg, LineText};
 
@@ -63,9 +67,9 @@ pub struct Identity {
     pub caps: u32,
 }
 
-/// The session state.
+/// The session state. `S` is where settings and offsets persist.
 #[derive(Debug)]
-pub struct Device {
+pub struct Device<S: Storage = NoStorage> {
     pub interp: Interpreter,
     port: FramedPort,
     ident: Identity,
@@ -87,6 +91,11 @@ pub struct Device {
     link_lost: LinkLost,
     /// Counters for tests and reports.
     pub stats: Stats,
+    persist: Persist<S>,
+    /// Writes (and an M501) waiting for the machine to be idle.
+    pending: persist::Pending,
+    /// What the boot's load found, told once after the banner.
+    boot_report: Report,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -108,32 +117,19 @@ pub struct Stats {
 }
 
 impl Device {
+    /// A session without storage: settings and offsets live until reset.
     pub fn new(ident: Identity) -> Self {
-        Device {
-            interp: Interpreter::new(),
-            port: FramedPort::new(),
-            ident,
-            cmds: Deque::new(),
-            slots: Deque::new(),
-            cadence: Default::default(),
-            check: false,
-            jogging: false,
-            jog_cancel: false,
-            sync: true,
-            probe_sync: false,
-            seen_alarm: None,
-            quiet_alarm: false,
-            text_lines: 0,
-            spindle_ov: 100,
-            link_lost: LinkLost::No,
-            stats: Stats::default(),
-        }
+        Device::with_storage(ident, Persist::new(NoStorage, Settings::default()), None)
     }
+}
 
+impl<S: Storage> Device<S> {
     /// The banner, as after power-up or a reset (text mode only).
     pub fn hello(&mut self, tx: &mut impl Tx) {
         let mut o = Out::new(tx, false);
         let _ = crate::link::reply::banner(&mut o);
+        let report = core::mem::take(&mut self.boot_report);
+        persist::tell(&report, &mut o);
     }
 
     /// The port was closed or reopened: the link is back in text mode.
@@ -235,6 +231,7 @@ impl Device {
             if let Some(e) = alarm {
                 self.cmds.clear();
                 self.slots.clear();
+                self.pending.cancel_queued();
                 self.sync = true;
                 if core::mem::take(&mut self.quiet_alarm) {
                     // Our own flush (jog cancel, reset in a hold): clear it.
@@ -256,6 +253,7 @@ impl Device {
                 self.sync = true;
             }
             if self.sync && m.ready() {
+                self.flush_storage(m, o);
                 self.sync = false;
                 // Any alarm of our own flush has come and gone by now.
                 self.quiet_alarm = false;
@@ -338,7 +336,7 @@ impl Device {
                 None => sys::reply(Err(protocol::Code::InvalidStatement.code()), None, o),
             },
             Some(FramedAction::SetSetting { n, value }) => {
-                let r = self.set_setting(n, value, m);
+                let r = self.set_setting(n, value, m, o);
                 match r {
                     Ok(()) => o.frame(&DeviceMsg::Setting { n, value }),
                     Err(c) => sys::reply(Err(c), None, o),
@@ -355,11 +353,20 @@ impl Device {
         }
     }
 
-    fn set_setting(&mut self, n: u16, value: f32, m: &mut impl MotionPort) -> Result<(), u16> {
+    /// `$n=`: only while idle (GRBL's rule), and persisted at once.
+    fn set_setting(
+        &mut self,
+        n: u16,
+        value: f32,
+        m: &mut impl MotionPort,
+        o: &mut Out<'_, impl Tx>,
+    ) -> Result<(), u16> {
         if !m.motion_idle() {
             return Err(protocol::Code::NotIdle.code());
         }
-        m.set_setting(n, value).map_err(|e| e.code().code())
+        m.set_setting(n, value).map_err(|e| e.code().code())?;
+        self.save_settings(m, o);
+        Ok(())
     }
 
     /// One job line (text mode) or one framed line leaving its slot.
@@ -380,8 +387,9 @@ impl Device {
         let check = self.check;
         let cmds = &mut self.cmds;
         let mut probe = false;
+        let mut store = persist::Pending::default();
         let r = self.interp.execute_line(text, &mut |c| {
-            if !check {
+            if !check && !store.take_command(&c) {
                 probe |= matches!(c, Command::Probe { .. });
                 // Room for a whole line was checked before taking it.
                 let _ = cmds.push_back((n, c));
@@ -393,6 +401,7 @@ impl Device {
                     self.sync = true;
                     self.probe_sync = probe;
                 }
+                self.after_line(store, m, o);
                 self.reply_line(Ok(()), seq, o)
             }
             Err(e) => {

@@ -69,6 +69,19 @@ pub trait MotionPort {
     fn settings(&self) -> &Settings;
     /// Change a setting (the device calls this only while idle).
     fn set_setting(&mut self, n: u16, value: f32) -> Result<(), SettingError>;
+    /// Replace every setting (M501, `$RST=$`; idle only): one
+    /// [`MotionPort::set_setting`] per value that differs, so each is
+    /// validated as `$n=` would validate it.
+    fn replace_settings(&mut self, s: &Settings) {
+        for n in crate::settings::table::numbers() {
+            let (Some(new), old) = (s.get(n), self.settings().get(n)) else {
+                continue;
+            };
+            if old.map(f32::to_bits) != Some(new.to_bits()) {
+                let _ = self.set_setting(n, new);
+            }
+        }
+    }
     /// Active input pins, `protocol::msg::pins` bits.
     fn pins(&self) -> u16 {
         0

@@ -62,7 +62,7 @@ pub(super) fn report_late(e: MachineError, line: u32, o: &mut Out<'_, impl Tx>) 
     });
 }
 
-impl Device {
+impl<S: crate::seams::Storage> Device<S> {
     pub(super) fn status(&mut self, rx_free: u16, m: &impl MotionPort) -> Status {
         let s = m.settings();
         let pos = m.rt().position();
@@ -131,6 +131,7 @@ impl Device {
                 self.jogging = false;
                 self.jog_cancel = false;
                 self.sync = true;
+                self.pending.cancel_queued();
                 self.stats.resets += 1;
                 if held && queued && m.alarm().is_none() {
                     self.quiet_alarm = true;
@@ -202,7 +203,7 @@ impl Device {
                 let v = s.get(n).ok_or(Code::InvalidStatement.code())?;
                 let _ = reply::setting(o, n, v);
             }
-            SysCmd::SetSetting { n, value } => self.set_setting(n, value, m)?,
+            SysCmd::SetSetting { n, value } => self.set_setting(n, value, m, o)?,
             SysCmd::Params => {
                 let _ = self.interp.write_offsets(o, "\r\n");
             }
@@ -254,7 +255,8 @@ impl Device {
                 }
             }
             SysCmd::Jog(body) => self.jog(body, m)?,
-            SysCmd::Sleep | SysCmd::Restore(_) => return Err(Code::Unsupported.code()),
+            SysCmd::Restore(what) => self.restore(what, m, o)?,
+            SysCmd::Sleep => return Err(Code::Unsupported.code()),
         }
         Ok(())
     }

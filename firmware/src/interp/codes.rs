@@ -138,6 +138,7 @@ pub(super) fn non_modal_g(
                 return Err(cx.err(ErrorKind::Unsupported(Unsupported::Letter(b'R')), b'R'));
             }
             let k = if p == 0 { usize::from(st.wcs) } else { p - 1 };
+            st.offsets_changed = true;
             let vals = axis_vals(cx);
             let pos = st.pos;
             let g92 = if st.g92_active { st.g92 } else { [0.0; AXES] };
@@ -181,8 +182,14 @@ pub(super) fn non_modal_g(
             };
             push(out, c, col)?;
         }
-        281 => st.g28 = st.pos,
-        301 => st.g30 = st.pos,
+        281 | 301 => {
+            if t == 281 {
+                st.g28 = st.pos;
+            } else {
+                st.g30 = st.pos;
+            }
+            st.offsets_changed = true;
+        }
         300 => {
             if st.feed <= 0.0 || st.inverse_time {
                 return Err(GcodeError::new(ErrorKind::UndefinedFeed, col));

@@ -28,6 +28,16 @@ use crate::gcode::{ErrorKind, GcodeError, Lexer, Name, ParamStore, Params, Token
 use block::{Added, Block};
 use core::fmt::{self, Write};
 
+/// What survives a power cycle (GRBL's EEPROM coordinate data): the nine
+/// work offsets G54..G59.3 and the G28/G30 positions, machine mm. G92 and
+/// the modal state do not.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Offsets {
+    pub wcs: [Pos; WCS_COUNT],
+    pub g28: Pos,
+    pub g30: Pos,
+}
+
 /// The interpreter: modal state plus parameters. About 2.3 KiB.
 #[derive(Clone, Debug)]
 pub struct Interpreter {
@@ -229,6 +239,29 @@ impl Interpreter {
     /// True after a command whose end only the machine knows.
     pub fn needs_sync(&self) -> bool {
         self.state.needs_sync
+    }
+
+    /// The offsets that persist.
+    pub fn offsets(&self) -> Offsets {
+        Offsets {
+            wcs: self.state.wcs_offsets,
+            g28: self.state.g28,
+            g30: self.state.g30,
+        }
+    }
+
+    /// Replaces the offsets that persist (boot, M501, `$RST=#`).
+    pub fn set_offsets(&mut self, o: &Offsets) {
+        self.state.wcs_offsets = o.wcs;
+        self.state.g28 = o.g28;
+        self.state.g30 = o.g30;
+    }
+
+    /// True once after G10 L2/L20, G28.1 or G30.1: the lines GRBL saves at
+    /// once. Offsets changed through their parameters (`#5221=…`) wait
+    /// for M500, like any other parameter.
+    pub fn take_offsets_changed(&mut self) -> bool {
+        core::mem::take(&mut self.state.offsets_changed)
     }
 
     /// Block delete switch (`/` lines skipped while on; on by default).

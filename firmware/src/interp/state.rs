@@ -105,6 +105,8 @@ pub struct State {
     pub block_delete: bool,
     /// The last command ended where only the machine knows (home, probe).
     pub needs_sync: bool,
+    /// G10 L2/L20, G28.1 or G30.1 ran: the device persists the offsets.
+    pub offsets_changed: bool,
 }
 
 impl Default for State {
@@ -141,6 +143,7 @@ impl State {
             pending_probe_z: None,
             block_delete: true,
             needs_sync: false,
+            offsets_changed: false,
         }
     }
 

@@ -3,11 +3,17 @@
 //! advanced by the caller, so the same device serves the pty
 //! (`cargo xtask sim --pty`, paced to the wall clock) and the deterministic
 //! end-to-end tests (driven tick by tick over an in-memory pipe).
+//!
+//! Settings and offsets persist in a [`SimFlash`]: a RAM copy of the
+//! boards' two 16 KiB sectors under the same sequential-storage map. A
+//! fresh device starts erased; [`VirtualDevice::flash`] hands the contents
+//! to [`VirtualDevice::with_flash`] to "reboot" with what was saved.
 
 use burin::command::{Command, Pos};
 use burin::device::{Device, Identity, MotionPort, Tx};
 use burin::link::Link;
 use burin::machine::{self, Machine, MachineError};
+use burin::persist::{FlashMap, Persist, RamFlash};
 use burin::realtime::Realtime;
 use burin::settings::table::SettingError;
 use burin::settings::Settings;
@@ -19,6 +25,9 @@ use crate::record::Recorder;
 
 /// Board name the virtual device reports in `$I` and the handshake.
 pub const BOARD: &str = "host-sim";
+
+/// The virtual board's settings flash: two 16 KiB sectors, as on the F411.
+pub type SimFlash = RamFlash<{ 2 * 16384 }, 16384>;
 
 /// The engine seen through the device's [`MotionPort`] seam.
 struct SimPort<'a, 'r> {
@@ -101,7 +110,7 @@ impl Tx for TxBuf {
 pub struct VirtualDevice<'r> {
     pub sim: Sim<'r>,
     pub link: Link,
-    pub device: Device,
+    pub device: Device<FlashMap<SimFlash>>,
     pub tx: TxBuf,
     /// When set, the machine line number of every command the executor
     /// accepted, in order (tests check exactly-once delivery with it).
@@ -109,15 +118,31 @@ pub struct VirtualDevice<'r> {
 }
 
 impl<'r> VirtualDevice<'r> {
-    /// Power-up: prints the banner, as the board does.
+    /// Power-up with erased settings flash: prints the banner, as the
+    /// board does.
     pub fn new(cfg: &MachineConfig, rec: &'r mut dyn Recorder) -> Self {
+        Self::with_flash(cfg, rec, SimFlash::new())
+    }
+
+    /// Power-up with `flash` as it was left: loads settings (the machine
+    /// file's are the defaults) and offsets from it, as the board's init
+    /// does before it builds the machine.
+    pub fn with_flash(cfg: &MachineConfig, rec: &'r mut dyn Recorder, flash: SimFlash) -> Self {
         let mut sim = Sim::new(cfg, rec);
         // An operator (the host) resumes holds and M0 pauses with `~`.
         sim.auto_resume = false;
-        let mut device = Device::new(Identity {
+        let mut persist = Persist::new(FlashMap::new(flash), *sim.machine.settings());
+        let boot = persist.load();
+        SimPort {
+            sim: &mut sim,
+            log: None,
+        }
+        .replace_settings(&boot.settings);
+        let ident = Identity {
             board: BOARD,
             caps: protocol::msg::caps::CHECK_MODE | protocol::msg::caps::HOMING,
-        });
+        };
+        let mut device = Device::with_storage(ident, persist, Some(&boot));
         let mut tx = TxBuf::default();
         device.hello(&mut tx);
         VirtualDevice {
@@ -127,6 +152,16 @@ impl<'r> VirtualDevice<'r> {
             tx,
             log: None,
         }
+    }
+
+    /// The settings flash as it is now (to power up another device with).
+    pub fn flash(&mut self) -> SimFlash {
+        self.device
+            .persist()
+            .storage()
+            .flash()
+            .cloned()
+            .unwrap_or_default()
     }
 
     /// Bytes the device can take now (like the USB endpoint, hold the rest).

@@ -1,0 +1,228 @@
+//! Settings and work offsets that survive a reset, over the [`Storage`]
+//! seam (a sequential-storage map in two 16 KiB flash sectors on the
+//! boards, RAM on QEMU and in host-sim).
+//!
+//! [`Persist`] keeps a mirror of what the flash holds, so a save writes only
+//! the records whose value changed (dirty tracking by comparison, nothing
+//! to forget to mark): `$110=…` costs one 12-byte record, an M500 with
+//! nothing changed costs nothing. The mirror uses NaN for "not known to be
+//! in flash" (never read, or its write failed), which compares unequal to
+//! every value, so the next save writes it.
+//!
+//! Loading validates every value with the rules `$n=` applies
+//! ([`Settings::set`]): flash never brings in a value `$n=` would refuse.
+//! A missing, damaged or old-format record falls back to that item's
+//! default, and the default is written back at once, so the report (one
+//! `[MSG:]` after the banner) appears on one boot, not on every boot.
+//!
+//! When the device writes (flash writes stall the CPU, and so the step
+//! interrupt, which runs from flash too): only while no motion is queued
+//! or running. `$n=` is refused unless idle; G10 L2/L20, G28.1, G30.1,
+//! M500 and M501 are sync points (see `device::persist`).
+
+pub mod flash;
+pub mod record;
+
+pub use flash::{FlashMap, RamFlash};
+
+use crate::interp::Offsets;
+use crate::seams::Storage;
+use crate::settings::{table, Settings};
+use crate::AXES;
+use record::{MAX_RECORD, OFFSETS_KEY, OFFSET_RECORDS};
+
+/// Number of `$n` settings (`table::numbers()`; a test keeps them equal).
+pub const SETTINGS: usize = 45;
+
+/// What a load found.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Report {
+    /// Items (settings and offset vectors) that were missing, damaged, of
+    /// an old format or refused by validation: their defaults are in use.
+    pub defaulted: u16,
+    /// The storage failed to read or write (the defaults may not stick).
+    pub failed: bool,
+}
+
+impl Report {
+    /// Nothing to tell the operator.
+    pub fn is_clean(&self) -> bool {
+        self.defaulted == 0 && !self.failed
+    }
+}
+
+impl core::fmt::Display for Report {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        if self.defaulted > 0 {
+            write!(
+                f,
+                "Stored settings: {} restored to defaults",
+                self.defaulted
+            )?;
+        }
+        if self.failed {
+            if self.defaulted > 0 {
+                f.write_str("; ")?;
+            }
+            f.write_str("settings storage error")?;
+        }
+        Ok(())
+    }
+}
+
+/// Everything a load produced.
+#[derive(Clone, Copy, Debug)]
+pub struct Loaded {
+    pub settings: Settings,
+    pub offsets: Offsets,
+    pub report: Report,
+}
+
+/// Settings and offsets over a key/value store, with a mirror of what the
+/// store holds.
+#[derive(Debug)]
+pub struct Persist<S: Storage> {
+    store: S,
+    defaults: Settings,
+    /// `$n` values as stored, in `table::numbers()` order; NaN: unknown.
+    saved: [f32; SETTINGS],
+    /// Offset vectors as stored (G54..G59.3, G28, G30); NaN: unknown.
+    saved_offsets: [[f32; AXES]; OFFSET_RECORDS],
+}
+
+fn vectors(o: &Offsets) -> impl Iterator<Item = &[f32; AXES]> {
+    o.wcs.iter().chain([&o.g28, &o.g30])
+}
+
+fn vectors_mut(o: &mut Offsets) -> impl Iterator<Item = &mut [f32; AXES]> {
+    o.wcs.iter_mut().chain([&mut o.g28, &mut o.g30])
+}
+
+fn same(a: f32, b: f32) -> bool {
+    a.to_bits() == b.to_bits()
+}
+
+impl<S: Storage> Persist<S> {
+    /// `defaults` are what a missing record and `$RST=$` give.
+    pub fn new(store: S, defaults: Settings) -> Self {
+        Persist {
+            store,
+            defaults,
+            saved: [f32::NAN; SETTINGS],
+            saved_offsets: [[f32::NAN; AXES]; OFFSET_RECORDS],
+        }
+    }
+
+    /// The defaults this store falls back to.
+    pub fn defaults(&self) -> &Settings {
+        &self.defaults
+    }
+
+    /// The store underneath.
+    pub fn storage(&mut self) -> &mut S {
+        &mut self.store
+    }
+
+    /// Reads `out.len()` values stored under `key`. `Ok(false)`: missing,
+    /// damaged or of another format.
+    fn read(&mut self, key: u16, out: &mut [f32]) -> Result<bool, S::Error> {
+        let mut buf = [0u8; MAX_RECORD];
+        let Some(len) = self.store.load(key, &mut buf)? else {
+            return Ok(false);
+        };
+        Ok(buf
+            .get(..len)
+            .and_then(|rec| record::decode(rec, out))
+            .is_some())
+    }
+
+    /// Reads everything (boot, M501). Items that fall back to their
+    /// defaults are written back; see the module docs.
+    pub fn load(&mut self) -> Loaded {
+        let mut report = Report::default();
+        let mut settings = self.defaults;
+        for (i, n) in table::numbers().enumerate().take(SETTINGS) {
+            let mut v = [0.0];
+            let ok = match self.read(record::setting_key(n), &mut v) {
+                Ok(found) => found && settings.set(n, v[0]).is_ok(),
+                Err(_) => {
+                    report.failed = true;
+                    false
+                }
+            };
+            self.saved[i] = if ok { v[0] } else { f32::NAN };
+            report.defaulted += u16::from(!ok);
+        }
+        let mut offsets = Offsets::default();
+        for (k, o) in vectors_mut(&mut offsets).enumerate() {
+            let mut v = [0.0; AXES];
+            // k < OFFSET_RECORDS (11): the key stays below 1011.
+            let ok = match self.read(OFFSETS_KEY + k as u16, &mut v) {
+                Ok(found) => found,
+                Err(_) => {
+                    report.failed = true;
+                    false
+                }
+            };
+            if ok {
+                *o = v;
+            }
+            if let Some(s) = self.saved_offsets.get_mut(k) {
+                *s = if ok { v } else { [f32::NAN; AXES] };
+            }
+            report.defaulted += u16::from(!ok);
+        }
+        if report.defaulted > 0 {
+            let wrote = self
+                .save_settings(&settings)
+                .and(self.save_offsets(&offsets));
+            report.failed |= wrote.is_err();
+        }
+        Loaded {
+            settings,
+            offsets,
+            report,
+        }
+    }
+
+    /// Writes the settings whose value differs from the stored one;
+    /// returns how many records were written.
+    pub fn save_settings(&mut self, s: &Settings) -> Result<u16, S::Error> {
+        let mut written = 0;
+        for (i, n) in table::numbers().enumerate().take(SETTINGS) {
+            let (Some(v), Some(saved)) = (s.get(n), self.saved.get_mut(i)) else {
+                continue;
+            };
+            if same(*saved, v) {
+                continue;
+            }
+            let mut buf = [0u8; MAX_RECORD];
+            let rec = record::encode(&[v], &mut buf);
+            *saved = f32::NAN;
+            self.store.store(record::setting_key(n), rec)?;
+            *saved = v;
+            written += 1;
+        }
+        Ok(written)
+    }
+
+    /// Writes the offset vectors that differ from the stored ones.
+    pub fn save_offsets(&mut self, o: &Offsets) -> Result<u16, S::Error> {
+        let mut written = 0;
+        for (k, (v, saved)) in vectors(o).zip(self.saved_offsets.iter_mut()).enumerate() {
+            if v.iter().zip(saved.iter()).all(|(a, b)| same(*a, *b)) {
+                continue;
+            }
+            let mut buf = [0u8; MAX_RECORD];
+            let rec = record::encode(v, &mut buf);
+            *saved = [f32::NAN; AXES];
+            self.store.store(OFFSETS_KEY + k as u16, rec)?;
+            *saved = *v;
+            written += 1;
+        }
+        Ok(written)
+    }
+}
+
+#[cfg(test)]
+mod tests;

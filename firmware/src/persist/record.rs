@@ -1,0 +1,77 @@
+//! Record keys and encoding. One record per setting and one per offset
+//! vector, so `$110=…` rewrites 12 bytes, not the whole table: less wear,
+//! and a torn write costs at most the one value being written (the map
+//! keeps the previous record of that key until the new one is complete).
+//!
+//! A record is `[FORMAT, f32 LE…]`. A record of another format (an older
+//! firmware's) or length is treated as missing: that item falls back to
+//! its default.
+
+use crate::AXES;
+
+/// Layout version of every record. Bump it when a record's meaning changes.
+pub const FORMAT: u8 = 1;
+
+/// `$n` is stored under key `n` (0..=999).
+pub const fn setting_key(n: u16) -> u16 {
+    n
+}
+
+/// Offset vectors: G54..G59.3 are `OFFSETS_KEY + 0..9`, G28 `+ 9`, G30 `+ 10`.
+pub const OFFSETS_KEY: u16 = 1000;
+/// How many offset vectors are stored.
+pub const OFFSET_RECORDS: usize = crate::interp::WCS_COUNT + 2;
+
+/// Bytes of the longest record (an offset vector).
+pub const MAX_RECORD: usize = 1 + 4 * AXES;
+
+/// Encodes `values` into `buf`, returning the record.
+pub fn encode<'b>(values: &[f32], buf: &'b mut [u8; MAX_RECORD]) -> &'b [u8] {
+    buf[0] = FORMAT;
+    let mut len = 1;
+    for (v, dst) in values.iter().zip(buf[1..].chunks_exact_mut(4)) {
+        dst.copy_from_slice(&v.to_le_bytes());
+        len += 4;
+    }
+    &buf[..len]
+}
+
+/// Decodes a record of exactly `out.len()` finite values.
+pub fn decode(rec: &[u8], out: &mut [f32]) -> Option<()> {
+    let (&format, body) = rec.split_first()?;
+    if format != FORMAT || body.len() != 4 * out.len() {
+        return None;
+    }
+    for (o, b) in out.iter_mut().zip(body.chunks_exact(4)) {
+        let v = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+        if !v.is_finite() {
+            return None;
+        }
+        *o = v;
+    }
+    Some(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_trip_and_rejects() {
+        let mut buf = [0; MAX_RECORD];
+        let rec = encode(&[1.5, -2.0, 0.25, 1e6], &mut buf).to_vec();
+        assert_eq!(rec.len(), MAX_RECORD);
+        let mut out = [0.0; AXES];
+        assert_eq!(decode(&rec, &mut out), Some(()));
+        assert_eq!(out, [1.5, -2.0, 0.25, 1e6]);
+        // Wrong length, wrong format, empty, NaN.
+        let mut one = [0.0];
+        assert_eq!(decode(&rec, &mut one), None);
+        let mut old = rec.clone();
+        old[0] = FORMAT + 1;
+        assert_eq!(decode(&old, &mut out), None);
+        assert_eq!(decode(&[], &mut out), None);
+        let nan = encode(&[f32::NAN], &mut buf).to_vec();
+        assert_eq!(decode(&nan, &mut one), None);
+    }
+}

@@ -1,0 +1,159 @@
+//! Persist over a RAM flash: defaults, round trips, dirty tracking,
+//! validation on load, torn writes and wear.
+
+use super::*;
+use crate::seams::Storage;
+
+/// The boards' geometry: two 16 KiB sectors.
+type Board = RamFlash<{ 2 * 16384 }, 16384>;
+/// Small pages so that a few hundred writes wrap the map many times.
+type Small = RamFlash<4096, 2048>;
+
+const ITEMS: u16 = (SETTINGS + OFFSET_RECORDS) as u16;
+
+fn persist<F: embedded_storage::nor_flash::NorFlash>(flash: F) -> Persist<FlashMap<F>> {
+    Persist::new(FlashMap::new(flash), Settings::default())
+}
+
+fn flash_of<F: embedded_storage::nor_flash::NorFlash + Clone>(p: &mut Persist<FlashMap<F>>) -> F {
+    p.storage().flash().cloned().expect("map configured")
+}
+
+#[test]
+fn setting_count_matches_the_table() {
+    assert_eq!(table::numbers().count(), SETTINGS);
+}
+
+#[test]
+fn fresh_flash_gives_defaults_once() {
+    let mut p = persist(Board::new());
+    let first = p.load();
+    assert_eq!(first.settings, Settings::default());
+    assert_eq!(first.offsets, Offsets::default());
+    assert_eq!(first.report.defaulted, ITEMS);
+    assert!(!first.report.failed);
+    // The defaults were written back: the next boot has nothing to report.
+    let mut again = persist(flash_of(&mut p));
+    let second = again.load();
+    assert!(second.report.is_clean(), "{:?}", second.report);
+    assert_eq!(second.settings, Settings::default());
+}
+
+#[test]
+fn saves_only_what_changed_and_reads_it_back() {
+    let mut p = persist(Board::new());
+    let loaded = p.load();
+    let mut s = loaded.settings;
+    assert_eq!(p.save_settings(&s).ok(), Some(0));
+    s.set(110, 1234.0).expect("valid");
+    s.set(22, 1.0).expect("valid");
+    assert_eq!(p.save_settings(&s).ok(), Some(2));
+    assert_eq!(p.save_settings(&s).ok(), Some(0));
+    let mut o = loaded.offsets;
+    o.wcs[1] = [5.0, 0.0, -1.5, 0.0];
+    o.g28 = [1.0, 2.0, 3.0, 4.0];
+    assert_eq!(p.save_offsets(&o).ok(), Some(2));
+
+    let mut rebooted = persist(flash_of(&mut p));
+    let back = rebooted.load();
+    assert!(back.report.is_clean(), "{:?}", back.report);
+    assert_eq!(back.settings.axes[0].max_rate, 1234.0);
+    assert!(back.settings.homing_enable);
+    assert_eq!(back.offsets, o);
+}
+
+#[test]
+fn values_set_would_refuse_fall_back_to_their_default() {
+    let mut p = persist(Board::new());
+    p.load();
+    let mut buf = [0u8; MAX_RECORD];
+    // $0 (pulse) above its range, $2 a mask with a bit for a fifth axis,
+    // $1 in an unknown format, an offset with a NaN.
+    let store = p.storage();
+    store
+        .store(0, record::encode(&[1000.0], &mut buf))
+        .expect("store");
+    store
+        .store(2, record::encode(&[16.0], &mut buf))
+        .expect("store");
+    store
+        .store(1, &[record::FORMAT + 1, 0, 0, 0x80, 0x3F])
+        .expect("store");
+    let nan = record::encode(&[0.0, f32::NAN, 0.0, 0.0], &mut buf);
+    store.store(OFFSETS_KEY, nan).expect("store");
+    store
+        .store(110, record::encode(&[777.0], &mut buf))
+        .expect("store");
+
+    let mut rebooted = persist(flash_of(&mut p));
+    let back = rebooted.load();
+    assert_eq!(back.report.defaulted, 4);
+    let d = Settings::default();
+    assert_eq!(back.settings.step_pulse_us, d.step_pulse_us);
+    assert_eq!(back.settings.step_invert, d.step_invert);
+    assert_eq!(back.settings.idle_delay_ms, d.idle_delay_ms);
+    assert_eq!(back.offsets.wcs[0], [0.0; AXES]);
+    // Good records next to bad ones still load.
+    assert_eq!(back.settings.axes[0].max_rate, 777.0);
+    // The defaults went back to flash: reported once.
+    assert!(persist(flash_of(&mut rebooted)).load().report.is_clean());
+}
+
+#[test]
+fn a_torn_write_keeps_the_previous_value() {
+    for cut in [1, 3, 7, 10, 13] {
+        let mut p = persist(Board::new());
+        let mut s = p.load().settings;
+        s.set(110, 1000.0).expect("valid");
+        assert_eq!(p.save_settings(&s).ok(), Some(1));
+
+        // The power goes `cut` bytes into the next record.
+        let mut flash = flash_of(&mut p);
+        flash.cut_power_after(cut);
+        let mut torn = persist(flash);
+        torn.load();
+        s.set(110, 2000.0).expect("valid");
+        assert!(torn.save_settings(&s).is_err(), "cut at {cut}");
+
+        let mut flash = flash_of(&mut torn);
+        flash.power_on();
+        let mut rebooted = persist(flash);
+        let back = rebooted.load();
+        assert_eq!(back.settings.axes[0].max_rate, 1000.0, "cut at {cut}");
+        assert!(!back.report.failed, "cut at {cut}: {:?}", back.report);
+        // And the store still takes writes afterwards.
+        s.set(110, 3000.0).expect("valid");
+        assert_eq!(rebooted.save_settings(&s).ok(), Some(1), "cut at {cut}");
+        let after = persist(flash_of(&mut rebooted)).load();
+        assert_eq!(after.settings.axes[0].max_rate, 3000.0, "cut at {cut}");
+    }
+}
+
+#[test]
+fn many_saves_wrap_the_pages_without_losing_anything() {
+    let mut p = persist(Small::new());
+    let mut s = p.load().settings;
+    let mut o = Offsets::default();
+    o.wcs[8] = [9.0, 8.0, 7.0, 6.0];
+    p.save_offsets(&o).expect("save");
+    for i in 0..400u16 {
+        s.set(110, 100.0 + f32::from(i)).expect("valid");
+        p.save_settings(&s).expect("save");
+    }
+    let flash = flash_of(&mut p);
+    // Pages were recycled, each about equally often.
+    assert!(flash.erases >= 4, "erases {}", flash.erases);
+    let back = persist(flash).load();
+    assert!(back.report.is_clean(), "{:?}", back.report);
+    assert_eq!(back.settings.axes[0].max_rate, 499.0);
+    assert_eq!(back.settings, s);
+    assert_eq!(back.offsets, o);
+}
+
+#[test]
+fn a_flash_too_small_for_a_map_reports_failure() {
+    let mut p = persist(RamFlash::<2048, 2048>::new());
+    let loaded = p.load();
+    assert!(loaded.report.failed);
+    assert_eq!(loaded.settings, Settings::default());
+}
