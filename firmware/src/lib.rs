@@ -19,6 +19,7 @@ pub mod gcode;
 pub mod interp;
 pub mod link;
 pub mod machine;
+pub mod num;
 pub mod planner;
 pub mod realtime;
 pub mod seams;
