@@ -206,7 +206,7 @@ fn write_scaled(
     let mut f = n % p;
     let mut d = u32::from(d);
     if trim {
-        while d > 0 && f % 10 == 0 {
+        while d > 0 && f.is_multiple_of(10) {
             f /= 10;
             d -= 1;
         }
