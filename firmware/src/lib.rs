@@ -20,6 +20,7 @@ pub mod inputs;
 pub mod interp;
 pub mod link;
 pub mod machine;
+pub mod num;
 pub mod outputs;
 pub mod persist;
 pub mod planner;

@@ -138,7 +138,7 @@ impl Outputs {
         let scale = match motion {
             Motion::Stopped | Motion::Rapid => return off,
             Motion::Feed { .. } if !ccw => 1.0,
-            Motion::Feed { ratio } => ratio.clamp(0.0, 1.0),
+            Motion::Feed { ratio } => crate::num::clamp(ratio, 0.0, 1.0),
         };
         Spindle {
             enable: true,
@@ -160,7 +160,7 @@ impl Outputs {
         if span.is_nan() || span <= 0.0 || s >= self.rpm_max {
             return 1.0;
         }
-        ((s - self.rpm_min) / span).clamp(MIN_DUTY, 1.0)
+        crate::num::clamp((s - self.rpm_min) / span, MIN_DUTY, 1.0)
     }
 }
 

@@ -12,6 +12,7 @@
 use super::error::{ErrorKind, Unsupported};
 use super::lexer::{blank, Cursor, LexResult};
 use super::params::{Name, ParamStore, PARAM_MAX};
+use crate::num::Decimal;
 use libm::{atan2f, ceilf, cosf, expf, floorf, fmodf, logf, powf, roundf, sinf, sqrtf, tanf};
 
 /// Deepest bracket/parameter nesting accepted.
@@ -35,7 +36,8 @@ impl Cursor<'_> {
     /// An unsigned decimal number: digits with at most one point (blanks
     /// allowed between them). Up to 7 significant digits and 10 decimals take
     /// the exact path (integer mantissa over an exact power of ten, one
-    /// rounding); anything longer goes to core's correctly rounded parser.
+    /// rounding); anything longer goes to [`crate::num::Decimal`].
+    #[inline]
     pub(crate) fn number(&mut self) -> LexResult<f32> {
         // Fast path: `digits[.digits]` with no blanks inside, the shape of
         // nearly every number in real files.
@@ -83,26 +85,20 @@ impl Cursor<'_> {
         self.number_slow()
     }
 
-    /// Numbers with blanks inside or many significant digits.
+    /// Numbers with blanks inside or many significant digits: the same
+    /// digits through [`crate::num::Decimal`], which keeps 19 of them.
+    #[cold]
+    #[inline(never)]
     fn number_slow(&mut self) -> LexResult<f32> {
         let start = self.pos;
         let line = self.line;
         let mut i = start;
-        let mut mant: u32 = 0;
-        let mut frac = 0usize;
+        let mut d = Decimal::default();
         let mut dot = false;
-        let mut digits = 0u32;
-        let mut exact = true;
         while let Some(&b) = line.get(i) {
-            let d = b.wrapping_sub(b'0');
-            if d < 10 {
-                digits += 1;
-                if mant < 10_000_000 {
-                    mant = mant * 10 + u32::from(d);
-                    frac += usize::from(dot);
-                } else {
-                    exact = false;
-                }
+            let digit = b.wrapping_sub(b'0');
+            if digit < 10 {
+                d.push(digit, dot);
             } else if b == b'.' && !dot {
                 dot = true;
             } else if !blank(b) {
@@ -111,28 +107,11 @@ impl Cursor<'_> {
             i += 1;
         }
         self.pos = i;
-        if digits == 0 {
+        let v = d.to_f32();
+        if d.digits == 0 || !v.is_finite() {
             return Err(self.err_at(ErrorKind::BadNumber, start));
         }
-        if exact && mant < (1 << 24) {
-            if let Some(p) = POW10.get(frac) {
-                return Ok(mant as f32 / p);
-            }
-        }
-        // Rare: many significant digits. Let core's parser round it.
-        let mut buf = [0u8; 48];
-        let mut n = 0;
-        for &b in line.get(start..i).unwrap_or(&[]) {
-            if !blank(b) {
-                *buf.get_mut(n)
-                    .ok_or_else(|| self.err_at(ErrorKind::BadNumber, start))? = b;
-                n += 1;
-            }
-        }
-        let s = buf.get(..n).and_then(|b| core::str::from_utf8(b).ok());
-        s.and_then(|s| s.parse::<f32>().ok())
-            .filter(|v| v.is_finite())
-            .ok_or_else(|| self.err_at(ErrorKind::BadNumber, start))
+        Ok(v)
     }
 
     /// Any real value: `[+-]* (number | [expr] | #param | FUNC[..])`.

@@ -327,7 +327,11 @@ impl Interpreter {
             (false, true) => w.write_str(" M8")?,
             (true, true) => w.write_str(" M7 M8")?,
         }
-        write!(w, " T{} F{} S{}", s.tool, s.feed / s.unit(), s.speed)
+        // Short numbers (`F10`, `S300`, `F12.5`): at most 3 decimals.
+        write!(w, " T{} F", s.tool)?;
+        crate::num::write_short(w, s.feed / s.unit(), 3)?;
+        w.write_str(" S")?;
+        crate::num::write_short(w, s.speed, 3)
     }
 
     /// GRBL's `$#` report lines (G54..G59.3, G28, G30, G92, TLO, PRB), all
@@ -339,7 +343,7 @@ impl Interpreter {
                 if i > 0 {
                     w.write_char(',')?;
                 }
-                write!(w, "{v:.3}")?;
+                crate::num::write_fixed(w, *v, 3)?;
             }
             Ok(())
         };

@@ -5,6 +5,7 @@
 //! line ends in `\r\n`, numbers use `.` and fixed decimals (3 in mm, 4 in
 //! inches), and the status report's fields come in GRBL's order.
 
+use crate::num::write_fixed;
 use crate::settings::{table, Settings};
 use core::fmt::{self, Write};
 use protocol::msg::pins;
@@ -77,7 +78,9 @@ pub fn setting(w: &mut impl Write, n: u16, value: f32) -> fmt::Result {
     if table::is_integer(n) {
         write!(w, "${n}={}\r\n", value as i64)
     } else {
-        write!(w, "${n}={value:.3}\r\n")
+        write!(w, "${n}=")?;
+        write_fixed(w, value, 3)?;
+        w.write_str("\r\n")
     }
 }
 
@@ -116,14 +119,11 @@ pub fn coords(w: &mut impl Write, pos: &[f32], f: Format) -> fmt::Result {
             w.write_char(',')?;
         }
         let linear = i < 3;
-        let v = if f.inches && linear { v / 25.4 } else { v };
-        // No "-0.000": values that round to zero print as zero.
-        let v = if v.abs() < 0.00005 { 0.0 } else { v };
+        // write_fixed never prints "-0.000".
         if f.inches && linear {
-            write!(w, "{v:.4}")?;
+            write_fixed(w, v / 25.4, 4)?;
         } else {
-            let v = if v.abs() < 0.0005 { 0.0 } else { v };
-            write!(w, "{v:.3}")?;
+            write_fixed(w, v, 3)?;
         }
     }
     Ok(())
@@ -213,7 +213,10 @@ pub fn status(
         write!(w, "|Ln:{n}")?;
     }
     let feed = if f.inches { s.feed / 25.4 } else { s.feed };
-    write!(w, "|FS:{:.0},{:.0}", feed, s.spindle)?;
+    w.write_str("|FS:")?;
+    write_fixed(w, feed, 0)?;
+    w.write_char(',')?;
+    write_fixed(w, s.spindle, 0)?;
     if s.pins != 0 {
         w.write_str("|Pn:")?;
         for (bit, letter) in pins::LETTERS {

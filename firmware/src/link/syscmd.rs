@@ -121,18 +121,7 @@ fn parse_u16(digits: &[u8]) -> Option<u16> {
 }
 
 /// Plain decimal numbers only: GRBL's syntax, no `inf`, `nan` or exponents.
-pub fn parse_f32(text: &[u8]) -> Option<f32> {
-    let body = text
-        .strip_prefix(b"-")
-        .or(text.strip_prefix(b"+"))
-        .unwrap_or(text);
-    let digits = body.iter().filter(|b| b.is_ascii_digit()).count();
-    let dots = body.iter().filter(|&&b| b == b'.').count();
-    if digits == 0 || dots > 1 || digits + dots != body.len() {
-        return None;
-    }
-    core::str::from_utf8(text).ok()?.parse().ok()
-}
+pub use crate::num::parse_f32;
 
 /// Upper-case and drop spaces (GRBL is case- and space-insensitive in `$`
 /// commands). `None` if it does not fit: no `$` command is that long.

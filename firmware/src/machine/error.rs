@@ -117,12 +117,9 @@ impl fmt::Display for MachineError {
                 axis_name(axis)
             ),
             VerifyHome { axis, deviation_mm } => {
-                write!(
-                    f,
-                    "G27: {} home off by {:.3} mm",
-                    axis_name(axis),
-                    deviation_mm
-                )
+                write!(f, "G27: {} home off by ", axis_name(axis))?;
+                crate::num::write_fixed(f, deviation_mm, 3)?;
+                f.write_str(" mm")
             }
             ProbeNoContact => f.write_str("probe: no contact"),
             ResetDuringMotion => f.write_str("reset during motion; position lost"),

@@ -45,7 +45,7 @@ impl<const N: usize> Planner<N> {
         let sin_half = libm::sqrtf(0.5 * (1.0 - cos));
         let r = self.settings.junction_deviation * sin_half / (1.0 - sin_half);
         let v_jd = libm::sqrtf(a * r);
-        let phi = libm::acosf((-cos).clamp(-1.0, 1.0)).max(1e-9);
+        let phi = libm::acosf(crate::num::clamp(-cos, -1.0, 1.0)).max(1e-9);
         let l = length.min(self.prev_length);
         let a_curve = if curve { 0.5 * a } else { a };
         let v_curve = libm::sqrtf(a_curve * l / phi);

@@ -85,7 +85,7 @@ impl Shape {
         let dv = v1 - v0;
         let sg = if dv < 0.0 { -1.0 } else { 1.0 };
         let total = self.time(dv);
-        let tau = tau.clamp(0.0, total);
+        let tau = crate::num::clamp(tau, 0.0, total);
         if self.jerk <= 0.0 || total <= 0.0 {
             let a = if total > 0.0 { dv / total } else { 0.0 };
             return (v0 + a * tau, v0 * tau + 0.5 * a * tau * tau);

@@ -445,7 +445,7 @@ impl Preparer {
         let period_f = ticks / events as f32;
         let period = if period_f >= self.cfg.min_period as f32 {
             let p = (period_f.min(u32::MAX as f32) as u32).max(self.cfg.min_period);
-            self.tick_carry = (ticks - p as f32 * events as f32).clamp(0.0, p as f32);
+            self.tick_carry = crate::num::clamp(ticks - p as f32 * events as f32, 0.0, p as f32);
             p
         } else {
             // Never faster than the ceiling; the lost time is not made up.

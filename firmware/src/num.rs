@@ -1,0 +1,345 @@
+//! Decimal text to `f32` and back, without core's float text machinery.
+//!
+//! core's `f32::from_str` and float `Display` pull in about 30 KB of code
+//! and tables (Eisel-Lemire with a 10 KB power-of-five table, Grisu, Dragon
+//! and the exact formatter) to be correct for every possible input. G-code
+//! and GRBL replies need much less: numbers without exponents, and replies
+//! with a fixed number of decimals. This module does exactly that, in a few
+//! hundred bytes, and says where it differs from core:
+//!
+//! - parsing is correctly rounded for up to 7 significant digits and 10
+//!   decimals (every number a CAM program writes); longer numbers may be 1
+//!   ulp off in the rare case that the decimal lies within 2^-50 (relative)
+//!   of the midpoint of two floats;
+//! - formatting prints the exact binary value rounded half away from zero
+//!   (core rounds exact ties to even: `{:.0}` of 2.5 is "2" there, "3" here),
+//!   never prints "-0.000", prints NaN as 0 and clamps magnitudes to
+//!   [`FIXED_LIMIT`], far beyond any position, feed or setting.
+
+use core::fmt::{self, Write};
+
+/// Exact `f32` powers of ten: 10^10 = 2^10 * 5^10 and 5^10 < 2^24.
+const POW10_F32: [f32; 11] = [1.0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10];
+
+/// Exact `f64` powers of ten (5^22 < 2^53).
+const POW10_F64: [f64; 23] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+];
+
+/// Significant digits kept; the rest only move the exponent. 19 digits are
+/// 63 bits, far more than f32's 24, so dropping the tail cannot matter
+/// except within 10^-18 of a rounding midpoint.
+const MAX_SIG: u32 = 19;
+
+/// A decimal number being read: `mant * 10^exp`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Decimal {
+    pub mant: u64,
+    pub exp: i32,
+    /// Significant digits in `mant` (leading zeros do not count).
+    sig: u32,
+    /// Every digit seen, zeros included: zero digits means no number.
+    pub digits: u32,
+}
+
+impl Decimal {
+    /// Appends one digit (0-9); `frac` says whether it follows the point.
+    #[inline]
+    pub fn push(&mut self, d: u8, frac: bool) {
+        self.digits += 1;
+        if self.sig < MAX_SIG {
+            if self.sig > 0 || d != 0 {
+                self.mant = self.mant * 10 + u64::from(d);
+                self.sig += 1;
+            }
+            self.exp -= i32::from(frac);
+        } else if !frac {
+            self.exp += 1;
+        }
+    }
+
+    /// The nearest `f32` (see the module notes for the 1-ulp exception).
+    /// Too large for `f32` gives infinity, for the caller to refuse.
+    pub fn to_f32(self) -> f32 {
+        let Decimal { mant, exp, sig, .. } = self;
+        if mant == 0 {
+            return 0.0;
+        }
+        if mant < 1 << 24 && (-10..=10).contains(&exp) {
+            // Both operands exact: one correctly rounded operation.
+            let p = POW10_F32
+                .get(exp.unsigned_abs() as usize)
+                .copied()
+                .unwrap_or(1.0);
+            return if exp < 0 {
+                mant as f32 / p
+            } else {
+                mant as f32 * p
+            };
+        }
+        // The value lies in [10^(top-1), 10^top).
+        let top = exp + sig as i32;
+        if top > 39 {
+            return f32::INFINITY;
+        }
+        if top < -46 {
+            // Below 10^-46, less than half the smallest subnormal.
+            return 0.0;
+        }
+        // Up to four f64 roundings (2^-53 each) before the one to f32.
+        let mut v = mant as f64;
+        let mut e = exp;
+        while e != 0 {
+            let step = e.unsigned_abs().min(22);
+            let p = POW10_F64.get(step as usize).copied().unwrap_or(1.0);
+            if e < 0 {
+                v /= p;
+                e += step as i32;
+            } else {
+                v *= p;
+                e -= step as i32;
+            }
+        }
+        v as f32
+    }
+}
+
+/// A plain decimal, `[+-]digits[.digits]` with at least one digit: GRBL's
+/// `$n=value` syntax. No blanks, exponents, `inf` or `nan`; `None` for
+/// those and for values too large for `f32`.
+pub fn parse_f32(text: &[u8]) -> Option<f32> {
+    let (neg, body) = match text.split_first() {
+        Some((b'-', rest)) => (true, rest),
+        Some((b'+', rest)) => (false, rest),
+        _ => (false, text),
+    };
+    let mut d = Decimal::default();
+    let mut frac = false;
+    for &b in body {
+        match b {
+            b'0'..=b'9' => d.push(b - b'0', frac),
+            b'.' if !frac => frac = true,
+            _ => return None,
+        }
+    }
+    if d.digits == 0 {
+        return None;
+    }
+    let v = d.to_f32();
+    if !v.is_finite() {
+        return None;
+    }
+    Some(if neg { -v } else { v })
+}
+
+/// Largest magnitude [`write_fixed`] prints (about 2^40); larger values and
+/// infinities print as this, with their sign.
+pub const FIXED_LIMIT: f32 = 1e12;
+
+/// `v` limited to `lo..=hi` (`lo` for NaN). Not `f32::clamp`: its
+/// `lo <= hi` assertion formats floats in its panic message, which links
+/// core's float printing (about 20 KB) into the image; `cargo xtask build`
+/// refuses an image that has it.
+#[inline]
+pub fn clamp(v: f32, lo: f32, hi: f32) -> f32 {
+    v.max(lo).min(hi)
+}
+
+/// Most decimals [`write_fixed`] prints; more are clamped to this.
+pub const MAX_DECIMALS: u8 = 6;
+
+/// `|v| * 10^decimals` rounded half away from zero, exactly (integer
+/// arithmetic on the float's bits), and the sign. NaN is 0.
+fn scaled(v: f32, decimals: u8) -> (bool, u64) {
+    let v = if v.is_nan() {
+        0.0
+    } else {
+        clamp(v, -FIXED_LIMIT, FIXED_LIMIT)
+    };
+    let bits = v.to_bits();
+    let neg = bits >> 31 != 0;
+    let biased = ((bits >> 23) & 0xff) as i32;
+    let frac = u64::from(bits & 0x7f_ffff);
+    let (m, e2) = if biased == 0 {
+        (frac, -149)
+    } else {
+        (frac | 1 << 23, biased - 150)
+    };
+    // m < 2^24 and 10^6 < 2^20: the product fits in 44 bits, and with
+    // |v| <= 2^40 the left shift below is at most 17.
+    let s = m * 10u64.pow(u32::from(decimals.min(MAX_DECIMALS)));
+    let n = if e2 >= 0 {
+        s << e2
+    } else if e2 <= -64 {
+        0
+    } else {
+        let sh = e2.unsigned_abs();
+        let half = 1u64 << (sh - 1);
+        let rest = s & ((1u64 << sh) - 1);
+        (s >> sh) + u64::from(rest >= half)
+    };
+    (neg && n != 0, n)
+}
+
+/// Writes `v` with exactly `decimals` digits after the point (none and no
+/// point for 0), like `{:.N}` but rounding ties away from zero, never
+/// writing "-0.000", NaN as 0, magnitudes clamped to [`FIXED_LIMIT`].
+pub fn write_fixed(w: &mut (impl Write + ?Sized), v: f32, decimals: u8) -> fmt::Result {
+    let d = decimals.min(MAX_DECIMALS);
+    let (neg, n) = scaled(v, d);
+    write_scaled(w, neg, n, d, false)
+}
+
+/// Writes `v` with at most `max_decimals` decimals and no trailing zeros
+/// (`10`, `12.5`, `0.125`): the short form for `$G`'s F and S. Same
+/// rounding and limits as [`write_fixed`].
+pub fn write_short(w: &mut (impl Write + ?Sized), v: f32, max_decimals: u8) -> fmt::Result {
+    let d = max_decimals.min(MAX_DECIMALS);
+    let (neg, n) = scaled(v, d);
+    write_scaled(w, neg, n, d, true)
+}
+
+fn write_scaled(
+    w: &mut (impl Write + ?Sized),
+    neg: bool,
+    n: u64,
+    d: u8,
+    trim: bool,
+) -> fmt::Result {
+    let p = 10u64.pow(u32::from(d));
+    if neg {
+        w.write_char('-')?;
+    }
+    write!(w, "{}", n / p)?;
+    let mut f = n % p;
+    let mut d = u32::from(d);
+    if trim {
+        while d > 0 && f.is_multiple_of(10) {
+            f /= 10;
+            d -= 1;
+        }
+    }
+    if d == 0 {
+        return Ok(());
+    }
+    // Fractional digits, most significant first, zero-padded.
+    let mut buf = [b'0'; MAX_DECIMALS as usize];
+    for slot in buf.iter_mut().take(d as usize).rev() {
+        *slot = b'0' + (f % 10) as u8;
+        f /= 10;
+    }
+    w.write_char('.')?;
+    for &b in buf.iter().take(d as usize) {
+        w.write_char(char::from(b))?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::string::String;
+
+    fn fixed(v: f32, d: u8) -> String {
+        let mut s = String::new();
+        write_fixed(&mut s, v, d).unwrap();
+        s
+    }
+
+    fn short(v: f32, d: u8) -> String {
+        let mut s = String::new();
+        write_short(&mut s, v, d).unwrap();
+        s
+    }
+
+    #[test]
+    fn parses_plain_decimals() {
+        assert_eq!(parse_f32(b"1.5"), Some(1.5));
+        assert_eq!(parse_f32(b"-0.001"), Some(-0.001));
+        assert_eq!(parse_f32(b"+12"), Some(12.0));
+        assert_eq!(parse_f32(b".5"), Some(0.5));
+        assert_eq!(parse_f32(b"5."), Some(5.0));
+        assert_eq!(parse_f32(b"000000000000000000000000123.25"), Some(123.25));
+        assert_eq!(parse_f32(b"0.1000000000000000000000001"), Some(0.1));
+        assert_eq!(parse_f32(b"16777217"), Some(16_777_216.0));
+        assert_eq!(
+            parse_f32(b"340282350000000000000000000000000000000"),
+            Some(f32::MAX)
+        );
+    }
+
+    #[test]
+    fn refuses_what_is_not_a_plain_decimal() {
+        for t in [
+            &b""[..],
+            b"-",
+            b".",
+            b"1.2.3",
+            b"1e5",
+            b"inf",
+            b"nan",
+            b" 1",
+            b"1 ",
+            b"--1",
+            b"0x10",
+        ] {
+            assert_eq!(parse_f32(t), None, "{:?}", core::str::from_utf8(t));
+        }
+        // 10^39 overflows f32.
+        let mut big = String::from("1");
+        big.push_str(&"0".repeat(39));
+        assert_eq!(parse_f32(big.as_bytes()), None);
+    }
+
+    #[test]
+    fn tiny_values_round_to_zero_or_subnormals() {
+        let mut t = String::from("0.");
+        t.push_str(&"0".repeat(60));
+        t.push('1');
+        assert_eq!(parse_f32(t.as_bytes()), Some(0.0));
+        let sub = "0.000000000000000000000000000000000000000000001401298464324817";
+        assert_eq!(parse_f32(sub.as_bytes()), Some(f32::from_bits(1)));
+    }
+
+    #[test]
+    fn fixed_matches_the_usual_text() {
+        assert_eq!(fixed(0.0, 3), "0.000");
+        assert_eq!(fixed(1.0, 3), "1.000");
+        assert_eq!(fixed(-12.3456, 3), "-12.346");
+        assert_eq!(fixed(0.1, 4), "0.1000");
+        assert_eq!(fixed(1234.5678, 0), "1235");
+        assert_eq!(fixed(99.9996, 3), "100.000");
+    }
+
+    #[test]
+    fn fixed_never_writes_negative_zero() {
+        assert_eq!(fixed(-0.0, 3), "0.000");
+        assert_eq!(fixed(-0.0004, 3), "0.000");
+        assert_eq!(fixed(-0.4, 0), "0");
+    }
+
+    #[test]
+    fn fixed_rounds_ties_away_from_zero() {
+        assert_eq!(fixed(2.5, 0), "3");
+        assert_eq!(fixed(-2.5, 0), "-3");
+        assert_eq!(fixed(0.125, 2), "0.13");
+    }
+
+    #[test]
+    fn fixed_clamps_nan_and_huge() {
+        assert_eq!(fixed(f32::NAN, 1), "0.0");
+        assert_eq!(fixed(f32::INFINITY, 0), "999999995904");
+        assert_eq!(fixed(-1e30, 0), "-999999995904");
+        assert_eq!(fixed(1.0, 200), "1.000000");
+    }
+
+    #[test]
+    fn short_trims_zeros() {
+        assert_eq!(short(0.0, 3), "0");
+        assert_eq!(short(10.0, 3), "10");
+        assert_eq!(short(12.5, 3), "12.5");
+        assert_eq!(short(-0.125, 3), "-0.125");
+        assert_eq!(short(3.937_008, 3), "3.937");
+    }
+}
