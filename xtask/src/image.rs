@@ -6,8 +6,12 @@ use crate::util;
 use anyhow::{bail, Context, Result};
 use object::elf::{PT_LOAD, SHF_ALLOC};
 use object::read::elf::{ElfFile32, FileHeader, ProgramHeader, SectionHeader};
-use object::{Object, ObjectSection, ObjectSymbol};
+use object::{Object, ObjectSection};
 use std::path::{Path, PathBuf};
+
+mod checks;
+pub use checks::check_vectors;
+use checks::{check_no_float_text, word};
 
 pub const FLASH_BASE: u32 = 0x0800_0000;
 /// Flash sectors 1 and 2 of both Black Pills: the settings and work
@@ -122,6 +126,7 @@ pub fn build_and_check(board: Board) -> Result<Sizes> {
     let sizes = size_report(&elf)?;
     print_sizes(board, &elf, &sizes);
     check_vectors(&elf)?;
+    check_no_float_text(&elf)?;
     check_budget(board, &sizes)?;
     Ok(sizes)
 }
@@ -258,47 +263,6 @@ pub fn check_budget(board: Board, s: &Sizes) -> Result<()> {
         );
     }
     Ok(())
-}
-
-/// Interrupts that must reach RTIC tasks, with their STM32F4 IRQ numbers.
-pub const RTIC_IRQS: [(&str, u32); 2] = [("TIM5", 50), ("OTG_FS", 67)];
-
-/// Checks that the vector table sends [`RTIC_IRQS`] to their RTIC handlers,
-/// not to cortex-m-rt's `DefaultHandler` (what an unbound interrupt gets).
-pub fn check_vectors(elf: &Path) -> Result<()> {
-    let bytes = read(elf)?;
-    let file = parse(&bytes)?;
-    let default = symbol(&file, "DefaultHandler")?;
-    let table = file
-        .section_by_name(".vector_table")
-        .context("no .vector_table section")?;
-    let data = table.data().context("reading .vector_table")?;
-    for (name, irq) in RTIC_IRQS {
-        let at = 4 * (16 + irq as usize);
-        let entry =
-            word(data, at).with_context(|| format!("vector table too short for IRQ {irq}"))?;
-        if entry & !1 == default & !1 {
-            bail!("IRQ {irq} ({name}) points at DefaultHandler: the RTIC task is not bound");
-        }
-        let handler = symbol(&file, name)?;
-        if entry & !1 != handler & !1 {
-            bail!("IRQ {irq} ({name}) points at {entry:#010x}, not at the `{name}` handler");
-        }
-        println!("  vector IRQ {irq:>2} {name:<6} -> {entry:#010x} (RTIC task), DefaultHandler {default:#010x}");
-    }
-    Ok(())
-}
-
-fn symbol(file: &ElfFile32<'_>, name: &str) -> Result<u32> {
-    let sym = file
-        .symbol_by_name(name)
-        .with_context(|| format!("no symbol `{name}` in the ELF"))?;
-    u32::try_from(sym.address()).context("symbol address beyond 32 bits")
-}
-
-fn word(data: &[u8], at: usize) -> Option<u32> {
-    let b = data.get(at..at + 4)?;
-    Some(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
 }
 
 /// A PT_LOAD segment's file bytes at its physical (load) address.

@@ -1,0 +1,92 @@
+//! Checks on the linked ELF: the RTIC tasks are in the vector table, and
+//! nothing pulled core's float text code in.
+use super::{parse, read};
+use anyhow::{bail, Context, Result};
+use object::read::elf::ElfFile32;
+use object::{Object, ObjectSection, ObjectSymbol};
+use std::path::Path;
+
+/// Interrupts that must reach RTIC tasks, with their STM32F4 IRQ numbers.
+pub const RTIC_IRQS: [(&str, u32); 2] = [("TIM5", 50), ("OTG_FS", 67)];
+
+/// Checks that the vector table sends [`RTIC_IRQS`] to their RTIC handlers,
+/// not to cortex-m-rt's `DefaultHandler` (what an unbound interrupt gets).
+pub fn check_vectors(elf: &Path) -> Result<()> {
+    let bytes = read(elf)?;
+    let file = parse(&bytes)?;
+    let default = symbol(&file, "DefaultHandler")?;
+    let table = file
+        .section_by_name(".vector_table")
+        .context("no .vector_table section")?;
+    let data = table.data().context("reading .vector_table")?;
+    for (name, irq) in RTIC_IRQS {
+        let at = 4 * (16 + irq as usize);
+        let entry =
+            word(data, at).with_context(|| format!("vector table too short for IRQ {irq}"))?;
+        if entry & !1 == default & !1 {
+            bail!("IRQ {irq} ({name}) points at DefaultHandler: the RTIC task is not bound");
+        }
+        let handler = symbol(&file, name)?;
+        if entry & !1 != handler & !1 {
+            bail!("IRQ {irq} ({name}) points at {entry:#010x}, not at the `{name}` handler");
+        }
+        println!("  vector IRQ {irq:>2} {name:<6} -> {entry:#010x} (RTIC task), DefaultHandler {default:#010x}");
+    }
+    Ok(())
+}
+
+fn symbol(file: &ElfFile32<'_>, name: &str) -> Result<u32> {
+    let sym = file
+        .symbol_by_name(name)
+        .with_context(|| format!("no symbol `{name}` in the ELF"))?;
+    u32::try_from(sym.address()).context("symbol address beyond 32 bits")
+}
+
+pub(super) fn word(data: &[u8], at: usize) -> Option<u32> {
+    let b = data.get(at..at + 4)?;
+    Some(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+}
+
+/// Symbol name parts of core's float parsing and printing. burin has its
+/// own (`burin::num`); one stray `{}` of an f32, `str::parse::<f32>` or
+/// `f32::clamp` (its assertion prints floats) links 10-25 KB of these.
+const FLOAT_TEXT: [&str; 3] = ["flt2dec", "dec2flt", "float_to_decimal"];
+
+/// Refuses an image that contains core's float parsing or printing.
+pub fn check_no_float_text(elf: &Path) -> Result<()> {
+    let bytes = read(elf)?;
+    let file = parse(&bytes)?;
+    let found = float_text_symbols(file.symbols().filter_map(|s| s.name().ok()));
+    if !found.is_empty() {
+        bail!(
+            "core's float text code is linked in ({}): use burin::num instead of \
+             float Display/FromStr/clamp",
+            found.join(", ")
+        );
+    }
+    Ok(())
+}
+
+fn float_text_symbols<'a>(names: impl Iterator<Item = &'a str>) -> Vec<&'a str> {
+    names
+        .filter(|n| FLOAT_TEXT.iter().any(|part| n.contains(part)))
+        .take(5)
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::float_text_symbols;
+
+    #[test]
+    fn finds_float_text_symbols_by_mangled_name() {
+        let names = [
+            "_ZN4core3num7flt2dec8strategy5grisu19format_shortest_opt17h1E",
+            "_ZN5burin3num11write_fixed17h2E",
+            "_ZN4core3num7dec2flt60_$LT$impl$u20$core..str..traits..FromStr$u20$for$u20$f32$GT$8from_str17h3E",
+        ];
+        let found = float_text_symbols(names.into_iter());
+        assert_eq!(found.len(), 2);
+        assert!(found.iter().all(|n| n.contains("core3num")));
+    }
+}
