@@ -49,7 +49,8 @@ pub struct Segment {
     pub steps: [u32; AXES],
     pub count: u32,
     pub dir_mask: u8,
-    /// Homing/probe conditions that stop the stepper at once.
+    /// Homing switches stop the stepper at once; a probe trip is only
+    /// recorded (the planner task then ramps down like a hold).
     pub watch: crate::planner::Watch,
     /// Path speed at the end of this segment reaches zero (end of motion
     /// or completed hold): running dry after it is not an underrun.
@@ -286,8 +287,12 @@ impl Stepper {
         }
         if watch.probe != 0 {
             let probe = sw.probe ^ self.cfg.probe_invert;
-            if (watch.probe == 1 && probe) || (watch.probe == 2 && !probe) {
-                return self.trip(rt, Trip::Probe, 0, generation);
+            if ((watch.probe == 1 && probe) || (watch.probe == 2 && !probe))
+                && rt.trip() == Trip::None
+            {
+                // Record where it tripped and keep stepping: the planner task
+                // ramps down within the acceleration limit and flushes the rest.
+                rt.set_trip(Trip::Probe, 0, &self.position);
             }
         }
         let threshold = self.run.threshold;

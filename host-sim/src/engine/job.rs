@@ -36,7 +36,12 @@ pub fn run_job(config: &MachineConfig, source: &str, recorder: &mut dyn Recorder
             sim.run();
             let _ = sim.take_barrier();
             match sim.stats.probe.take() {
-                Some((pos, contact)) => interp.probe_finished(pos, contact),
+                Some((pos, contact)) => {
+                    // Parameters get the trip point; the position is where the
+                    // ramp-down after it actually stopped.
+                    interp.probe_finished(pos, contact);
+                    interp.set_machine_position(sim.machine.commanded_position());
+                }
                 None => interp.set_machine_position(sim.machine.commanded_position()),
             }
         }

@@ -344,3 +344,39 @@ pub fn check_path(
 pub fn expected_steps(info: &RunInfo, mm: [f32; AXES]) -> [i64; AXES] {
     std::array::from_fn(|i| (mm[i] * info.axes[i].steps_per_mm).round() as i64)
 }
+
+/// The last stop of `axis` in the trace decelerates within its limit.
+///
+/// A body that ends at rest after decelerating at most at `a` covers at
+/// most `a·t²/2` in the last `t` before it stops. For every step `k` of the
+/// final `window` steps this compares the distance from `k` to the last
+/// step with that bound. Quantisation: the continuous ramp ends somewhere
+/// inside the step after the last one, which it may take up to
+/// `t_q = sqrt(2·step/a)` to reach, so `t` counts from `t_q` after the last
+/// step; the preparer's 2 ms staircase adds the factor `1 + 2ms/25ms` (as in
+/// [`check_max_accel`]) and position quantisation 2 steps. An instant stop
+/// from `v` fails as soon as `v·t > a·(t+t_q)²/2·1.08 + 2 steps`.
+/// Returns the worst ratio distance/bound.
+pub fn check_stop_decel(info: &RunInfo, events: &[PinEvent], axis: usize, window: usize) -> f64 {
+    let st = axis_steps(events, axis);
+    let Some(&(t_end, _)) = st.last() else {
+        return 0.0;
+    };
+    let ax = &info.axes[axis];
+    let spm = ax.steps_per_mm as f64;
+    let a = ax.max_accel_mm_s2 as f64;
+    let hz = info.tick_hz as f64;
+    let tq = (2.0 / spm / a).sqrt();
+    let mut worst = 0.0f64;
+    for (n, (t, _)) in st.iter().rev().enumerate().take(window).skip(1) {
+        let dt = (t_end - t) as f64 / hz + tq;
+        let d = n as f64 / spm;
+        let bound = a * dt * dt / 2.0 * (1.0 + 0.002 / ACCEL_BIN_S) + 2.0 / spm;
+        worst = worst.max(d / bound);
+        assert!(
+            d <= bound,
+            "axis {axis}: {d:.4} mm in the last {dt:.5} s before the stop, at most {bound:.4} mm decelerating at {a} mm/s²"
+        );
+    }
+    worst
+}
