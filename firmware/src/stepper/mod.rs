@@ -224,11 +224,16 @@ impl Stepper {
         self.left = s.events;
         self.last_end = s.end_of_motion;
         let shift = MAX_AMASS.saturating_sub(s.amass);
+        let mut watch = s.watch;
+        // Tripped already: the rest of the move only ramps down.
+        if watch.probe != 0 && rt.trip() == Trip::Probe {
+            watch.probe = 0;
+        }
         self.run = Running {
             inc: s.steps.map(|n| n << shift),
             threshold: s.count << MAX_AMASS,
             period: s.period,
-            watch: s.watch,
+            watch,
             generation: s.generation,
             speed_mm_min: s.speed_mm_min,
             line: s.line,
@@ -287,12 +292,11 @@ impl Stepper {
         }
         if watch.probe != 0 {
             let probe = sw.probe ^ self.cfg.probe_invert;
-            if ((watch.probe == 1 && probe) || (watch.probe == 2 && !probe))
-                && rt.trip() == Trip::None
-            {
+            if (watch.probe == 1 && probe) || (watch.probe == 2 && !probe) {
                 // Record where it tripped and keep stepping: the planner task
                 // ramps down within the acceleration limit and flushes the rest.
                 rt.set_trip(Trip::Probe, 0, &self.position);
+                self.run.watch.probe = 0;
             }
         }
         let threshold = self.run.threshold;
