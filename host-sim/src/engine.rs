@@ -286,7 +286,7 @@ impl<'r> Sim<'r> {
             }
             let t_in = self.inputs.front().map(|(t, _)| *t);
             let t_task = self.task_due();
-            let next = [self.next_step, t_in, t_task].into_iter().flatten().min();
+            let next = earliest(earliest(self.next_step, t_in), t_task);
             let next = match next {
                 Some(n) => n,
                 None => {
@@ -361,6 +361,17 @@ impl<'r> Sim<'r> {
 
     fn take_barrier(&mut self) -> bool {
         std::mem::take(&mut self.stats.barrier_done)
+    }
+}
+
+/// The earlier of two optional times (a plain match: an iterator chain
+/// here cost a quarter of the simulation's time).
+#[inline]
+fn earliest(a: Option<u64>, b: Option<u64>) -> Option<u64> {
+    match (a, b) {
+        (Some(x), Some(y)) => Some(x.min(y)),
+        (x, None) => x,
+        (None, y) => y,
     }
 }
 
