@@ -20,6 +20,7 @@ fn config() -> MachineConfig {
         limits: [None; AXES],
         probe: None,
         start_position_mm: [0.0; AXES],
+        host: host_sim::config::HostModel::default(),
     }
 }
 

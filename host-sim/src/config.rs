@@ -33,6 +33,47 @@ pub struct ProbeSurface {
     pub towards_negative: bool,
 }
 
+/// How fast the host side of the simulation is: the link a streamed job
+/// arrives on and the run time of the parse/plan task (RTIC priority 1,
+/// which the step timer preempts). Zero means "no cost".
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HostModel {
+    /// Link rate for jobs streamed from text (`run_job`), bytes per second;
+    /// 0: every line is there at once. 11_520 is a 115 200 baud serial line.
+    pub link_bytes_per_s: u32,
+    /// Bytes the sender may have in flight or unparsed (character counting
+    /// against the firmware's receive window, `protocol::RX_WINDOW`).
+    pub rx_window_bytes: u32,
+    /// Parse task time per G-code line (or pushed command), nanoseconds.
+    pub line_ns: u32,
+    /// Planning time per planner block (line, chord, homing or probe move), ns.
+    pub block_ns: u32,
+}
+
+impl HostModel {
+    /// An infinitely fast host: no link time, no task time.
+    pub const INSTANT: HostModel = HostModel {
+        link_bytes_per_s: 0,
+        rx_window_bytes: 128,
+        line_ns: 0,
+        block_ns: 0,
+    };
+}
+
+/// The measured on-target costs (`cargo xtask bench-target`: 2422
+/// instructions per parsed line, 2915 per planned block) at 96 MHz and one
+/// instruction per cycle: 25.2 µs and 30.4 µs. The link is instant: a job
+/// file can be sent at any rate, so its time is not the controller's.
+impl Default for HostModel {
+    fn default() -> Self {
+        HostModel {
+            line_ns: 25_229,
+            block_ns: 30_365,
+            ..HostModel::INSTANT
+        }
+    }
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct MachineConfig {
     /// Step timer rate in Hz (TIM5 runs at the 96 MHz timer clock on the F411).
@@ -42,6 +83,8 @@ pub struct MachineConfig {
     pub probe: Option<ProbeSurface>,
     /// Machine position at power-up, mm.
     pub start_position_mm: [f32; AXES],
+    /// Link and parse/plan task timing.
+    pub host: HostModel,
 }
 
 /// The default machine: a small 300 × 300 × 100 mm gantry mill on the
@@ -63,6 +106,8 @@ pub struct MachineConfig {
 /// * Power-up position (-1, -1, -1, 0): parked where a homing cycle leaves
 ///   the machine, pulled off each switch by `$27` = 1 mm, so no switch is
 ///   closed at power-up.
+/// * `host` = [`HostModel::default`]: the parse/plan task costs its measured
+///   on-target time per line and per block; the link is instant.
 impl Default for MachineConfig {
     fn default() -> Self {
         let settings = Settings::default();
@@ -80,6 +125,7 @@ impl Default for MachineConfig {
                 towards_negative: true,
             }),
             start_position_mm: [-1.0, -1.0, -1.0, 0.0],
+            host: HostModel::default(),
         }
     }
 }

@@ -65,11 +65,19 @@ fn gcode_homing_and_probing_sync_the_interpreter() {
     cfg.start_position_mm = [-40.0, -40.0, -10.0, 0.0];
     // Home, probe down to the plate at Z=-20, then a relative move from
     // wherever the probe stopped.
-    let src = "G28\nG90 G0 X-10 Y-10\nG38.2 Z-40 F200\nG91 G1 Z5 F500\nG90\n";
-    let mut rec = Collect::default();
-    let s = run_job(&cfg, src, &mut rec);
-    assert!(s.errors.is_empty(), "{:?}", s.errors);
-    // probe stops on the contact step (-20 mm = -8000 steps), then +5 mm
-    assert_eq!(s.final_position_steps[2], -8000 + 2000);
-    assert_eq!(&s.final_position_steps[..2], &[-800, -800]);
+    let probe = "G28\nG90 G0 X-10 Y-10\nG38.2 Z-40 F600\n";
+    let run = |src: &str| {
+        let mut rec = Collect::default();
+        let s = run_job(&cfg, src, &mut rec);
+        assert!(s.errors.is_empty(), "{:?}", s.errors);
+        assert_eq!(&s.final_position_steps[..2], &[-800, -800]);
+        s.final_position_steps[2]
+    };
+    // The probe ramps down past the contact (-20 mm = -8000 steps)...
+    let stop = run(probe);
+    assert!(stop < -8000 && stop > -8000 - 500, "stopped at {stop}");
+    // ...a relative move starts where it really stopped...
+    assert_eq!(run(&format!("{probe}G91 G1 Z5 F500\nG90\n")), stop + 2000);
+    // ...and #5063 holds the contact point itself.
+    assert_eq!(run(&format!("{probe}G1 Z[#5063] F500\n")), -8000);
 }

@@ -194,7 +194,10 @@ fn probe_g38_2_contact_and_no_contact() {
         "tripped at {pos:?}"
     );
     assert!(sim.errors().is_empty(), "{:?}", sim.errors());
-    assert_eq!(sim.world.steps[2], -8000, "stopped on contact");
+    // Past the contact by the (tiny) ramp-down at 100 mm/min.
+    let over = -8000 - sim.world.steps[2];
+    assert!((0..40).contains(&over), "overtravel {over} steps");
+    assert_eq!(sim.rt.position(), sim.world.steps.map(|s| s as i32));
     // Away from the plate: G38.4 until contact breaks.
     sim.push_command(
         2,
@@ -341,4 +344,61 @@ fn soft_reset_mid_move_stops_and_flags_position() {
     assert!(x > 0 && x < 8000, "stopped part way: {x}");
     // the core's idea of the position matches the steps that really ran
     assert_eq!(i64::from(x), sim.world.steps[0]);
+}
+
+/// G38.2 at 1000 mm/min: the trip point is recorded exactly, then Z ramps
+/// down within its acceleration limit (no instant stop) and the machine
+/// position is where it really stopped.
+#[test]
+fn probe_contact_ramps_down_within_accel() {
+    let cfg = config_with_switches();
+    let mut rec = Collect::default();
+    let mut sim = Sim::new(&cfg, &mut rec);
+    sim.push_command(
+        1,
+        Command::Probe {
+            end: [0.0, 0.0, -30.0, 0.0],
+            feed: Feed::PerMin(1000.0),
+            kind: ProbeKind::Toward,
+        },
+    );
+    sim.run();
+    assert!(sim.errors().is_empty(), "{:?}", sim.errors());
+    let (pos, contact) = sim.probe_result().unwrap();
+    assert!(contact);
+    // The plate is at world step -8000: reported within 1 step of it.
+    let trip_steps = pos[2] as f64 * 400.0;
+    assert!(
+        (trip_steps + 8000.0).abs() <= 1.0,
+        "tripped at {trip_steps}"
+    );
+    // 16.7 mm/s at 100 mm/s² needs 1.39 mm (555 steps) to stop.
+    let over = -8000 - sim.world.steps[2];
+    assert!((500..900).contains(&over), "overtravel {over} steps");
+    assert_eq!(sim.rt.position(), sim.world.steps.map(|s| s as i32));
+    let stop = sim.machine.commanded_position();
+    assert!((stop[2] * 400.0 - sim.world.steps[2] as f32).abs() < 0.5);
+    assert!(sim.machine.alarm().is_none());
+    // Motion goes on normally from the stop point.
+    sim.push_command(
+        2,
+        Command::Line {
+            end: [0.0, 0.0, -10.0, 0.0],
+            feed: Feed::PerMin(600.0),
+        },
+    );
+    sim.run();
+    assert_eq!(sim.world.steps[2], -4000);
+    drop(sim);
+    let info = rec.info.as_ref().unwrap();
+    let acc = check_max_accel(info, &rec.events, &[], 0.01);
+    let probe_events: Vec<_> = rec
+        .events
+        .iter()
+        .filter(|e| e.dir_mask & 0b100 != 0)
+        .copied()
+        .collect();
+    let stop = check_stop_decel(info, &probe_events, 2, 2000);
+    println!("probe stop: worst accel ratio {acc:.3}, stop ratio {stop:.3}");
+    check_pin_timing(info, &rec.events);
 }

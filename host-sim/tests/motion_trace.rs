@@ -5,8 +5,7 @@ mod common;
 use burin::command::{Arc, ArcDir, Command, Feed, Plane, Spline};
 use burin::settings::{Profile, RapidMode};
 use common::*;
-use host_sim::config::MachineConfig;
-use host_sim::engine::{Input, Sim};
+use host_sim::engine::Input;
 
 fn arc(end: [f32; 4], center: [f32; 2], plane: Plane, dir: ArcDir, turns: u16, f: f32) -> Command {
     Command::Arc(Arc {
@@ -94,66 +93,6 @@ fn mixed_job() -> Vec<Command> {
             end: [0.0, 0.0, 0.0, 0.0],
         },
     ]
-}
-
-struct Run {
-    rec: Collect,
-    summary: host_sim::record::Summary,
-}
-
-fn run(cfg: &MachineConfig, cmds: &[Command], inputs: &[(f64, Input)]) -> Run {
-    let mut rec = Collect::default();
-    let mut sim = Sim::new(cfg, &mut rec);
-    for (i, c) in cmds.iter().enumerate() {
-        sim.push_command(i as u32 + 1, c.clone());
-    }
-    for (t, inp) in inputs {
-        sim.input_at((t * cfg.tick_hz as f64) as u64, *inp);
-    }
-    sim.run();
-    let summary = sim.summary(cmds.len() as u32, [0.0; 4]);
-    drop(sim);
-    Run { rec, summary }
-}
-
-fn last_end(cmds: &[Command]) -> [f32; 4] {
-    cmds.iter()
-        .rev()
-        .find_map(|c| c.end().copied())
-        .unwrap_or([0.0; 4])
-}
-
-fn check_all(cfg: &MachineConfig, r: &Run, cmds: &[Command], label: &str) {
-    let info = r.rec.info.as_ref().unwrap();
-    assert!(
-        r.summary.errors.is_empty(),
-        "{label}: {:?}",
-        r.summary.errors
-    );
-    assert_eq!(
-        r.summary.final_position_steps,
-        expected_steps(info, last_end(cmds)),
-        "{label}"
-    );
-    let rate = check_max_rate(info, &r.rec.events);
-    let (dev, corners) = check_path(info, cfg.start_position_mm, &r.rec.path, &r.rec.events, 0.0);
-    let acc = check_max_accel(
-        info,
-        &r.rec.events,
-        &corners,
-        cfg.settings.junction_deviation as f64,
-    );
-    check_pin_timing(info, &r.rec.events);
-    println!(
-        "{label}: {} step events, {:.3} s, worst rate {:.3}, worst accel {:.3}, worst path dev {:.4} mm, underruns {}",
-        r.rec.events.len(),
-        r.summary.job_time_s,
-        rate,
-        acc,
-        dev,
-        r.summary.planner_underruns
-    );
-    assert_eq!(r.summary.planner_underruns, 0, "{label}");
 }
 
 #[test]
@@ -367,45 +306,6 @@ fn independent_rapid_moves_each_axis_at_its_own_rate() {
     assert!(last_tick(&coord, 2) as f64 > 0.95 * last_tick(&coord, 0) as f64);
     assert!((last_tick(&ind, 2) as f64) < 0.7 * last_tick(&ind, 0) as f64);
     assert!(ind.rec.path.len() == 2, "two legs: {:?}", ind.rec.path);
-}
-
-/// Jerk of the X axis from its step times: velocity from the first to the
-/// last step inside 25 ms bins, acceleration and jerk as differences of
-/// neighbouring bins. Quantisation noise is a few hundred mm/s³ here.
-fn max_jerk_x(r: &Run, hz: f64) -> f64 {
-    let t: Vec<f64> = r
-        .rec
-        .events
-        .iter()
-        .filter(|e| e.step_mask & 1 != 0)
-        .map(|e| e.tick as f64 / hz)
-        .collect();
-    let bin = 0.025;
-    let mut v: Vec<(f64, f64)> = Vec::new();
-    let mut k = 0;
-    while k < t.len() {
-        let b = (t[k] / bin) as u64;
-        let mut j = k;
-        while j + 1 < t.len() && (t[j + 1] / bin) as u64 == b {
-            j += 1;
-        }
-        if j > k + 2 && t[j] - t[k] > 0.8 * bin {
-            v.push(((t[j] + t[k]) / 2.0, (j - k) as f64 / (t[j] - t[k]) / 80.0));
-        }
-        k = j + 1;
-    }
-    let a: Vec<(f64, f64)> = v
-        .windows(2)
-        .map(|w| {
-            (
-                (w[0].0 + w[1].0) / 2.0,
-                (w[1].1 - w[0].1) / (w[1].0 - w[0].0),
-            )
-        })
-        .collect();
-    a.windows(2)
-        .map(|w| ((w[1].1 - w[0].1) / (w[1].0 - w[0].0)).abs())
-        .fold(0.0, f64::max)
 }
 
 #[test]

@@ -86,6 +86,12 @@ enum Pending {
         kind: ProbeKind,
         line: u32,
     },
+    /// The probe tripped at `at`; the move is ramping down before the rest
+    /// of it is dropped.
+    ProbeStop {
+        at: Pos,
+        line: u32,
+    },
     Homing(Homing),
 }
 
@@ -163,7 +169,10 @@ impl<const N: usize> Machine<N> {
             State::Alarm
         } else if matches!(self.pending, Pending::Homing(_)) {
             State::Homing
-        } else if self.prep.hold() != crate::stepper::prep::Hold::Running || rt.hold_requested() {
+        } else if (self.prep.hold() != crate::stepper::prep::Hold::Running
+            && !self.prep.cancelling())
+            || rt.hold_requested()
+        {
             State::Hold
         } else if self.planner.is_empty() && self.prep.is_idle() && rt.stepper_idle() {
             State::Idle
@@ -304,19 +313,36 @@ impl<const N: usize> Machine<N> {
                 let line = self.prep.line();
                 self.raise_alarm(rt, MachineError::HardLimit { mask }, line, obs);
             }
-            Trip::Probe => {
-                let pos = self.steps_to_mm(&rt.trip_position());
-                self.flush(rt);
-                if let Pending::ProbeRun { line, .. } = self.pending {
-                    self.probe_result = Some((pos, true));
-                    obs(Note::Probed {
-                        line,
-                        position: pos,
-                        contact: true,
-                    });
+            Trip::Probe => match self.pending {
+                // Stopping dead would need infinite deceleration: the trip
+                // position is kept and the move ramps down like a hold.
+                Pending::ProbeRun { line, .. } => {
+                    let at = self.steps_to_mm(&rt.trip_position());
+                    self.pending = Pending::ProbeStop { at, line };
+                    self.prep.cancel_motion();
                 }
-                self.pending = Pending::None;
-            }
+                Pending::ProbeStop { at, line } => {
+                    let stopped = self.prep.hold() == crate::stepper::prep::Hold::Held
+                        && sink.is_empty()
+                        && rt.stepper_idle();
+                    if stopped {
+                        // The flush takes the stop point (past the trip) as
+                        // the commanded position; the interpreter resyncs to it.
+                        self.flush(rt);
+                        self.probe_result = Some((at, true));
+                        obs(Note::Probed {
+                            line,
+                            position: at,
+                            contact: true,
+                        });
+                        self.pending = Pending::None;
+                    }
+                }
+                _ => {
+                    self.flush(rt);
+                    self.pending = Pending::None;
+                }
+            },
             Trip::Homing => {
                 let (mask, at) = (rt.trip_mask(), rt.trip_position());
                 self.flush(rt);

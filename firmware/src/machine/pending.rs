@@ -6,6 +6,8 @@ impl<const N: usize> Machine<N> {
     pub(super) fn run_pending(&mut self, rt: &Realtime, obs: &mut dyn FnMut(Note)) {
         match core::mem::replace(&mut self.pending, Pending::None) {
             Pending::None | Pending::Chords { .. } => {}
+            // Finished by `poll` once the ramp-down has stopped.
+            p @ Pending::ProbeStop { .. } => self.pending = p,
             Pending::Sync { command, line } => {
                 if let Command::Pause { .. } = command {
                     rt.feed_hold();

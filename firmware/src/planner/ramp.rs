@@ -80,6 +80,27 @@ impl Shape {
         hi
     }
 
+    /// Acceleration `tau` seconds into a ramp from `v0` to `v1` (signed).
+    pub fn accel_at(&self, v0: f32, v1: f32, tau: f32) -> f32 {
+        let dv = v1 - v0;
+        let total = self.time(dv);
+        if total <= 0.0 {
+            return 0.0;
+        }
+        let sg = if dv < 0.0 { -1.0 } else { 1.0 };
+        if self.jerk <= 0.0 {
+            return dv / total;
+        }
+        let tau = tau.clamp(0.0, total);
+        let j = self.jerk;
+        let tj = if dv.abs() * j >= self.accel * self.accel {
+            self.accel / j
+        } else {
+            libm::sqrtf(dv.abs() / j)
+        };
+        sg * j * tau.min(tj).min(total - tau)
+    }
+
     /// Speed and distance `tau` seconds into a ramp from `v0` to `v1`.
     pub fn eval(&self, v0: f32, v1: f32, tau: f32) -> (f32, f32) {
         let dv = v1 - v0;
@@ -126,6 +147,10 @@ pub struct Phase {
     pub v1: f32,
     pub time: f32,
     pub dist: f32,
+    /// The phase starts this far (s) into the ramp from `v0` to `v1`; `dist`
+    /// and `time` count from there. Nonzero only for a hold that must first
+    /// bring a running S-curve acceleration back to zero.
+    pub t0: f32,
 }
 
 /// Speed over the rest of a block: up to three phases (change to the peak,
@@ -146,6 +171,7 @@ impl Profile {
             v1: b,
             time: shape.time(b - a),
             dist: shape.dist(a, b),
+            t0: 0.0,
         };
         let mut v1 = v1.min(vn);
         // Entry too fast to reach the exit speed: slow down as much as possible.
@@ -165,11 +191,15 @@ impl Profile {
         let (up, down) = (shape.dist(v0, vn), shape.dist(vn, v1));
         let peak = if up + down <= len {
             vn
-        } else if shape.jerk <= 0.0 {
+        } else if shape.jerk <= 0.0 && v0 <= vn {
             let a = shape.accel;
             libm::sqrtf(((2.0 * a * len + v0 * v0 + v1 * v1) / 2.0).max(0.0)).min(vn)
         } else {
-            let (mut lo, mut hi) = (v0.max(v1), vn);
+            // Entered above the cruise speed (an override drop): S ramps via
+            // `vn` may not fit, so bisect a plateau between the exit speed
+            // (one direct ramp, which fits) and `vn`.
+            let lo0 = if v0 > vn { v1 } else { v0.max(v1) };
+            let (mut lo, mut hi) = (lo0, vn);
             for _ in 0..24 {
                 let mid = 0.5 * (lo + hi);
                 if shape.dist(v0, mid) + shape.dist(mid, v1) <= len {
@@ -188,6 +218,7 @@ impl Profile {
             v1: peak,
             time: cruise_len / peak.max(1e-6),
             dist: cruise_len,
+            t0: 0.0,
         };
         Profile { phases: [a, b, c] }
     }

@@ -49,7 +49,8 @@ pub struct Segment {
     pub steps: [u32; AXES],
     pub count: u32,
     pub dir_mask: u8,
-    /// Homing/probe conditions that stop the stepper at once.
+    /// Homing switches stop the stepper at once; a probe trip is only
+    /// recorded (the planner task then ramps down like a hold).
     pub watch: crate::planner::Watch,
     /// Path speed at the end of this segment reaches zero (end of motion
     /// or completed hold): running dry after it is not an underrun.
@@ -223,11 +224,16 @@ impl Stepper {
         self.left = s.events;
         self.last_end = s.end_of_motion;
         let shift = MAX_AMASS.saturating_sub(s.amass);
+        let mut watch = s.watch;
+        // Tripped already: the rest of the move only ramps down.
+        if watch.probe != 0 && rt.trip() == Trip::Probe {
+            watch.probe = 0;
+        }
         self.run = Running {
             inc: s.steps.map(|n| n << shift),
             threshold: s.count << MAX_AMASS,
             period: s.period,
-            watch: s.watch,
+            watch,
             generation: s.generation,
             speed_mm_min: s.speed_mm_min,
             line: s.line,
@@ -287,7 +293,10 @@ impl Stepper {
         if watch.probe != 0 {
             let probe = sw.probe ^ self.cfg.probe_invert;
             if (watch.probe == 1 && probe) || (watch.probe == 2 && !probe) {
-                return self.trip(rt, Trip::Probe, 0, generation);
+                // Record where it tripped and keep stepping: the planner task
+                // ramps down within the acceleration limit and flushes the rest.
+                rt.set_trip(Trip::Probe, 0, &self.position);
+                self.run.watch.probe = 0;
             }
         }
         let threshold = self.run.threshold;

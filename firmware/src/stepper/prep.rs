@@ -7,7 +7,7 @@
 //! handed out exactly: the last segment of a block takes every step left.
 
 use super::{Segment, StepConfig, MAX_AMASS};
-use crate::planner::{Block, BlockKind, Phase, Planner, Profile, Shape};
+use crate::planner::{Block, BlockKind, Planner, Profile, Shape};
 use crate::realtime::Realtime;
 use crate::settings::Settings;
 
@@ -19,6 +19,8 @@ pub const AMASS_FINE_HZ: f32 = 16_000.0;
 const DWELL_CHUNK_S: f32 = 0.01;
 
 pub use super::sink::SegmentSink;
+
+mod hold;
 
 /// Feed hold progress.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -53,6 +55,12 @@ pub struct Preparer {
     dwell_left: u64,
     last_dir: u8,
     hold: Hold,
+    /// The hold is a motion cancel (probe contact): cycle start does not
+    /// resume it; the executor flushes once it has stopped.
+    cancel: bool,
+    /// The shape the running profile was planned with (a hold ramp that
+    /// crosses into the next block is still evaluated with it).
+    pshape: Shape,
     last_line: u32,
     /// Highest segment speed so far, mm/min.
     pub max_speed_mm_min: f32,
@@ -80,6 +88,11 @@ impl Preparer {
             dwell_left: 0,
             last_dir: 0,
             hold: Hold::Running,
+            cancel: false,
+            pshape: Shape {
+                accel: 1.0,
+                jerk: 0.0,
+            },
             last_line: 0,
             max_speed_mm_min: 0.0,
         }
@@ -92,6 +105,7 @@ impl Preparer {
         self.v = 0.0;
         self.tick_carry = 0.0;
         self.hold = Hold::Running;
+        self.cancel = false;
     }
 
     pub fn hold(&self) -> Hold {
@@ -147,6 +161,7 @@ impl Preparer {
     }
 
     fn set_profile(&mut self, p: Profile) {
+        self.pshape = self.shape();
         self.profile = p;
         self.phase = 0;
         self.tau = 0.0;
@@ -166,32 +181,6 @@ impl Preparer {
         self.profile_exit = exit;
         self.profile_nominal = b.nominal;
         self.set_profile(p);
-    }
-
-    fn plan_hold(&mut self) {
-        let sh = self.shape();
-        let ramp = Phase {
-            v0: self.v,
-            v1: 0.0,
-            time: sh.time(self.v),
-            dist: sh.dist(self.v, 0.0),
-        };
-        let zero = Phase::default();
-        self.set_profile(Profile {
-            phases: [ramp, zero, zero],
-        });
-    }
-
-    /// An S-curve profile may only be replaced where acceleration is zero.
-    fn can_replan(&self) -> bool {
-        self.settings.profile == crate::settings::Profile::Trapezoid
-            || self.tau == 0.0
-            || self.phase >= 3
-            || self
-                .profile
-                .phases
-                .get(self.phase)
-                .is_some_and(|p| p.v0 == p.v1)
     }
 
     /// Walk the profile for `dt` seconds; returns the time actually walked
@@ -217,8 +206,13 @@ impl Preparer {
             let ph = self.profile.phases[self.phase];
             let (v, s) = if ph.v0 == ph.v1 {
                 (ph.v0, ph.v0 * self.tau)
+            } else if ph.t0 > 0.0 {
+                // The tail of a ramp that started before this profile.
+                let sh = self.pshape;
+                let (v, s) = sh.eval(ph.v0, ph.v1, ph.t0 + self.tau);
+                (v, s - sh.eval(ph.v0, ph.v1, ph.t0).1)
             } else {
-                self.shape().eval(ph.v0, ph.v1, self.tau)
+                self.pshape.eval(ph.v0, ph.v1, self.tau)
             };
             self.v = v;
             self.s_done = self.s_phase0 + s;
@@ -247,7 +241,10 @@ impl Preparer {
                 self.v = 0.0;
             }
             BlockKind::Line => {
-                self.v = self.v.min(b.max_entry.max(b.entry));
+                // Only the hard limits: after an override drop the previous
+                // block may not have reached this one's (lower) planned
+                // entry, and cutting the speed here would be a jump.
+                self.v = self.v.min(b.junction.min(b.cap));
                 if self.hold == Hold::Decelerating {
                     self.plan_hold();
                 } else {
@@ -270,19 +267,10 @@ impl Preparer {
         rt: &Realtime,
     ) -> Option<Segment> {
         if rt.hold_requested() && self.hold == Hold::Running {
-            // `v` carries across block boundaries: between two blocks the
-            // tool is still moving and the hold ramp starts in the next one.
-            if self.v > 1e-6 {
-                self.hold = Hold::Decelerating;
-                if self.active {
-                    self.plan_hold();
-                }
-            } else {
-                self.hold = Hold::Held;
-            }
+            self.begin_hold();
         }
         if self.hold == Hold::Held {
-            if !rt.take_cycle_start() {
+            if self.cancel || !rt.take_cycle_start() {
                 return None;
             }
             rt.clear_hold();

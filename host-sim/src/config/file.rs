@@ -57,6 +57,17 @@ struct File {
     spindle: Spindle,
     #[serde(default)]
     report: Report,
+    #[serde(default)]
+    host: Host,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct Host {
+    link_bytes_per_s: Option<u32>,
+    rx_window_bytes: Option<u32>,
+    line_ns: Option<u32>,
+    block_ns: Option<u32>,
 }
 
 #[derive(Deserialize, Default)]
@@ -205,6 +216,11 @@ pub(super) fn apply(text: &str, cfg: &mut MachineConfig) -> Result<(), ConfigErr
     let f: File = toml::from_str(text).map_err(|e| ConfigError::Parse(e.to_string()))?;
     set(&mut cfg.tick_hz, f.tick_hz);
     set(&mut cfg.start_position_mm, f.start_position_mm);
+    let h = f.host;
+    set(&mut cfg.host.link_bytes_per_s, h.link_bytes_per_s);
+    set(&mut cfg.host.rx_window_bytes, h.rx_window_bytes);
+    set(&mut cfg.host.line_ns, h.line_ns);
+    set(&mut cfg.host.block_ns, h.block_ns);
     let s = &mut cfg.settings;
 
     let axes = [f.axes.x, f.axes.y, f.axes.z, f.axes.a];

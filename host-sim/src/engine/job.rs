@@ -20,6 +20,8 @@ pub fn run_job(config: &MachineConfig, source: &str, recorder: &mut dyn Recorder
         match interp.execute_line(text.as_bytes(), &mut |c| cmds.push(c)) {
             Ok(()) => {}
             Err(e) => {
+                // It still crossed the link and cost parse time.
+                sim.push_line(line_no, text.len() as u32 + 1, Vec::new());
                 gcode_errors.push(RunError {
                     line: line_no,
                     code: e.kind.code(),
@@ -28,15 +30,18 @@ pub fn run_job(config: &MachineConfig, source: &str, recorder: &mut dyn Recorder
                 continue;
             }
         }
-        for c in cmds {
-            sim.push_command(line_no, c);
-        }
+        sim.push_line(line_no, text.len() as u32 + 1, cmds);
         if interp.needs_sync() {
             // Homing and probing end where only the machine knows: run to idle.
             sim.run();
             let _ = sim.take_barrier();
             match sim.stats.probe.take() {
-                Some((pos, contact)) => interp.probe_finished(pos, contact),
+                Some((pos, contact)) => {
+                    // Parameters get the trip point; the position is where the
+                    // ramp-down after it actually stopped.
+                    interp.probe_finished(pos, contact);
+                    interp.set_machine_position(sim.machine.commanded_position());
+                }
                 None => interp.set_machine_position(sim.machine.commanded_position()),
             }
         }

@@ -2,9 +2,11 @@
 //! config built from firmware defaults, and the trace property checks.
 #![allow(dead_code)]
 
+use burin::command::Command;
 use burin::settings::Settings;
 use burin::AXES;
 use host_sim::config::{LimitSwitch, MachineConfig, ProbeSurface};
+use host_sim::engine::{Input, Sim};
 use host_sim::record::{MoveKind, PinEvent, Recorder, RunInfo, Summary};
 
 pub const TICK_HZ: u32 = 96_000_000;
@@ -16,6 +18,7 @@ pub fn config() -> MachineConfig {
         limits: [None; AXES],
         probe: None,
         start_position_mm: [0.0; AXES],
+        host: host_sim::config::HostModel::default(),
     }
 }
 
@@ -343,4 +346,140 @@ pub fn check_path(
 /// Final position in steps equals the commanded end rounded to steps.
 pub fn expected_steps(info: &RunInfo, mm: [f32; AXES]) -> [i64; AXES] {
     std::array::from_fn(|i| (mm[i] * info.axes[i].steps_per_mm).round() as i64)
+}
+
+/// The last stop of `axis` in the trace decelerates within its limit.
+///
+/// A body that ends at rest after decelerating at most at `a` covers at
+/// most `a·t²/2` in the last `t` before it stops. For every step `k` of the
+/// final `window` steps this compares the distance from `k` to the last
+/// step with that bound. Quantisation: the continuous ramp ends somewhere
+/// inside the step after the last one, which it may take up to
+/// `t_q = sqrt(2·step/a)` to reach, so `t` counts from `t_q` after the last
+/// step; the preparer's 2 ms staircase adds the factor `1 + 2ms/25ms` (as in
+/// [`check_max_accel`]) and position quantisation 2 steps. An instant stop
+/// from `v` fails as soon as `v·t > a·(t+t_q)²/2·1.08 + 2 steps`.
+/// Returns the worst ratio distance/bound.
+pub fn check_stop_decel(info: &RunInfo, events: &[PinEvent], axis: usize, window: usize) -> f64 {
+    let st = axis_steps(events, axis);
+    let Some(&(t_end, _)) = st.last() else {
+        return 0.0;
+    };
+    let ax = &info.axes[axis];
+    let spm = ax.steps_per_mm as f64;
+    let a = ax.max_accel_mm_s2 as f64;
+    let hz = info.tick_hz as f64;
+    let tq = (2.0 / spm / a).sqrt();
+    let mut worst = 0.0f64;
+    for (n, (t, _)) in st.iter().rev().enumerate().take(window).skip(1) {
+        let dt = (t_end - t) as f64 / hz + tq;
+        let d = n as f64 / spm;
+        let bound = a * dt * dt / 2.0 * (1.0 + 0.002 / ACCEL_BIN_S) + 2.0 / spm;
+        worst = worst.max(d / bound);
+        assert!(
+            d <= bound,
+            "axis {axis}: {d:.4} mm in the last {dt:.5} s before the stop, at most {bound:.4} mm decelerating at {a} mm/s²"
+        );
+    }
+    worst
+}
+
+/// A job of Commands with realtime inputs at given seconds.
+pub struct Run {
+    pub rec: Collect,
+    pub summary: host_sim::record::Summary,
+}
+
+pub fn run(cfg: &MachineConfig, cmds: &[Command], inputs: &[(f64, Input)]) -> Run {
+    let mut rec = Collect::default();
+    let mut sim = Sim::new(cfg, &mut rec);
+    for (i, c) in cmds.iter().enumerate() {
+        sim.push_command(i as u32 + 1, c.clone());
+    }
+    for (t, inp) in inputs {
+        sim.input_at((t * cfg.tick_hz as f64) as u64, *inp);
+    }
+    sim.run();
+    let summary = sim.summary(cmds.len() as u32, [0.0; 4]);
+    drop(sim);
+    Run { rec, summary }
+}
+
+pub fn last_end(cmds: &[Command]) -> [f32; 4] {
+    cmds.iter()
+        .rev()
+        .find_map(|c| c.end().copied())
+        .unwrap_or([0.0; 4])
+}
+
+pub fn check_all(cfg: &MachineConfig, r: &Run, cmds: &[Command], label: &str) {
+    let info = r.rec.info.as_ref().unwrap();
+    assert!(
+        r.summary.errors.is_empty(),
+        "{label}: {:?}",
+        r.summary.errors
+    );
+    assert_eq!(
+        r.summary.final_position_steps,
+        expected_steps(info, last_end(cmds)),
+        "{label}"
+    );
+    let rate = check_max_rate(info, &r.rec.events);
+    let (dev, corners) = check_path(info, cfg.start_position_mm, &r.rec.path, &r.rec.events, 0.0);
+    let acc = check_max_accel(
+        info,
+        &r.rec.events,
+        &corners,
+        cfg.settings.junction_deviation as f64,
+    );
+    check_pin_timing(info, &r.rec.events);
+    println!(
+        "{label}: {} step events, {:.3} s, worst rate {:.3}, worst accel {:.3}, worst path dev {:.4} mm, underruns {}",
+        r.rec.events.len(),
+        r.summary.job_time_s,
+        rate,
+        acc,
+        dev,
+        r.summary.planner_underruns
+    );
+    assert_eq!(r.summary.planner_underruns, 0, "{label}");
+}
+
+/// Jerk of the X axis from its step times: velocity from the first to the
+/// last step inside 25 ms bins, acceleration and jerk as differences of
+/// neighbouring bins. Quantisation noise is a few hundred mm/s³ here.
+pub fn max_jerk_x(r: &Run, hz: f64) -> f64 {
+    let t: Vec<f64> = r
+        .rec
+        .events
+        .iter()
+        .filter(|e| e.step_mask & 1 != 0)
+        .map(|e| e.tick as f64 / hz)
+        .collect();
+    let bin = 0.025;
+    let mut v: Vec<(f64, f64)> = Vec::new();
+    let mut k = 0;
+    while k < t.len() {
+        let b = (t[k] / bin) as u64;
+        let mut j = k;
+        while j + 1 < t.len() && (t[j + 1] / bin) as u64 == b {
+            j += 1;
+        }
+        if j > k + 2 && t[j] - t[k] > 0.8 * bin {
+            v.push(((t[j] + t[k]) / 2.0, (j - k) as f64 / (t[j] - t[k]) / 80.0));
+        }
+        k = j + 1;
+    }
+    let a: Vec<(f64, f64)> = v
+        .windows(2)
+        .map(|w| {
+            (
+                (w[0].0 + w[1].0) / 2.0,
+                (w[1].1 - w[0].1) / (w[1].0 - w[0].0),
+            )
+        })
+        .collect();
+    a.windows(2)
+        .map(|w| ((w[1].1 - w[0].1) / (w[1].0 - w[0].0)).abs())
+        .fold(0.0, f64::max)
 }

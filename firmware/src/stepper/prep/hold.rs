@@ -1,0 +1,91 @@
+//! Feed hold and motion cancel (probe contact): ramp down along the path.
+
+use super::{Hold, Preparer};
+use crate::planner::{Phase, Profile};
+
+impl Preparer {
+    /// Ramp down to a stop and stay there until the executor flushes
+    /// (probe contact). A feed hold already under way just carries on.
+    pub fn cancel_motion(&mut self) {
+        self.cancel = true;
+        if self.hold == Hold::Running {
+            self.begin_hold();
+        }
+    }
+
+    /// A motion cancel is under way (not an operator hold).
+    pub fn cancelling(&self) -> bool {
+        self.cancel
+    }
+
+    pub(super) fn begin_hold(&mut self) {
+        // `v` carries across block boundaries: between two blocks the
+        // tool is still moving and the hold ramp starts in the next one.
+        if self.v > 1e-6 {
+            self.hold = Hold::Decelerating;
+            if self.active {
+                self.plan_hold();
+            }
+        } else {
+            self.hold = Hold::Held;
+        }
+    }
+
+    /// Acceleration of the running profile now, mm/s² (signed).
+    fn accel_now(&self) -> f32 {
+        match self.profile.phases.get(self.phase) {
+            Some(ph) if ph.v0 != ph.v1 => self.pshape.accel_at(ph.v0, ph.v1, ph.t0 + self.tau),
+            _ => 0.0,
+        }
+    }
+
+    /// The hold ramp from the current state (again at each new block, whose
+    /// acceleration limit may differ). With S-curves the acceleration
+    /// must first return to zero at the jerk limit (the speed still changes
+    /// by `a²/2j` meanwhile): that is the second half of a symmetric ramp
+    /// whose peak acceleration is the current one. A symmetric S ramp to
+    /// zero follows. Trapezoids drop the acceleration at once.
+    pub(super) fn plan_hold(&mut self) {
+        let sh = self.shape();
+        let a = if sh.jerk > 0.0 { self.accel_now() } else { 0.0 };
+        let zero = Phase::default();
+        let mut phases = [zero; 3];
+        let mut v = self.v;
+        let mut k = 0;
+        if libm::fabsf(a) > 1e-3 {
+            let tj = libm::fabsf(a) / sh.jerk;
+            let half = 0.5 * a * a / sh.jerk * if a < 0.0 { -1.0 } else { 1.0 };
+            let (v0, v1) = (v - half, (v + half).max(0.0));
+            let whole = 0.5 * (v0 + v1) * 2.0 * tj;
+            phases[0] = Phase {
+                v0,
+                v1,
+                time: tj,
+                dist: (whole - sh.eval(v0, v1, tj).1).max(0.0),
+                t0: tj,
+            };
+            v = v1;
+            k = 1;
+        }
+        phases[k] = Phase {
+            v0: v,
+            v1: 0.0,
+            time: sh.time(v),
+            dist: sh.dist(v, 0.0),
+            t0: 0.0,
+        };
+        self.set_profile(Profile { phases });
+    }
+
+    /// An S-curve profile may only be replaced where acceleration is zero.
+    pub(super) fn can_replan(&self) -> bool {
+        self.settings.profile == crate::settings::Profile::Trapezoid
+            || self.tau == 0.0
+            || self.phase >= 3
+            || self
+                .profile
+                .phases
+                .get(self.phase)
+                .is_some_and(|p| p.v0 == p.v1)
+    }
+}
