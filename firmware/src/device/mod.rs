@@ -257,10 +257,12 @@ impl<S: Storage> Device<S> {
                 self.sync = false;
                 // Any alarm of our own flush has come and gone by now.
                 self.quiet_alarm = false;
-                match (self.probe_sync, m.probe_result()) {
-                    (true, Some((p, c))) => self.interp.probe_finished(p, c),
-                    _ => self.interp.set_machine_position(m.commanded_position()),
+                // The probe result holds the trip point (for #5061..); the
+                // machine stopped past it, after its deceleration.
+                if let (true, Some((p, c))) = (self.probe_sync, m.probe_result()) {
+                    self.interp.probe_finished(p, c);
                 }
+                self.interp.set_machine_position(m.commanded_position());
                 self.probe_sync = false;
             }
         }

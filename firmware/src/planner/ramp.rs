@@ -91,7 +91,7 @@ impl Shape {
         if self.jerk <= 0.0 {
             return dv / total;
         }
-        let tau = tau.clamp(0.0, total);
+        let tau = crate::num::clamp(tau, 0.0, total);
         let j = self.jerk;
         let tj = if dv.abs() * j >= self.accel * self.accel {
             self.accel / j
