@@ -3,6 +3,8 @@
 //! session, and the motion core in virtual time. Deterministic: the device
 //! advances a fixed virtual step per round and the pipes never block.
 
+mod common;
+
 use host_sim::config::MachineConfig;
 use host_sim::device_sim::VirtualDevice;
 use host_sim::engine::run_job;
@@ -212,4 +214,24 @@ fn text_char_counting_and_send_response_end_where_run_job_ends() {
         assert_eq!(pos.map(i64::from), want, "{pacing:?}");
         assert!(status.contains("Idle"), "{status}");
     }
+}
+
+/// Through the device session (not `run_job`): after G38.2 the machine
+/// stops past the contact, and the interpreter must continue from there
+/// (a relative move) while #5063 keeps the contact point.
+#[test]
+fn device_probe_then_relative_move_matches_run_job() {
+    let mut cfg = common::config_with_switches();
+    cfg.start_position_mm = [-40.0, -40.0, -10.0, 0.0];
+    let job = "$H\nG90 G0 X-10 Y-10\nG38.2 Z-40 F600\nG91 G1 Z5 F500\nG90\nG1 X[#5061] F800\n";
+    let reference = job.replacen("$H", "G28", 1);
+    let want = expected_steps(&cfg, &reference);
+    let (pos, oks, _) = stream_text(&cfg, job, Pacing::SendResponse);
+    assert_eq!(oks, job.lines().count());
+    assert_eq!(pos.map(i64::from), want);
+    // The contact was at Z -20 mm (-8000 steps); Z ended 5 mm above the stop.
+    assert!(
+        want[2] < -8000 + 2000 && want[2] > -8000 + 2000 - 500,
+        "{want:?}"
+    );
 }
