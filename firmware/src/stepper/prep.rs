@@ -8,7 +8,7 @@
 
 use super::{Segment, StepConfig, MAX_AMASS};
 use crate::planner::{Block, BlockKind, Planner, Profile, Shape};
-use crate::realtime::Realtime;
+use crate::realtime::{Realtime, Trip};
 use crate::settings::Settings;
 
 /// Target duration of one segment, seconds.
@@ -125,15 +125,28 @@ impl Preparer {
     }
 
     /// Push segments until the queue is full or there is nothing to prepare.
+    ///
+    /// A limit or e-stop interrupt may preempt this at any point: it records
+    /// the trip, then bumps the generation. Taking the generation first and
+    /// stamping it on every segment of this fill makes whatever this pass
+    /// prepares from the old plan stale if the bump lands mid-fill; a hard
+    /// limit seen before the first segment stops the fill (the planner task
+    /// flushes on its next pass). Homing and probe trips keep filling: their
+    /// sequences go on (pull-off, the probe's deceleration).
     pub fn fill<const N: usize>(
         &mut self,
         pl: &mut Planner<N>,
         rt: &Realtime,
         sink: &mut impl SegmentSink,
     ) {
+        let generation = rt.generation();
+        if rt.trip() == Trip::HardLimit {
+            return;
+        }
         while !sink.is_full() {
             match self.next_segment(pl, rt) {
-                Some(seg) => {
+                Some(mut seg) => {
+                    seg.generation = generation;
                     if sink.push(seg).is_err() {
                         break;
                     }
