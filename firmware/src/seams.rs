@@ -27,7 +27,7 @@ pub trait StepTimer {
     fn stop(&mut self);
 }
 
-/// Persistent records: a small key/value store (a sequential-storage map
+/// Persistent records: a small key/value store (a record log
 /// in flash on the MCU, RAM on QEMU and in host-sim; see `persist`). It is
 /// blocking on purpose: a flash write stalls the CPU anyway (code runs from
 /// flash), so the device calls it only while no motion runs.

@@ -1,5 +1,5 @@
 //! Settings and work offsets survive a power cycle of the virtual device:
-//! the same sequential-storage map as the boards, over a RAM copy of their
+//! the same record log as the boards, over a RAM copy of their
 //! two flash sectors that a "rebooted" device is handed.
 
 use host_sim::config::MachineConfig;

@@ -1,5 +1,5 @@
 //! Settings and work offsets that survive a reset, over the [`Storage`]
-//! seam (a sequential-storage map in two 16 KiB flash sectors on the
+//! seam (a record log, [`FlashMap`], in two 16 KiB flash sectors on the
 //! boards, RAM on QEMU and in host-sim).
 //!
 //! [`Persist`] keeps a mirror of what the flash holds, so a save writes only
@@ -23,7 +23,9 @@
 pub mod flash;
 pub mod record;
 
-pub use flash::{FlashMap, RamFlash};
+pub mod ram;
+pub use flash::FlashMap;
+pub use ram::RamFlash;
 
 use crate::interp::Offsets;
 use crate::seams::Storage;

@@ -5,7 +5,7 @@
 //! end-to-end tests (driven tick by tick over an in-memory pipe).
 //!
 //! Settings and offsets persist in a [`SimFlash`]: a RAM copy of the
-//! boards' two 16 KiB sectors under the same sequential-storage map. A
+//! boards' two 16 KiB sectors under the same record log as the boards. A
 //! fresh device starts erased; [`VirtualDevice::flash`] hands the contents
 //! to [`VirtualDevice::with_flash`] to "reboot" with what was saved.
 

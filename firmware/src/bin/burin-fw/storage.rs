@@ -1,5 +1,5 @@
-//! Where settings and work offsets live: `burin::persist` over
-//! sequential-storage's map, on flash sectors 1 and 2 of the Black Pills
+//! Where settings and work offsets live: `burin::persist`'s record log
+//! ([`FlashMap`](burin::persist::FlashMap)) on flash sectors 1 and 2 of the Black Pills
 //! (16 KiB each, 0x0800_4000..0x0800_C000; `memory-f4x1.x` starts `.text`
 //! after them). Small sectors erase in about 0.3 s instead of 1-2 s for a
 //! 128 KiB one, and every F4 has them.
