@@ -193,6 +193,7 @@ pub fn run() -> Result<i32> {
         seen.extend(chunk);
     }
     job_test(&mut stdin, &rx, &mut seen)?;
+    settings_test(&mut stdin, &rx, &mut seen)?;
     println!("qemu: the RTIC app ran a job on {MACHINE} over USART1 and ended at {JOB_END:?}");
     if let Some(status) = guard.0.try_wait()? {
         bail!("{QEMU} exited by itself ({status})");
@@ -268,6 +269,28 @@ fn job_test(
         }
         std::thread::sleep(Duration::from_millis(100));
     }
+}
+
+/// `$n=` through the device session and its store (RAM on QEMU), read
+/// back with `$$`.
+fn settings_test(
+    stdin: &mut impl Write,
+    rx: &mpsc::Receiver<Vec<u8>>,
+    seen: &mut Vec<u8>,
+) -> Result<()> {
+    for (line, want) in [("$110=4321", "ok"), ("$$", "$110=4321.000")] {
+        seen.clear();
+        stdin.write_all(format!("{line}\n").as_bytes())?;
+        stdin.flush()?;
+        if !expect(rx, seen, want.as_bytes(), Duration::from_secs(10)) {
+            bail!(
+                "`{line}`: no `{want}` in {:?}",
+                String::from_utf8_lossy(seen)
+            );
+        }
+    }
+    println!("settings: $110=4321 stored and listed back");
+    Ok(())
 }
 
 /// The numbers after `MPos:` in a status report body.
