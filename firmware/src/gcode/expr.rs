@@ -37,52 +37,63 @@ impl Cursor<'_> {
     /// allowed between them). Up to 7 significant digits and 10 decimals take
     /// the exact path (integer mantissa over an exact power of ten, one
     /// rounding); anything longer goes to [`crate::num::Decimal`].
-    #[inline]
+    #[inline(always)]
     pub(crate) fn number(&mut self) -> LexResult<f32> {
-        // Fast path: `digits[.digits]` with no blanks inside, the shape of
-        // nearly every number in real files.
-        let start = self.pos;
+        // Fast path: `digits[.digits]` with at most 9 digits and no blanks
+        // inside, the shape of nearly every number in real files. Nine
+        // digits cannot overflow the u32 mantissa.
         let line = self.line;
-        let mut i = start;
-        let mut mant: u64 = 0;
-        let mut nd = 0u32;
-        let mut frac = 0usize;
-        let run = |i: &mut usize, mant: &mut u64, nd: &mut u32| {
-            let from = *i;
-            while let Some(d) = line
-                .get(*i)
-                .map(|b| b.wrapping_sub(b'0'))
-                .filter(|d| *d < 10)
-            {
-                if *nd < 19 {
-                    *mant = *mant * 10 + u64::from(d);
-                }
-                *nd += 1;
-                *i += 1;
+        let mut i = self.pos;
+        let mut mant: u32 = 0;
+        let int_start = i;
+        while let Some(&b) = line.get(i) {
+            let d = b.wrapping_sub(b'0');
+            if d >= 10 {
+                break;
             }
-            *i - from
-        };
-        run(&mut i, &mut mant, &mut nd);
+            mant = mant.wrapping_mul(10).wrapping_add(u32::from(d));
+            i += 1;
+        }
+        let mut nd = i - int_start;
+        let mut frac = 0;
         let dot = line.get(i) == Some(&b'.');
         if dot {
             i += 1;
-            frac = run(&mut i, &mut mant, &mut nd);
-        }
-        let blank_inside = line.get(i).is_some_and(|&b| blank(b)) && {
-            let next = line.get(i..).and_then(|r| r.iter().find(|&&b| !blank(b)));
-            next.is_some_and(|&b| b.is_ascii_digit() || (b == b'.' && !dot))
-        };
-        if !blank_inside && nd > 0 && nd <= 19 && mant < (1 << 24) {
-            if frac == 0 {
-                self.pos = i;
-                return Ok(mant as f32);
+            let frac_start = i;
+            while let Some(&b) = line.get(i) {
+                let d = b.wrapping_sub(b'0');
+                if d >= 10 {
+                    break;
+                }
+                mant = mant.wrapping_mul(10).wrapping_add(u32::from(d));
+                i += 1;
             }
+            frac = i - frac_start;
+            nd += frac;
+        }
+        let plain = nd > 0 && nd <= 9 && mant < (1 << 24);
+        let after_blank = line.get(i).is_some_and(|&b| blank(b));
+        if plain && !(after_blank && self.digits_follow(i, dot)) {
             if let Some(p) = POW10.get(frac) {
                 self.pos = i;
-                return Ok(mant as f32 / p);
+                return Ok(if frac == 0 {
+                    mant as f32
+                } else {
+                    mant as f32 / p
+                });
             }
         }
         self.number_slow()
+    }
+
+    /// After a number and a blank: whether the number goes on (`X1 0`,
+    /// `X1 .5` when no point was seen yet).
+    fn digits_follow(&self, i: usize, dot: bool) -> bool {
+        let next = self
+            .line
+            .get(i..)
+            .and_then(|r| r.iter().find(|&&b| !blank(b)));
+        next.is_some_and(|&b| b.is_ascii_digit() || (b == b'.' && !dot))
     }
 
     /// Numbers with blanks inside or many significant digits: the same

@@ -181,8 +181,19 @@ impl<'a> Lexer<'a> {
                             .err_at(ErrorKind::Unsupported(Unsupported::OWord), col));
                     }
                     // Fast path: a plain unsigned number right after the letter.
+                    // Fast path: a plain number, maybe negative, right after
+                    // the letter.
                     let value = match self.cur.peek_raw() {
                         Some(b'0'..=b'9' | b'.') => self.cur.number()?,
+                        Some(b'-')
+                            if matches!(
+                                self.cur.line.get(self.cur.pos + 1),
+                                Some(b'0'..=b'9' | b'.')
+                            ) =>
+                        {
+                            self.cur.bump();
+                            -self.cur.number()?
+                        }
                         _ => {
                             if self.keyword_at(col) {
                                 return Err(self.cur.err_at(

@@ -111,6 +111,18 @@ pub(crate) struct Block<'a> {
     pub bare_col: u16,
 }
 
+/// Letters that carry values: the axes and F I J K L P Q R S T.
+const VALUE_LETTERS: u32 = {
+    let mut m = 0u32;
+    let l = b"XYZAFIJKLPQRST";
+    let mut i = 0;
+    while i < l.len() {
+        m |= 1 << (l[i] - b'A');
+        i += 1;
+    }
+    m
+};
+
 pub(crate) fn bit(letter: u8) -> u32 {
     1u32 << (letter.wrapping_sub(b'A') % 26)
 }
@@ -145,10 +157,9 @@ impl<'a> Block<'a> {
     }
 
     pub fn axis_mask(&self) -> u8 {
-        AXIS_LETTERS
-            .iter()
-            .enumerate()
-            .fold(0, |m, (i, &l)| if self.has(l) { m | 1 << i } else { m })
+        let p = self.present;
+        let b = |l: u8, i: u8| u8::from(p & bit(l) != 0) << i;
+        b(b'X', 0) | b(b'Y', 1) | b(b'Z', 2) | b(b'A', 3)
     }
 
     pub fn g_of(&self, grp: GGroup) -> Option<(u16, u16)> {
@@ -235,17 +246,17 @@ impl<'a> Block<'a> {
                 }
                 *slot = Some((t, w.col));
             }
-            b'X' | b'Y' | b'Z' | b'A' | b'F' | b'I' | b'J' | b'K' | b'L' | b'P' | b'Q' | b'R'
-            | b'S' | b'T' => {
-                if self.has(w.letter) {
-                    return err(ErrorKind::RepeatedWord(w.letter));
+            l if l.is_ascii_uppercase() && VALUE_LETTERS & bit(l) != 0 => {
+                let b = bit(l);
+                if self.present & b != 0 {
+                    return err(ErrorKind::RepeatedWord(l));
                 }
-                let i = usize::from(w.letter - b'A');
+                let i = usize::from(l.wrapping_sub(b'A') % 26);
                 if let (Some(v), Some(c)) = (self.val.get_mut(i), self.col.get_mut(i)) {
                     *v = w.value;
                     *c = w.col;
                 }
-                self.present |= bit(w.letter);
+                self.present |= b;
                 if w.bare && self.bare_col == 0 {
                     self.bare_col = w.col;
                 }
