@@ -32,20 +32,29 @@ fn finite(v: f32) -> Result<f32, ErrorKind> {
     }
 }
 
-impl Cursor<'_> {
-    /// An unsigned decimal number: digits with at most one point (blanks
-    /// allowed between them). Up to 7 significant digits and 10 decimals take
-    /// the exact path (integer mantissa over an exact power of ten, one
-    /// rounding); anything longer goes to [`crate::num::Decimal`].
-    #[inline(always)]
-    pub(crate) fn number(&mut self) -> LexResult<f32> {
-        // Fast path: `digits[.digits]` with at most 9 digits and no blanks
-        // inside, the shape of nearly every number in real files. Nine
-        // digits cannot overflow the u32 mantissa.
-        let line = self.line;
-        let mut i = self.pos;
-        let mut mant: u32 = 0;
-        let int_start = i;
+/// The fast path for numbers: `digits[.digits]` at `i` with 1 to 9 digits
+/// (a u32 cannot overflow), below 2^24 and at most 10 decimals, and not
+/// continued after a blank (`X1 0` is X10). That is nearly every number in
+/// real files, and the result is exact: an exact integer over an exact
+/// power of ten, rounded once. `None` sends the caller to the general path.
+#[inline(always)]
+pub(crate) fn plain_number(line: &[u8], mut i: usize) -> Option<(f32, usize)> {
+    let mut mant: u32 = 0;
+    let int_start = i;
+    while let Some(&b) = line.get(i) {
+        let d = b.wrapping_sub(b'0');
+        if d >= 10 {
+            break;
+        }
+        mant = mant.wrapping_mul(10).wrapping_add(u32::from(d));
+        i += 1;
+    }
+    let mut nd = i - int_start;
+    let mut frac = 0;
+    let dot = line.get(i) == Some(&b'.');
+    if dot {
+        i += 1;
+        let frac_start = i;
         while let Some(&b) = line.get(i) {
             let d = b.wrapping_sub(b'0');
             if d >= 10 {
@@ -54,46 +63,46 @@ impl Cursor<'_> {
             mant = mant.wrapping_mul(10).wrapping_add(u32::from(d));
             i += 1;
         }
-        let mut nd = i - int_start;
-        let mut frac = 0;
-        let dot = line.get(i) == Some(&b'.');
-        if dot {
-            i += 1;
-            let frac_start = i;
-            while let Some(&b) = line.get(i) {
-                let d = b.wrapping_sub(b'0');
-                if d >= 10 {
-                    break;
-                }
-                mant = mant.wrapping_mul(10).wrapping_add(u32::from(d));
-                i += 1;
-            }
-            frac = i - frac_start;
-            nd += frac;
-        }
-        let plain = nd > 0 && nd <= 9 && mant < (1 << 24);
-        let after_blank = line.get(i).is_some_and(|&b| blank(b));
-        if plain && !(after_blank && self.digits_follow(i, dot)) {
-            if let Some(p) = POW10.get(frac) {
-                self.pos = i;
-                return Ok(if frac == 0 {
-                    mant as f32
-                } else {
-                    mant as f32 / p
-                });
-            }
-        }
-        self.number_slow()
+        frac = i - frac_start;
+        nd += frac;
     }
+    if nd == 0 || nd > 9 || mant >= 1 << 24 {
+        return None;
+    }
+    if line.get(i).is_some_and(|&b| blank(b)) && digits_follow(line, i, dot) {
+        return None;
+    }
+    let p = POW10.get(frac)?;
+    Some((
+        if frac == 0 {
+            mant as f32
+        } else {
+            mant as f32 / p
+        },
+        i,
+    ))
+}
 
-    /// After a number and a blank: whether the number goes on (`X1 0`,
-    /// `X1 .5` when no point was seen yet).
-    fn digits_follow(&self, i: usize, dot: bool) -> bool {
-        let next = self
-            .line
-            .get(i..)
-            .and_then(|r| r.iter().find(|&&b| !blank(b)));
-        next.is_some_and(|&b| b.is_ascii_digit() || (b == b'.' && !dot))
+/// After a number and a blank: whether the number goes on (`X1 0`, and
+/// `X1 .5` when no point was seen yet).
+fn digits_follow(line: &[u8], i: usize, dot: bool) -> bool {
+    let next = line.get(i..).and_then(|r| r.iter().find(|&&b| !blank(b)));
+    next.is_some_and(|&b| b.is_ascii_digit() || (b == b'.' && !dot))
+}
+
+impl Cursor<'_> {
+    /// An unsigned decimal number: digits with at most one point (blanks
+    /// allowed between them). Up to 9 significant digits and 10 decimals take
+    /// the exact path (integer mantissa over an exact power of ten, one
+    /// rounding); anything longer goes to [`crate::num::Decimal`].
+    pub(crate) fn number(&mut self) -> LexResult<f32> {
+        match plain_number(self.line, self.pos) {
+            Some((v, end)) => {
+                self.pos = end;
+                Ok(v)
+            }
+            None => self.number_slow(),
+        }
     }
 
     /// Numbers with blanks inside or many significant digits: the same

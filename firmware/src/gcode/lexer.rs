@@ -148,100 +148,133 @@ impl<'a> Lexer<'a> {
     }
 
     /// The next word or message; `None` at the end of the line.
+    ///
+    /// The hot path (blanks, a letter, a plain number) is kept small so it
+    /// compiles to a tight loop; everything else is out of line. Inlined
+    /// into its caller so the token never makes a round trip through memory.
+    #[inline(always)]
     pub fn next_token(&mut self, p: &mut dyn ParamStore) -> LexResult<Option<Token<'a>>> {
         loop {
             if self.done {
                 return Ok(None);
             }
-            let Some(b) = self.cur.peek() else {
+            let line = self.cur.line;
+            let mut i = self.cur.pos;
+            while line.get(i).is_some_and(|&b| blank(b)) {
+                i += 1;
+            }
+            self.cur.pos = i;
+            let Some(&b) = line.get(i) else {
                 self.done = true;
                 return Ok(None);
             };
-            let col = self.cur.pos;
-            match b {
-                b'(' => {
-                    if let Some(t) = self.comment()? {
-                        return Ok(Some(t));
-                    }
-                }
-                b';' => self.done = true,
-                b'*' => self.checksum()?,
-                _ if self.percent => return Err(self.cur.err(ErrorKind::ExpectedLetter(b'%'))),
-                b'#' => {
-                    self.cur.bump();
-                    self.assignment(p, col)?;
-                    self.seen_word = true;
-                }
-                _ if b.is_ascii_alphabetic() => {
-                    let l = b.to_ascii_uppercase();
-                    self.cur.bump();
-                    if l == b'O' {
-                        return Err(self
-                            .cur
-                            .err_at(ErrorKind::Unsupported(Unsupported::OWord), col));
-                    }
-                    // Fast path: a plain unsigned number right after the letter.
-                    // Fast path: a plain number, maybe negative, right after
-                    // the letter.
-                    let value = match self.cur.peek_raw() {
-                        Some(b'0'..=b'9' | b'.') => self.cur.number()?,
-                        Some(b'-')
-                            if matches!(
-                                self.cur.line.get(self.cur.pos + 1),
-                                Some(b'0'..=b'9' | b'.')
-                            ) =>
-                        {
-                            self.cur.bump();
-                            -self.cur.number()?
-                        }
-                        _ => {
-                            if self.keyword_at(col) {
-                                return Err(self.cur.err_at(
-                                    ErrorKind::Unsupported(Unsupported::ControlFlow),
-                                    col,
-                                ));
-                            }
-                            let next = self.cur.peek();
-                            let ends = matches!(next, None | Some(b';' | b'(' | b'*'))
-                                || next.is_some_and(|b| b.is_ascii_alphabetic());
-                            if ends && matches!(l, b'X' | b'Y' | b'Z' | b'A') {
-                                self.seen_word = true;
-                                return Ok(Some(Token::Word(Word {
-                                    letter: l,
-                                    value: 0.0,
-                                    col: (col + 1) as u16,
-                                    bare: true,
-                                })));
-                            }
-                            self.cur.real(p, 0)?
-                        }
+            if b.is_ascii_alphabetic() && !self.percent {
+                let l = b.to_ascii_uppercase();
+                let fast = if l != b'N' && l != b'O' {
+                    let (neg, at) = match line.get(i + 1) {
+                        Some(b'-') => (true, i + 2),
+                        _ => (false, i + 1),
                     };
-                    if !value.is_finite() {
-                        return Err(self.cur.err_at(ErrorKind::NotFinite, col));
+                    super::expr::plain_number(line, at)
+                        .map(|(v, end)| (if neg { -v } else { v }, end))
+                } else {
+                    None
+                };
+                // Both paths meet in scalars, so the word is built once, in
+                // registers (an aggregate merged in memory and reloaded whole
+                // stalls store forwarding on every word).
+                let (value, bare) = match fast {
+                    Some((v, end)) => {
+                        self.cur.pos = end;
+                        (v, false)
                     }
-                    let col16 = (col + 1) as u16;
-                    if l == b'N' {
-                        if self.seen_word || self.line_number.is_some() {
-                            return Err(self.cur.err_at(ErrorKind::LineNumberMisplaced, col));
+                    None => {
+                        self.cur.bump();
+                        match self.word(p, l, i)? {
+                            Some(vb) => vb,
+                            None => continue,
                         }
-                        if !(0.0..=99_999_999.0).contains(&value) || libm::floorf(value) != value {
-                            return Err(self.cur.err_at(ErrorKind::InvalidLineNumber, col));
-                        }
-                        self.line_number = Some(value as u32);
-                        continue;
                     }
-                    self.seen_word = true;
-                    return Ok(Some(Token::Word(Word {
-                        letter: l,
-                        value,
-                        col: col16,
-                        bare: false,
-                    })));
-                }
-                _ if !b.is_ascii() => return Err(self.cur.err(ErrorKind::NonAscii)),
-                _ => return Err(self.cur.err(ErrorKind::ExpectedLetter(b))),
+                };
+                self.seen_word = true;
+                return Ok(Some(Token::Word(Word {
+                    letter: l,
+                    value,
+                    col: (i + 1) as u16,
+                    bare,
+                })));
+            }
+            if let Some(t) = self.other(p, b, i)? {
+                return Ok(Some(t));
             }
         }
+    }
+
+    /// Anything but a word: comments, checksums, assignments, errors.
+    #[inline(never)]
+    fn other(&mut self, p: &mut dyn ParamStore, b: u8, col: usize) -> LexResult<Option<Token<'a>>> {
+        match b {
+            b'(' => return self.comment(),
+            b';' => self.done = true,
+            b'*' => self.checksum()?,
+            _ if self.percent => return Err(self.cur.err(ErrorKind::ExpectedLetter(b'%'))),
+            b'#' => {
+                self.cur.bump();
+                self.assignment(p, col)?;
+                self.seen_word = true;
+            }
+            _ if !b.is_ascii() => return Err(self.cur.err(ErrorKind::NonAscii)),
+            _ => return Err(self.cur.err(ErrorKind::ExpectedLetter(b))),
+        }
+        Ok(None)
+    }
+
+    /// The general word after letter `l` (cursor past it): expressions,
+    /// parameters, signs, bare axis letters, `N` and the refusals.
+    /// `None` for an `N` word, which is consumed.
+    #[inline(never)]
+    fn word(
+        &mut self,
+        p: &mut dyn ParamStore,
+        l: u8,
+        col: usize,
+    ) -> LexResult<Option<(f32, bool)>> {
+        if l == b'O' {
+            return Err(self
+                .cur
+                .err_at(ErrorKind::Unsupported(Unsupported::OWord), col));
+        }
+        let value = match self.cur.peek_raw() {
+            Some(b'0'..=b'9' | b'.') => self.cur.number()?,
+            _ => {
+                if self.keyword_at(col) {
+                    return Err(self
+                        .cur
+                        .err_at(ErrorKind::Unsupported(Unsupported::ControlFlow), col));
+                }
+                let next = self.cur.peek();
+                let ends = matches!(next, None | Some(b';' | b'(' | b'*'))
+                    || next.is_some_and(|b| b.is_ascii_alphabetic());
+                if ends && matches!(l, b'X' | b'Y' | b'Z' | b'A') {
+                    return Ok(Some((0.0, true)));
+                }
+                self.cur.real(p, 0)?
+            }
+        };
+        if !value.is_finite() {
+            return Err(self.cur.err_at(ErrorKind::NotFinite, col));
+        }
+        if l == b'N' {
+            if self.seen_word || self.line_number.is_some() {
+                return Err(self.cur.err_at(ErrorKind::LineNumberMisplaced, col));
+            }
+            if !(0.0..=99_999_999.0).contains(&value) || libm::floorf(value) != value {
+                return Err(self.cur.err_at(ErrorKind::InvalidLineNumber, col));
+            }
+            self.line_number = Some(value as u32);
+            return Ok(None);
+        }
+        Ok(Some((value, false)))
     }
 
     /// A letter run starting at `col` that spells a control-flow keyword.

@@ -177,7 +177,7 @@ impl<'a> Block<'a> {
     }
 
     /// Adds a word, or says that it starts the next command.
-    pub fn add(&mut self, w: Word) -> Result<Added, GcodeError> {
+    pub fn add(&mut self, w: &Word) -> Result<Added, GcodeError> {
         let err = |k| Err(GcodeError::new(k, w.col));
         match w.letter {
             b'G' => {

@@ -179,10 +179,10 @@ impl Interpreter {
                     }
                 }
                 Some(Token::Word(w)) => {
-                    if block.add(w)? == Added::Split {
+                    if block.add(&w)? == Added::Split {
                         self.run_block(&block, buf)?;
                         block = Block::default();
-                        block.add(w)?;
+                        block.add(&w)?;
                     }
                     if w.letter == b'M' && w.tenths() == Some(1170) {
                         block.text = Some(lx.rest_text()?);
