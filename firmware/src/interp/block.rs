@@ -81,14 +81,6 @@ fn m_group(n: u16) -> Option<MGroup> {
 /// Letters that carry values (not G, M, N).
 pub(crate) const AXIS_LETTERS: [u8; 4] = [b'X', b'Y', b'Z', b'A'];
 
-/// What [`Block::add`] decided.
-#[derive(Debug, PartialEq, Eq)]
-pub(crate) enum Added {
-    Ok,
-    /// The word begins the next command on the line; it was not consumed.
-    Split,
-}
-
 /// The words of one command.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Block<'a> {
@@ -176,8 +168,17 @@ impl<'a> Block<'a> {
         }
     }
 
-    /// Adds a word, or says that it starts the next command.
-    pub fn add(&mut self, w: &Word) -> Result<Added, GcodeError> {
+    /// Whether `w` starts the next command on the line: a motion G word
+    /// after axis words (BeagleG's `G1 X10 G1 X0`).
+    pub fn splits_on(&self, w: &Word) -> bool {
+        w.letter == b'G'
+            && self.axis_mask() != 0
+            && w.tenths().and_then(g_group) == Some(GGroup::Motion)
+    }
+
+    /// Adds a word; [`Block::splits_on`] must have been asked first.
+    #[inline(always)]
+    pub fn add(&mut self, w: &Word) -> Result<(), GcodeError> {
         let err = |k| Err(GcodeError::new(k, w.col));
         match w.letter {
             b'G' => {
@@ -190,9 +191,6 @@ impl<'a> Block<'a> {
                         tenths: t,
                     }));
                 };
-                if grp == GGroup::Motion && self.axis_mask() != 0 {
-                    return Ok(Added::Split);
-                }
                 let slot = self
                     .g
                     .get_mut(grp as usize)
@@ -264,6 +262,6 @@ impl<'a> Block<'a> {
             l => return err(ErrorKind::Unsupported(Unsupported::Letter(l))),
         }
         self.note_col(w.col);
-        Ok(Added::Ok)
+        Ok(())
     }
 }

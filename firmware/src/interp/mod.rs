@@ -25,7 +25,7 @@ pub use state::{Motion, State, WCS_COUNT};
 
 use crate::command::{Command, Plane, Pos};
 use crate::gcode::{ErrorKind, GcodeError, Lexer, Name, ParamStore, Params, Token};
-use block::{Added, Block};
+use block::Block;
 use core::fmt::{self, Write};
 
 /// What survives a power cycle (GRBL's EEPROM coordinate data): the nine
@@ -179,11 +179,11 @@ impl Interpreter {
                     }
                 }
                 Some(Token::Word(w)) => {
-                    if block.add(&w)? == Added::Split {
+                    if block.splits_on(&w) {
                         self.run_block(&block, buf)?;
                         block = Block::default();
-                        block.add(&w)?;
                     }
+                    block.add(&w)?;
                     if w.letter == b'M' && w.tenths() == Some(1170) {
                         block.text = Some(lx.rest_text()?);
                     }
