@@ -24,6 +24,15 @@ pub(crate) enum GGroup {
 }
 const G_GROUPS: usize = 11;
 
+/// The groups that only set a mode ([`Block::gmask`] bits).
+pub(crate) const MODE_GROUPS: u16 = 1 << GGroup::Plane as u16
+    | 1 << GGroup::Distance as u16
+    | 1 << GGroup::ArcDistance as u16
+    | 1 << GGroup::FeedMode as u16
+    | 1 << GGroup::Units as u16
+    | 1 << GGroup::Wcs as u16
+    | 1 << GGroup::Path as u16;
+
 /// M-word groups (index into [`Block::m`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum MGroup {
@@ -88,6 +97,10 @@ pub(crate) struct Block<'a> {
     pub g: [Option<(u16, u16)>; G_GROUPS],
     /// Per group: the M number and its column. Coolant keeps M7+M8 as a mask in `coolant`.
     pub m: [Option<(u16, u16)>; M_GROUPS],
+    /// Which G groups (bit = [`GGroup`] index) and M groups hold a word,
+    /// so the executor can skip absent groups wholesale.
+    pub gmask: u16,
+    pub mmask: u8,
     /// Bit 0: M7 seen, bit 1: M8 seen, bit 2: M9 seen.
     pub coolant: u8,
     /// Value words by letter (A=0 .. Z=25); `present` says which are set.
@@ -121,10 +134,7 @@ pub(crate) fn bit(letter: u8) -> u32 {
 
 impl<'a> Block<'a> {
     pub fn is_empty(&self) -> bool {
-        self.present == 0
-            && self.g.iter().all(Option::is_none)
-            && self.m.iter().all(Option::is_none)
-            && self.msg.is_none()
+        self.present == 0 && self.gmask == 0 && self.mmask == 0 && self.msg.is_none()
     }
 
     pub fn has(&self, letter: u8) -> bool {
@@ -203,6 +213,7 @@ impl<'a> Block<'a> {
                     Some(_) => return err(ErrorKind::ModalGroupViolation),
                     None => *slot = Some((t, w.col)),
                 }
+                self.gmask |= 1 << grp as u16;
             }
             b'M' => {
                 let t = match w.tenths().map(|t| (t, t % 10)) {
@@ -243,6 +254,7 @@ impl<'a> Block<'a> {
                     return err(ErrorKind::ModalGroupViolation);
                 }
                 *slot = Some((t, w.col));
+                self.mmask |= 1 << grp as u8;
             }
             l if l.is_ascii_uppercase() && VALUE_LETTERS & bit(l) != 0 => {
                 let b = bit(l);

@@ -32,7 +32,7 @@
 //!   of the radius (LinuxCNC 2.9 is looser: 0.0283 mm and 0.1%); the centre
 //!   is then moved onto the chord's bisector so the arc is consistent.
 
-use super::block::{bit, Block, GGroup, MGroup, AXIS_LETTERS};
+use super::block::{bit, Block, GGroup, MGroup, AXIS_LETTERS, MODE_GROUPS};
 use super::state::{Motion, State};
 use crate::command::{Command, Plane, SpindleDir};
 use crate::gcode::{ErrorKind, GcodeError};
@@ -94,34 +94,36 @@ pub(crate) fn execute(st: &mut State, b: &Block, out: &mut Out) -> Result<(), Gc
         push(out, Command::Message(message(text)), col)?;
     }
     // Modes first: they govern how every number below is read.
-    if let Some((t, _)) = b.g_of(GGroup::Units) {
-        st.inch = t == 200 || t == 700;
-    }
-    if let Some((t, _)) = b.g_of(GGroup::Plane) {
-        st.plane = match t {
-            170 => Plane::XY,
-            180 => Plane::ZX,
-            _ => Plane::YZ,
-        };
-    }
-    if let Some((t, _)) = b.g_of(GGroup::Distance) {
-        st.incremental = t == 910;
-    }
-    if let Some((t, _)) = b.g_of(GGroup::ArcDistance) {
-        st.arc_absolute = t == 901;
-    }
-    if let Some((t, _)) = b.g_of(GGroup::FeedMode) {
-        st.inverse_time = t == 930;
-    }
-    if let Some((t, _)) = b.g_of(GGroup::Wcs) {
-        st.wcs = match t {
-            540..=590 => ((t - 540) / 10) as u8,
-            _ => (t - 591 + 6) as u8,
-        };
-    }
-    if let Some((640, _)) = b.g_of(GGroup::Path) {
-        cx.take(b'P');
-        cx.take(b'Q');
+    if b.gmask & MODE_GROUPS != 0 {
+        if let Some((t, _)) = b.g_of(GGroup::Units) {
+            st.inch = t == 200 || t == 700;
+        }
+        if let Some((t, _)) = b.g_of(GGroup::Plane) {
+            st.plane = match t {
+                170 => Plane::XY,
+                180 => Plane::ZX,
+                _ => Plane::YZ,
+            };
+        }
+        if let Some((t, _)) = b.g_of(GGroup::Distance) {
+            st.incremental = t == 910;
+        }
+        if let Some((t, _)) = b.g_of(GGroup::ArcDistance) {
+            st.arc_absolute = t == 901;
+        }
+        if let Some((t, _)) = b.g_of(GGroup::FeedMode) {
+            st.inverse_time = t == 930;
+        }
+        if let Some((t, _)) = b.g_of(GGroup::Wcs) {
+            st.wcs = match t {
+                540..=590 => ((t - 540) / 10) as u8,
+                _ => (t - 591 + 6) as u8,
+            };
+        }
+        if let Some((640, _)) = b.g_of(GGroup::Path) {
+            cx.take(b'P');
+            cx.take(b'Q');
+        }
     }
     let misc = b.m_of(MGroup::Misc).map(|m| m.0);
     let s_is_arg = matches!(misc, Some(42 | 106 | 220));
