@@ -36,7 +36,8 @@ fn finite(v: f32) -> Result<f32, ErrorKind> {
 /// (a u32 cannot overflow), below 2^24 and at most 10 decimals, and not
 /// continued after a blank (`X1 0` is X10). That is nearly every number in
 /// real files, and the result is exact: an exact integer over an exact
-/// power of ten, rounded once. `None` sends the caller to the general path.
+/// power of ten, rounded once. Returns the value and the position after it
+/// and any blanks; `None` sends the caller to the general path.
 #[inline(always)]
 pub(crate) fn plain_number(line: &[u8], mut i: usize) -> Option<(f32, usize)> {
     let mut mant: u32 = 0;
@@ -69,7 +70,17 @@ pub(crate) fn plain_number(line: &[u8], mut i: usize) -> Option<(f32, usize)> {
     if nd == 0 || nd > 9 || mant >= 1 << 24 {
         return None;
     }
-    if line.get(i).is_some_and(|&b| blank(b)) && digits_follow(line, i, dot) {
+    // Blanks after the number are consumed here, once; if a digit (or a
+    // first point) follows them, the number goes on: `X1 0`, `X1 .5`.
+    let mut end = i;
+    while line.get(end).is_some_and(|&b| blank(b)) {
+        end += 1;
+    }
+    if end > i
+        && line
+            .get(end)
+            .is_some_and(|&b| b.is_ascii_digit() || (b == b'.' && !dot))
+    {
         return None;
     }
     let p = POW10.get(frac)?;
@@ -79,15 +90,8 @@ pub(crate) fn plain_number(line: &[u8], mut i: usize) -> Option<(f32, usize)> {
         } else {
             mant as f32 / p
         },
-        i,
+        end,
     ))
-}
-
-/// After a number and a blank: whether the number goes on (`X1 0`, and
-/// `X1 .5` when no point was seen yet).
-fn digits_follow(line: &[u8], i: usize, dot: bool) -> bool {
-    let next = line.get(i..).and_then(|r| r.iter().find(|&&b| !blank(b)));
-    next.is_some_and(|&b| b.is_ascii_digit() || (b == b'.' && !dot))
 }
 
 impl Cursor<'_> {

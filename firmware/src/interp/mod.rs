@@ -89,20 +89,31 @@ impl ParamStore for Env<'_> {
     }
 }
 
+/// Non-zero when some value in `s` is infinite or NaN (exponent all ones).
+/// Branch-free: this runs on every value of every command.
+fn non_finite(s: &[f32]) -> u32 {
+    s.iter().fold(0, |a, v| {
+        a | u32::from(v.to_bits() & 0x7f80_0000 == 0x7f80_0000)
+    })
+}
+
 fn cmd_finite(c: &Command) -> bool {
-    let all = |s: &[f32]| s.iter().all(|v| v.is_finite());
     let feed = |f: &crate::command::Feed| match f {
-        crate::command::Feed::PerMin(v) | crate::command::Feed::InverseTime(v) => v.is_finite(),
+        crate::command::Feed::PerMin(v) | crate::command::Feed::InverseTime(v) => non_finite(&[*v]),
     };
-    match c {
-        Command::Rapid { end } => all(end),
-        Command::Line { end, feed: f } | Command::Probe { end, feed: f, .. } => all(end) && feed(f),
-        Command::Arc(a) => all(&a.end) && all(&a.center) && feed(&a.feed),
-        Command::Spline(s) => all(&s.end) && all(&s.p1) && all(&s.p2) && feed(&s.feed),
-        Command::Dwell { seconds } => seconds.is_finite(),
-        Command::Spindle { speed, .. } => speed.is_finite(),
-        Command::Aux { value, .. } => value.is_finite(),
-        _ => true,
+    0 == match c {
+        Command::Rapid { end } => non_finite(end),
+        Command::Line { end, feed: f } | Command::Probe { end, feed: f, .. } => {
+            non_finite(end) | feed(f)
+        }
+        Command::Arc(a) => non_finite(&a.end) | non_finite(&a.center) | feed(&a.feed),
+        Command::Spline(s) => {
+            non_finite(&s.end) | non_finite(&s.p1) | non_finite(&s.p2) | feed(&s.feed)
+        }
+        Command::Dwell { seconds } => non_finite(&[*seconds]),
+        Command::Spindle { speed, .. } => non_finite(&[*speed]),
+        Command::Aux { value, .. } => non_finite(&[*value]),
+        _ => 0,
     }
 }
 
@@ -148,7 +159,7 @@ impl Interpreter {
         let bad = buf
             .get(before..)
             .is_some_and(|s| s.iter().any(|c| !cmd_finite(c)));
-        if bad || !self.state.pos.iter().all(|v| v.is_finite()) {
+        if bad || non_finite(&self.state.pos) != 0 {
             return Err(GcodeError::new(ErrorKind::NotFinite, b.first_col));
         }
         Ok(())
