@@ -14,7 +14,7 @@ fn finite(c: &Command) -> bool {
 }
 
 fn check(it: &mut Interpreter, line: &[u8]) {
-    let before = *it.state();
+    let before = (*it.state(), it.offsets());
     let mut cmds = Vec::new();
     match it.execute_line(line, &mut |c| cmds.push(c)) {
         Ok(()) => {
@@ -29,7 +29,11 @@ fn check(it: &mut Interpreter, line: &[u8]) {
         }
         Err(e) => {
             assert!(cmds.is_empty());
-            assert_eq!(*it.state(), before, "state changed by failing line");
+            assert_eq!(
+                (*it.state(), it.offsets()),
+                before,
+                "state changed by failing line"
+            );
             assert!(
                 usize::from(e.col) <= line.len() + 1,
                 "column {} beyond line {:?}",

@@ -49,6 +49,37 @@ fn offsets_report_and_wco() {
     assert!(s.ends_with("[TLO:0.000]\n[PRB:0.000,0.000,0.000,0.000:0]\n"));
 }
 
+/// The offset tables are backed up lazily (on a line's first write), so a
+/// line that writes them and then fails must still leave them untouched.
+#[test]
+fn failing_line_restores_offsets_it_wrote() {
+    let mut it = Interpreter::new();
+    run(&mut it, "G21 G90 F100 G10 L2 P1 X1 Y1 Z1");
+    assert!(it.take_offsets_changed());
+    let before = it.offsets();
+    for line in [
+        // G10 runs as the first command of the line, the second one fails.
+        "G10 L2 P1 X5 G0 X1 Q1",
+        "G10 L20 P2 X7 G1 X[1/0]",
+        // Parameter writes to the tables, then a bad word.
+        "#5221=9 #5161=3 G0 X1 E1",
+        // G28.1 stores, the block's motion then fails.
+        "G28.1 G0 X1 Q2",
+    ] {
+        let mut n = 0;
+        let r = it.execute_line(line.as_bytes(), &mut |_| n += 1);
+        assert!(r.is_err(), "{line} should fail");
+        assert_eq!(n, 0, "{line} emitted commands");
+        assert_eq!(it.offsets(), before, "{line} changed the offsets");
+        assert!(!it.take_offsets_changed(), "{line} flagged a save");
+    }
+    // The same writes on good lines do land.
+    run(&mut it, "G10 L2 P1 X5");
+    assert_eq!(it.offsets().wcs[0], [5.0, 1.0, 1.0, 0.0]);
+    run(&mut it, "#5161=3");
+    assert_eq!(it.offsets().g28[0], 3.0);
+}
+
 #[test]
 fn machine_position_feedback() {
     let mut it = Interpreter::new();

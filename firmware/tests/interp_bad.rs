@@ -23,7 +23,7 @@ fn bad_cases() {
         interp
             .execute_line(b"G21 G90 F100", &mut |_| {})
             .expect("preamble");
-        let before = *interp.state();
+        let before = (*interp.state(), interp.offsets());
         let mut emitted = 0;
         let r = interp.execute_line(line.as_bytes(), &mut |_| emitted += 1);
         n += 1;
@@ -32,7 +32,7 @@ fn bad_cases() {
                 if e.code() == code
                     && e.col == col
                     && emitted == 0
-                    && *interp.state() == before => {}
+                    && (*interp.state(), interp.offsets()) == before => {}
             other => failures.push(format!(
                 "line {}: `{line}` want {code}@{col}, got {other:?} (emitted {emitted})",
                 i + 1

@@ -4,7 +4,7 @@
 
 use super::block::AXIS_LETTERS;
 use super::exec::{all_axes, message, push, Ctx, Out, G30_PROBE_TRAVEL};
-use super::state::{State, WCS_COUNT};
+use super::state::{State, Tables, WCS_COUNT};
 use crate::command::{Command, Feed, ReportKind};
 use crate::gcode::{ErrorKind, GcodeError, Unsupported};
 use crate::AXES;
@@ -97,6 +97,7 @@ pub(super) fn misc_m(
 pub(super) fn non_modal_g(
     cx: &mut Ctx,
     st: &mut State,
+    tb: &mut Tables,
     t: u16,
     col: u16,
     out: &mut Out,
@@ -143,7 +144,7 @@ pub(super) fn non_modal_g(
             let pos = st.pos;
             let g92 = if st.g92_active { st.g92 } else { [0.0; AXES] };
             let inc = st.incremental;
-            let Some(off) = st.wcs_offsets.get_mut(k) else {
+            let Some(off) = tb.edit().wcs.get_mut(k) else {
                 return Ok(false);
             };
             for i in 0..AXES {
@@ -184,9 +185,9 @@ pub(super) fn non_modal_g(
         }
         281 | 301 => {
             if t == 281 {
-                st.g28 = st.pos;
+                tb.edit().g28 = st.pos;
             } else {
-                st.g30 = st.pos;
+                tb.edit().g30 = st.pos;
             }
             st.offsets_changed = true;
         }
@@ -229,8 +230,9 @@ pub(super) fn non_modal_g(
             if vals.iter().all(Option::is_none) {
                 return Err(GcodeError::new(ErrorKind::NoAxisWords, col));
             }
-            let base = st
-                .wcs_offsets
+            let base = tb
+                .get()
+                .wcs
                 .get(usize::from(st.wcs))
                 .copied()
                 .unwrap_or([0.0; AXES]);

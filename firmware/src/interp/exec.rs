@@ -33,7 +33,7 @@
 //!   is then moved onto the chord's bisector so the arc is consistent.
 
 use super::block::{bit, Block, GGroup, MGroup, AXIS_LETTERS, MODE_GROUPS};
-use super::state::{Motion, State};
+use super::state::{Motion, State, Tables};
 use crate::command::{Command, Plane, SpindleDir};
 use crate::gcode::{ErrorKind, GcodeError};
 use crate::AXES;
@@ -48,6 +48,8 @@ pub const G30_PROBE_TRAVEL: f32 = 100.0;
 pub(super) struct Ctx<'b, 'a> {
     pub(super) b: &'b Block<'a>,
     pub(super) used: u32,
+    /// The work offset motion words are relative to (set before motion).
+    pub(super) wco: crate::command::Pos,
 }
 
 impl Ctx<'_, '_> {
@@ -85,8 +87,17 @@ pub(super) fn all_axes() -> u8 {
 }
 
 /// Runs one block against `st`, appending its commands to `out`.
-pub(crate) fn execute(st: &mut State, b: &Block, out: &mut Out) -> Result<(), GcodeError> {
-    let mut cx = Ctx { b, used: 0 };
+pub(crate) fn execute(
+    st: &mut State,
+    tb: &mut Tables,
+    b: &Block,
+    out: &mut Out,
+) -> Result<(), GcodeError> {
+    let mut cx = Ctx {
+        b,
+        used: 0,
+        wco: [0.0; AXES],
+    };
     let col0 = b.first_col;
     let gcol = |g: GGroup| b.g_of(g).map_or(col0, |x| x.1);
 
@@ -221,7 +232,7 @@ pub(crate) fn execute(st: &mut State, b: &Block, out: &mut Out) -> Result<(), Gc
     }
     let mut g53 = false;
     if let Some((t, col)) = non_modal {
-        g53 = super::codes::non_modal_g(&mut cx, st, t, col, out)?;
+        g53 = super::codes::non_modal_g(&mut cx, st, tb, t, col, out)?;
     }
     if let Some((t, _)) = motion_word {
         st.motion = Motion::from_tenths(t).unwrap_or(Motion::Cancel);
@@ -233,6 +244,7 @@ pub(crate) fn execute(st: &mut State, b: &Block, out: &mut Out) -> Result<(), Gc
         ));
     }
     if !axis_nm && !motors_take_axes {
+        cx.wco = st.wco(tb.get());
         super::motion::motion(
             &mut cx,
             st,

@@ -21,27 +21,19 @@ mod motion;
 mod state;
 
 pub use exec::{G30_PROBE_TRAVEL, LINE_COMMANDS};
-pub use state::{Motion, State, WCS_COUNT};
+pub use state::{Motion, Offsets, State, WCS_COUNT};
 
 use crate::command::{Command, Plane, Pos};
 use crate::gcode::{ErrorKind, GcodeError, Lexer, Name, ParamStore, Params, Token};
 use block::Block;
 use core::fmt::{self, Write};
+use state::Tables;
 
-/// What survives a power cycle (GRBL's EEPROM coordinate data): the nine
-/// work offsets G54..G59.3 and the G28/G30 positions, machine mm. G92 and
-/// the modal state do not.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Offsets {
-    pub wcs: [Pos; WCS_COUNT],
-    pub g28: Pos,
-    pub g30: Pos,
-}
-
-/// The interpreter: modal state plus parameters. About 2.3 KiB.
+/// The interpreter: modal state, offset tables and parameters. About 2.3 KiB.
 #[derive(Clone, Debug)]
 pub struct Interpreter {
     state: State,
+    offsets: Offsets,
     params: Params,
 }
 
@@ -52,18 +44,19 @@ impl Default for Interpreter {
 }
 
 /// Parameter access seen by the lexer: typed state first, then the table.
-struct Env<'s> {
+struct Env<'s, 't> {
     state: &'s mut State,
+    tables: &'s mut Tables<'t>,
     params: &'s mut Params,
 }
 
-impl ParamStore for Env<'_> {
+impl ParamStore for Env<'_, '_> {
     fn get(&self, n: u16) -> Result<f32, ErrorKind> {
         match n {
             0 => Ok(0.0),
             1..=crate::gcode::params::PARAM_MAX => Ok(self
                 .state
-                .param(n)
+                .param(self.tables.get(), n)
                 .unwrap_or_else(|| self.params.get_num(n))),
             _ => Err(ErrorKind::ParamOutOfRange),
         }
@@ -72,7 +65,7 @@ impl ParamStore for Env<'_> {
         match n {
             0 => Err(ErrorKind::ParamReadOnly),
             1..=crate::gcode::params::PARAM_MAX => {
-                if self.state.set_param(n, v)? {
+                if self.state.set_param(self.tables, n, v)? {
                     Ok(())
                 } else {
                     self.params.set_num(n, v)
@@ -121,6 +114,11 @@ impl Interpreter {
     pub const fn new() -> Self {
         Interpreter {
             state: State::new(),
+            offsets: Offsets {
+                wcs: [[0.0; crate::AXES]; WCS_COUNT],
+                g28: [0.0; crate::AXES],
+                g30: [0.0; crate::AXES],
+            },
             params: Params::new(),
         }
     }
@@ -134,9 +132,10 @@ impl Interpreter {
         out: &mut dyn FnMut(Command),
     ) -> Result<(), GcodeError> {
         let snapshot = self.state;
+        let mut saved = None;
         self.params.begin_line();
         let mut buf = exec::Out::new();
-        match self.run(line, &mut buf) {
+        match self.run(line, &mut buf, &mut saved) {
             Ok(()) => {
                 // By reference: moving the whole buffer into an iterator
                 // would copy all its slots (1.3 KB) on every line.
@@ -147,15 +146,24 @@ impl Interpreter {
             }
             Err(e) => {
                 self.state = snapshot;
+                if let Some(o) = saved {
+                    self.offsets = o;
+                }
                 self.params.rollback();
                 Err(e)
             }
         }
     }
 
-    fn run_block(&mut self, b: &Block, buf: &mut exec::Out) -> Result<(), GcodeError> {
+    fn run_block(
+        &mut self,
+        b: &Block,
+        buf: &mut exec::Out,
+        saved: &mut Option<Offsets>,
+    ) -> Result<(), GcodeError> {
         let before = buf.len();
-        exec::execute(&mut self.state, b, buf)?;
+        let mut tables = Tables::new(&mut self.offsets, saved);
+        exec::execute(&mut self.state, &mut tables, b, buf)?;
         let bad = buf
             .get(before..)
             .is_some_and(|s| s.iter().any(|c| !cmd_finite(c)));
@@ -165,7 +173,12 @@ impl Interpreter {
         Ok(())
     }
 
-    fn run(&mut self, line: &[u8], buf: &mut exec::Out) -> Result<(), GcodeError> {
+    fn run(
+        &mut self,
+        line: &[u8],
+        buf: &mut exec::Out,
+        saved: &mut Option<Offsets>,
+    ) -> Result<(), GcodeError> {
         let mut lx = Lexer::new(line)?;
         if lx.block_delete && self.state.block_delete {
             return Ok(());
@@ -173,8 +186,10 @@ impl Interpreter {
         let mut block = Block::default();
         loop {
             let tok = {
+                let mut tables = Tables::new(&mut self.offsets, saved);
                 let mut env = Env {
                     state: &mut self.state,
+                    tables: &mut tables,
                     params: &mut self.params,
                 };
                 lx.next_token(&mut env)?
@@ -191,7 +206,7 @@ impl Interpreter {
                 }
                 Some(Token::Word(w)) => {
                     if block.splits_on(&w) {
-                        self.run_block(&block, buf)?;
+                        self.run_block(&block, buf, saved)?;
                         block = Block::default();
                     }
                     block.add(&w)?;
@@ -202,7 +217,7 @@ impl Interpreter {
             }
         }
         if !block.is_empty() {
-            self.run_block(&block, buf)?;
+            self.run_block(&block, buf, saved)?;
         }
         Ok(())
     }
@@ -234,8 +249,8 @@ impl Interpreter {
         if let Some(t) = self.state.pending_probe_z.take() {
             if contact {
                 let base = self
-                    .state
-                    .wcs_offsets
+                    .offsets
+                    .wcs
                     .get(usize::from(self.state.wcs))
                     .map_or(0.0, |o| o[2]);
                 if !self.state.g92_active {
@@ -254,18 +269,12 @@ impl Interpreter {
 
     /// The offsets that persist.
     pub fn offsets(&self) -> Offsets {
-        Offsets {
-            wcs: self.state.wcs_offsets,
-            g28: self.state.g28,
-            g30: self.state.g30,
-        }
+        self.offsets
     }
 
     /// Replaces the offsets that persist (boot, M501, `$RST=#`).
     pub fn set_offsets(&mut self, o: &Offsets) {
-        self.state.wcs_offsets = o.wcs;
-        self.state.g28 = o.g28;
-        self.state.g30 = o.g30;
+        self.offsets = *o;
     }
 
     /// True once after G10 L2/L20, G28.1 or G30.1: the lines GRBL saves at
@@ -285,9 +294,6 @@ impl Interpreter {
     pub fn reset(&mut self) {
         let s = self.state;
         self.state = State {
-            wcs_offsets: s.wcs_offsets,
-            g28: s.g28,
-            g30: s.g30,
             g92: s.g92,
             g92_active: s.g92_active,
             pos: s.pos,
@@ -301,7 +307,7 @@ impl Interpreter {
 
     /// Work coordinate offset (active G54.. plus G92), machine mm: GRBL's WCO.
     pub fn wco(&self) -> Pos {
-        self.state.wco()
+        self.state.wco(&self.offsets)
     }
 
     /// The body of GRBL's `$G` report, e.g. `G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0`
@@ -358,7 +364,7 @@ impl Interpreter {
             }
             Ok(())
         };
-        for (k, o) in s.wcs_offsets.iter().enumerate() {
+        for (k, o) in self.offsets.wcs.iter().enumerate() {
             w.write_char('[')?;
             let code = if k < 6 {
                 540 + 10 * k as u16
@@ -370,7 +376,8 @@ impl Interpreter {
             pos(w, o)?;
             write!(w, "]{eol}")?;
         }
-        for (label, p) in [("G28", &s.g28), ("G30", &s.g30), ("G92", &s.g92)] {
+        let o = &self.offsets;
+        for (label, p) in [("G28", &o.g28), ("G30", &o.g30), ("G92", &s.g92)] {
             write!(w, "[{label}:")?;
             pos(w, p)?;
             write!(w, "]{eol}")?;

@@ -11,7 +11,7 @@ use crate::gcode::{ErrorKind, GcodeError};
 /// The target of a motion block in machine mm.
 fn target(cx: &mut Ctx, st: &State, g53: bool) -> Pos {
     let u = st.unit();
-    let wco = st.wco();
+    let wco = cx.wco;
     let mut end = st.pos;
     for (i, l) in AXIS_LETTERS.iter().enumerate() {
         let (Some(v), Some(e)) = (cx.take(*l), end.get_mut(i)) else {
@@ -154,7 +154,7 @@ fn arc(cx: &mut Ctx, st: &State, feed: Feed, col: u16) -> Result<Arc, GcodeError
         if o0.is_none() && o1.is_none() {
             return Err(GcodeError::new(ErrorKind::NoOffsetsInPlane, col));
         }
-        let wco = st.wco();
+        let wco = cx.wco;
         let abs = |o: Option<f32>, a: usize, start: f32| match o {
             Some(v) if st.arc_absolute => v * u + wco.get(a).copied().unwrap_or(0.0),
             Some(v) => start + v * u,

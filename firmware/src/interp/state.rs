@@ -1,8 +1,9 @@
 //! The interpreter's modal state: small and `Copy`, so a line can be rolled
-//! back by restoring a snapshot taken before it ran.
+//! back by restoring a snapshot taken before it ran. The large offset
+//! tables ([`Offsets`]) sit beside it and are backed up only when written.
 //!
-//! Offsets and stored positions live here as typed values in machine mm
-//! and are also visible through their RS274NGC parameter numbers (see
+//! Offsets and stored positions are typed values in machine mm and are
+//! also visible through their RS274NGC parameter numbers (see
 //! [`State::param`]). All of them stay in mm whatever G20/G21 say, like
 //! LinuxCNC's parameters in a metric machine's units.
 
@@ -79,11 +80,8 @@ pub struct State {
     pub inverse_time: bool,
     /// Active work coordinate system, 0 = G54 .. 8 = G59.3.
     pub wcs: u8,
-    pub wcs_offsets: [Pos; WCS_COUNT],
     pub g92: Pos,
     pub g92_active: bool,
-    pub g28: Pos,
-    pub g30: Pos,
     /// Where the tool is (or will be after the last emitted command), machine mm.
     pub pos: Pos,
     /// G94 feed rate, mm/min (0: none given yet).
@@ -125,11 +123,8 @@ impl State {
             arc_absolute: false,
             inverse_time: false,
             wcs: 0,
-            wcs_offsets: [[0.0; AXES]; WCS_COUNT],
             g92: [0.0; AXES],
             g92_active: false,
-            g28: [0.0; AXES],
-            g30: [0.0; AXES],
             pos: [0.0; AXES],
             feed: 0.0,
             speed: 0.0,
@@ -148,9 +143,9 @@ impl State {
     }
 
     /// Work coordinate offset: active G54.. plus G92 when active (GRBL's WCO).
-    pub fn wco(&self) -> Pos {
-        let base = self
-            .wcs_offsets
+    pub fn wco(&self, o: &Offsets) -> Pos {
+        let base = o
+            .wcs
             .get(usize::from(self.wcs))
             .copied()
             .unwrap_or([0.0; AXES]);
@@ -172,49 +167,78 @@ impl State {
         }
     }
 
-    fn slot(&mut self, n: u16) -> Option<&mut f32> {
-        match slot_of(n)? {
-            Slot::G28(a) => self.g28.get_mut(a),
-            Slot::G30(a) => self.g30.get_mut(a),
-            Slot::G92(a) => self.g92.get_mut(a),
-            Slot::Wcs(k, a) => self.wcs_offsets.get_mut(k).and_then(|o| o.get_mut(a)),
-        }
-    }
-
     /// The typed value behind parameter `n`, if `n` is one of ours.
     /// #5061-5064 probe (machine mm), #5070 probe ok, #5161 G28, #5181 G30,
     /// #5210 G92 on, #5211 G92, #5220 active system 1-9, #5221+20k G54+k.
-    pub fn param(&self, n: u16) -> Option<f32> {
+    pub fn param(&self, o: &Offsets, n: u16) -> Option<f32> {
         match n {
             5061..=5064 => self.probe.get(usize::from(n - 5061)).copied(),
             5070 => Some(f32::from(u8::from(self.probe_ok))),
             5210 => Some(f32::from(u8::from(self.g92_active))),
             5220 => Some(f32::from(self.wcs + 1)),
             _ => match slot_of(n)? {
-                Slot::G28(a) => self.g28.get(a).copied(),
-                Slot::G30(a) => self.g30.get(a).copied(),
+                Slot::G28(a) => o.g28.get(a).copied(),
+                Slot::G30(a) => o.g30.get(a).copied(),
                 Slot::G92(a) => self.g92.get(a).copied(),
-                Slot::Wcs(k, a) => self.wcs_offsets.get(k).and_then(|o| o.get(a)).copied(),
+                Slot::Wcs(k, a) => o.wcs.get(k).and_then(|w| w.get(a)).copied(),
             },
         }
     }
 
     /// Writes a typed parameter. `Ok(false)`: not one of ours (use the table).
-    pub fn set_param(&mut self, n: u16, v: f32) -> Result<bool, ErrorKind> {
-        match n {
-            5061..=5064 | 5070 | 5220 => Err(ErrorKind::ParamReadOnly),
+    pub(crate) fn set_param(&mut self, t: &mut Tables, n: u16, v: f32) -> Result<bool, ErrorKind> {
+        let slot = match n {
+            5061..=5064 | 5070 | 5220 => return Err(ErrorKind::ParamReadOnly),
             5210 => {
                 self.g92_active = v != 0.0;
-                Ok(true)
+                return Ok(true);
             }
-            _ => match self.slot(n) {
-                Some(s) => {
-                    *s = v;
-                    Ok(true)
-                }
-                None => Ok(false),
+            _ => match slot_of(n) {
+                None => return Ok(false),
+                Some(Slot::G92(a)) => self.g92.get_mut(a),
+                Some(Slot::G28(a)) => t.edit().g28.get_mut(a),
+                Some(Slot::G30(a)) => t.edit().g30.get_mut(a),
+                Some(Slot::Wcs(k, a)) => t.edit().wcs.get_mut(k).and_then(|w| w.get_mut(a)),
             },
+        };
+        if let Some(s) = slot {
+            *s = v;
         }
+        Ok(true)
+    }
+}
+
+/// What survives a power cycle (GRBL's EEPROM coordinate data): the nine
+/// work offsets G54..G59.3 and the G28/G30 positions, machine mm. G92 and
+/// the modal state do not.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Offsets {
+    pub wcs: [Pos; WCS_COUNT],
+    pub g28: Pos,
+    pub g30: Pos,
+}
+
+/// The offset tables as one line sees them. They are most of the
+/// interpreter's state by size but rarely written, so instead of copying
+/// them before every line (as [`State`] is), a line backs them up the first
+/// time it writes them, and only then.
+pub(crate) struct Tables<'t> {
+    cur: &'t mut Offsets,
+    saved: &'t mut Option<Offsets>,
+}
+
+impl<'t> Tables<'t> {
+    pub(crate) fn new(cur: &'t mut Offsets, saved: &'t mut Option<Offsets>) -> Self {
+        Tables { cur, saved }
+    }
+    pub(crate) fn get(&self) -> &Offsets {
+        self.cur
+    }
+    pub(crate) fn edit(&mut self) -> &mut Offsets {
+        if self.saved.is_none() {
+            *self.saved = Some(*self.cur);
+        }
+        self.cur
     }
 }
 
