@@ -86,6 +86,64 @@ pub(super) fn all_axes() -> u8 {
     (1u8 << AXES) - 1
 }
 
+/// F: mm/min in G94; in G93 the F of this line only (returned).
+fn feed_word(cx: &mut Ctx, st: &mut State) -> Result<Option<f32>, GcodeError> {
+    let Some(f) = cx.take(b'F') else {
+        return Ok(None);
+    };
+    if f < 0.0 {
+        return Err(cx.err(ErrorKind::ValueOutOfRange(b'F'), b'F'));
+    }
+    if st.inverse_time {
+        return Ok(Some(f));
+    }
+    st.feed = f * st.unit();
+    Ok(None)
+}
+
+/// Letters a plain move may carry (see [`plain_move`]).
+const MOVE_LETTERS: u32 = 1 << (b'X' - b'A')
+    | 1 << (b'Y' - b'A')
+    | 1 << (b'Z' - b'A')
+    | 1 << (b'A' - b'A')
+    | 1 << (b'F' - b'A');
+
+/// The shape of most lines in a job: a straight move (G0/G1, given or
+/// modal) with axis words and maybe F, and nothing else. For such a block
+/// every other step of [`execute`] finds nothing to do, so this goes
+/// straight to the F word and the motion; `None` for any other block.
+fn plain_move(
+    cx: &mut Ctx,
+    st: &mut State,
+    tb: &Tables,
+    out: &mut Out,
+) -> Option<Result<(), GcodeError>> {
+    let b = cx.b;
+    let plain = b.gmask & !(1 << GGroup::Motion as u16) == 0
+        && b.mmask == 0
+        && b.msg.is_none()
+        && b.bare_col == 0
+        && b.present & !MOVE_LETTERS == 0
+        && b.axis_mask() != 0;
+    if !plain {
+        return None;
+    }
+    let word = b.g_of(GGroup::Motion);
+    let motion = match word {
+        Some((t, _)) => Motion::from_tenths(t)?,
+        None => st.motion,
+    };
+    if !matches!(motion, Motion::Rapid | Motion::Linear) {
+        return None;
+    }
+    Some((|| {
+        let inverse_f = feed_word(cx, st)?;
+        st.motion = motion;
+        cx.wco = st.wco(tb.get());
+        super::motion::motion(cx, st, false, inverse_f, word.map(|x| x.1), true, out)
+    })())
+}
+
 /// Runs one block against `st`, appending its commands to `out`.
 pub(crate) fn execute(
     st: &mut State,
@@ -98,6 +156,9 @@ pub(crate) fn execute(
         used: 0,
         wco: [0.0; AXES],
     };
+    if let Some(r) = plain_move(&mut cx, st, tb, out) {
+        return r;
+    }
     let col0 = b.first_col;
     let gcol = |g: GGroup| b.g_of(g).map_or(col0, |x| x.1);
 
@@ -139,18 +200,7 @@ pub(crate) fn execute(
     let misc = b.m_of(MGroup::Misc).map(|m| m.0);
     let s_is_arg = matches!(misc, Some(42 | 106 | 220));
 
-    // F: mm/min in G94; in G93 the F of this line only.
-    let mut inverse_f = None;
-    if let Some(f) = cx.take(b'F') {
-        if f < 0.0 {
-            return Err(cx.err(ErrorKind::ValueOutOfRange(b'F'), b'F'));
-        }
-        if st.inverse_time {
-            inverse_f = Some(f);
-        } else {
-            st.feed = f * st.unit();
-        }
-    }
+    let inverse_f = feed_word(&mut cx, st)?;
     let spindle_m = b.m_of(MGroup::Spindle);
     if !s_is_arg {
         if let Some(s) = cx.take(b'S') {
