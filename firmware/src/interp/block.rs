@@ -128,7 +128,7 @@ const VALUE_LETTERS: u32 = {
     m
 };
 
-pub(crate) fn bit(letter: u8) -> u32 {
+pub(crate) const fn bit(letter: u8) -> u32 {
     1u32 << (letter.wrapping_sub(b'A') % 26)
 }
 

@@ -102,11 +102,7 @@ fn feed_word(cx: &mut Ctx, st: &mut State) -> Result<Option<f32>, GcodeError> {
 }
 
 /// Letters a plain move may carry (see [`plain_move`]).
-const MOVE_LETTERS: u32 = 1 << (b'X' - b'A')
-    | 1 << (b'Y' - b'A')
-    | 1 << (b'Z' - b'A')
-    | 1 << (b'A' - b'A')
-    | 1 << (b'F' - b'A');
+const MOVE_LETTERS: u32 = bit(b'X') | bit(b'Y') | bit(b'Z') | bit(b'A') | bit(b'F');
 
 /// The shape of most lines in a job: a straight move (G0/G1, given or
 /// modal) with axis words and maybe F, and nothing else. For such a block
