@@ -7,9 +7,10 @@
 //! bytes arrive); the gcode crate parses the whole text.
 
 use burin::interp::Interpreter;
-use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use criterion::{criterion_group, Criterion, Throughput};
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 fn corpus() -> (String, u64) {
     let dir = std::env::var_os("BURIN_CORPUS")
@@ -53,6 +54,27 @@ fn corpus() -> (String, u64) {
     (text, lines)
 }
 
+/// One pass of burin over the pre-split lines: parse and interpret all.
+fn burin_pass(split: &[&str]) -> u32 {
+    let mut it = Interpreter::new();
+    let mut n = 0u32;
+    for line in split {
+        let _ = it.execute_line(line.as_bytes(), &mut |c| {
+            black_box(&c);
+            n += 1;
+        });
+        if it.needs_sync() {
+            it.set_machine_position(it.state().pos);
+        }
+    }
+    n
+}
+
+fn gcode_pass(text: &str) {
+    let mut v = gcode::core::Noop;
+    gcode::core::parse(black_box(text), &mut v);
+}
+
 fn bench(c: &mut Criterion) {
     let (text, lines) = corpus();
     // burin gets lines already split, as the link layer hands them over on
@@ -62,29 +84,52 @@ fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("corpus");
     g.throughput(Throughput::Elements(lines));
     g.bench_function("burin_parse_and_interpret", |b| {
-        b.iter(|| {
-            let mut it = Interpreter::new();
-            let mut n = 0u32;
-            for line in &split {
-                let _ = it.execute_line(line.as_bytes(), &mut |c| {
-                    black_box(&c);
-                    n += 1;
-                });
-                if it.needs_sync() {
-                    it.set_machine_position(it.state().pos);
-                }
-            }
-            black_box(n)
-        })
+        b.iter(|| black_box(burin_pass(&split)))
     });
-    g.bench_function("gcode_0_7_tokenise", |b| {
-        b.iter(|| {
-            let mut v = gcode::core::Noop;
-            gcode::core::parse(black_box(&text), &mut v);
-        })
-    });
+    g.bench_function("gcode_0_7_tokenise", |b| b.iter(|| gcode_pass(&text)));
     g.finish();
 }
 
+/// Criterion measures the two one after the other, so a machine whose
+/// speed drifts (a shared VM) can skew their ratio. This measures them in
+/// alternation, pass for pass, and prints the ratio of each pair's times:
+/// drift then hits both sides of a pair alike.
+fn interleaved_ratio() {
+    let (text, _) = corpus();
+    let split: Vec<&str> = text.lines().collect();
+    let mut ratios = Vec::new();
+    for _ in 0..5 {
+        burin_pass(&split);
+        gcode_pass(&text);
+    }
+    for _ in 0..101 {
+        let t = Instant::now();
+        black_box(burin_pass(&split));
+        let b = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        gcode_pass(&text);
+        let g = t.elapsed().as_secs_f64();
+        ratios.push(g / b);
+    }
+    ratios.sort_by(f64::total_cmp);
+    let q = |f: f64| ratios[((ratios.len() - 1) as f64 * f) as usize];
+    println!(
+        "corpus/interleaved: gcode_0_7 time / burin time over {} alternating pass pairs: \
+         median {:.2}x (quartiles {:.2}x .. {:.2}x)",
+        ratios.len(),
+        q(0.5),
+        q(0.25),
+        q(0.75)
+    );
+}
+
 criterion_group!(benches, bench);
-criterion_main!(benches);
+
+fn main() {
+    benches();
+    Criterion::default().configure_from_args().final_summary();
+    // Not in `cargo test --benches` / `--test` / `--list` runs.
+    if !std::env::args().any(|a| a == "--test" || a == "--list") {
+        interleaved_ratio();
+    }
+}
