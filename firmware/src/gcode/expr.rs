@@ -32,6 +32,21 @@ fn finite(v: f32) -> Result<f32, ErrorKind> {
     }
 }
 
+/// Appends the decimal digits at `i` to `mant` and returns where they end.
+/// Wrapping: the caller refuses runs long enough to overflow.
+#[inline(always)]
+fn digit_run(line: &[u8], mut i: usize, mant: &mut u32) -> usize {
+    while let Some(&b) = line.get(i) {
+        let d = b.wrapping_sub(b'0');
+        if d >= 10 {
+            break;
+        }
+        *mant = mant.wrapping_mul(10).wrapping_add(u32::from(d));
+        i += 1;
+    }
+    i
+}
+
 /// The fast path for numbers: `digits[.digits]` at `i` with 1 to 9 digits
 /// (a u32 cannot overflow), below 2^24 and at most 10 decimals, and not
 /// continued after a blank (`X1 0` is X10). That is nearly every number in
@@ -39,33 +54,17 @@ fn finite(v: f32) -> Result<f32, ErrorKind> {
 /// power of ten, rounded once. Returns the value and the position after it
 /// and any blanks; `None` sends the caller to the general path.
 #[inline(always)]
-pub(crate) fn plain_number(line: &[u8], mut i: usize) -> Option<(f32, usize)> {
+pub(crate) fn plain_number(line: &[u8], start: usize) -> Option<(f32, usize)> {
     let mut mant: u32 = 0;
-    let int_start = i;
-    while let Some(&b) = line.get(i) {
-        let d = b.wrapping_sub(b'0');
-        if d >= 10 {
-            break;
-        }
-        mant = mant.wrapping_mul(10).wrapping_add(u32::from(d));
-        i += 1;
-    }
-    let mut nd = i - int_start;
-    let mut frac = 0;
+    let mut i = digit_run(line, start, &mut mant);
+    let mut nd = i - start;
     let dot = line.get(i) == Some(&b'.');
+    let mut frac = 0;
     if dot {
-        i += 1;
-        let frac_start = i;
-        while let Some(&b) = line.get(i) {
-            let d = b.wrapping_sub(b'0');
-            if d >= 10 {
-                break;
-            }
-            mant = mant.wrapping_mul(10).wrapping_add(u32::from(d));
-            i += 1;
-        }
-        frac = i - frac_start;
+        let end = digit_run(line, i + 1, &mut mant);
+        frac = end - (i + 1);
         nd += frac;
+        i = end;
     }
     if nd == 0 || nd > 9 || mant >= 1 << 24 {
         return None;
