@@ -103,6 +103,23 @@ proptest! {
         check_parse(&s, lex_value(&format!("X{spaced}")));
     }
 
+    /// The lexer's fast path for plain numbers (`X1.5`, `X-1.5`, blanks
+    /// after) must give exactly, bit for bit, what the general path gives
+    /// (a blank after the letter, brackets, a unary minus in brackets).
+    #[test]
+    fn fast_and_general_number_paths_agree(
+        s in "[0-9]{1,6}|[0-9]{0,5}\\.[0-9]{1,6}|[0-9]{1,5}\\.",
+        tail in prop::sample::select(vec!["", " ", "\t Y1", " (c)", ";x"]),
+    ) {
+        let fast = lex_value(&format!("X{s}{tail}"));
+        let general = lex_value(&format!("X {s}{tail}"));
+        prop_assert_eq!(fast.to_bits(), general.to_bits(), "{}", s);
+        prop_assert_eq!(fast.to_bits(), lex_value(&format!("X[{s}]{tail}")).to_bits(), "{}", s);
+        let neg = lex_value(&format!("X-{s}{tail}"));
+        prop_assert_eq!(neg.to_bits(), (-fast).to_bits(), "{}", s);
+        prop_assert_eq!(neg.to_bits(), lex_value(&format!("X [-{s}]{tail}")).to_bits(), "{}", s);
+    }
+
     #[test]
     fn fixed_matches_std(v in -1.0e7f32..1.0e7, n in 0u8..=4) {
         let mut ours = String::new();
