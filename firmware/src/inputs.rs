@@ -35,11 +35,20 @@ pub const INSTANT: u8 = LIMITS | PROBE | ESTOP;
 /// a glitch on a long cable must not pause or resume a job.
 pub const BUTTONS: u8 = FEED_HOLD | CYCLE_START;
 
+/// The inverts that apply to the inputs, from the settings: `$5` limits,
+/// `$6` probe and `$14` control inputs (bit 0 e-stop, 1 feed hold, 2 cycle
+/// start), which GRBL defines on the switch, not on the pin.
+pub fn invert_mask(limit_invert: u8, probe_invert: bool, control_invert: u8) -> u8 {
+    let control = [(1, ESTOP), (2, FEED_HOLD), (4, CYCLE_START)]
+        .iter()
+        .filter(|(bit, _)| control_invert & bit != 0)
+        .fold(0, |acc, (_, input)| acc | input);
+    (limit_invert & LIMITS) | if probe_invert { PROBE } else { 0 } | control
+}
+
 /// Active levels from the closed-to-ground levels (`closed`, bit set = pin
-/// pulled low) and the `$5` limit / `$6` probe inverts, which GRBL defines
-/// on the switch, not on the pin.
-pub fn active(closed: u8, limit_invert: u8, probe_invert: bool) -> u8 {
-    let invert = (limit_invert & LIMITS) | if probe_invert { PROBE } else { 0 };
+/// pulled low) and an [`invert_mask`].
+pub fn active(closed: u8, invert: u8) -> u8 {
     (closed ^ invert) & ALL
 }
 
@@ -180,14 +189,22 @@ mod tests {
     const SETTLE: u32 = 20;
 
     #[test]
-    fn inverts_apply_to_limits_and_probe_only() {
-        assert_eq!(active(0, 0, false), 0);
-        assert_eq!(active(LIMIT_Y, 0, false), LIMIT_Y);
+    fn inverts_apply_to_their_own_inputs() {
+        let act =
+            |closed, limits, probe, control| active(closed, invert_mask(limits, probe, control));
+        assert_eq!(act(0, 0, false, 0), 0);
+        assert_eq!(act(LIMIT_Y, 0, false, 0), LIMIT_Y);
         // $5 = 0b101: X and Z read inverted, Y not.
-        assert_eq!(active(0, 0b101, false), LIMIT_X | LIMIT_Z);
-        assert_eq!(active(PROBE | FEED_HOLD, 0, true), FEED_HOLD);
+        assert_eq!(act(0, 0b101, false, 0), LIMIT_X | LIMIT_Z);
+        assert_eq!(act(PROBE | FEED_HOLD, 0, true, 0), FEED_HOLD);
         // Bits above the limits in $5 do not touch the buttons.
-        assert_eq!(active(0, 0xF8, false), 0);
+        assert_eq!(act(0, 0xF8, false, 0), 0);
+        // $14 bit 0: a normally-closed e-stop is active when its pin opens
+        // (a cut wire stops the machine); the rest are not touched.
+        assert_eq!(act(ESTOP, 0, false, 1), 0);
+        assert_eq!(act(0, 0, false, 1), ESTOP);
+        assert_eq!(act(0, 0, false, 0b110), FEED_HOLD | CYCLE_START);
+        assert_eq!(act(0, 0, false, 0xF8), 0);
     }
 
     #[test]

@@ -11,16 +11,28 @@ fn numbers_are_ascending_unique_and_all_readable() {
     let s = Settings::default();
     let nums: Vec<u16> = table::numbers().collect();
     assert!(nums.windows(2).all(|w| w[0] < w[1]));
-    assert_eq!(nums.len(), 22 + 16 + 7);
+    assert_eq!(nums.len(), 23 + 16 + 7);
     for n in &nums {
         let v = s.get(*n).unwrap_or_else(|| panic!("${n} unreadable"));
         let mut t = s;
         assert_eq!(t.set(*n, v), Ok(()), "${n}={v} default must be valid");
         assert_eq!(t, s);
     }
-    for n in [7, 14, 99, 104, 114, 140, 199, 207, 65535] {
+    for n in [7, 15, 99, 104, 114, 140, 199, 207, 65535] {
         assert_eq!(s.get(n), None, "${n}");
     }
+}
+
+#[test]
+fn control_invert_is_a_three_bit_mask() {
+    let mut s = Settings::default();
+    assert_eq!(s.set(14, 1.0), Ok(()));
+    assert_eq!(s.control_invert, 1);
+    assert_eq!(s.set(14, 7.0), Ok(()));
+    assert_eq!(s.get(14), Some(7.0));
+    assert!(s.set(14, 8.0).is_err());
+    assert!(s.set(14, 0.5).is_err());
+    assert_eq!(s.control_invert, 7);
 }
 
 #[test]
@@ -110,7 +122,7 @@ fn settings_listing() {
     );
     let mut all = String::new();
     reply::settings(&mut all, &Settings::default()).expect("string sink");
-    assert_eq!(all.lines().count(), 45);
+    assert_eq!(all.lines().count(), 46);
     assert!(all.starts_with("$0=2.000\r\n$1=25\r\n$2=0\r\n"));
 }
 

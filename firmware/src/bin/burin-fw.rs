@@ -263,7 +263,7 @@ mod app {
             &settings,
         );
         // Inputs: EXTI on both edges; the levels at power-up are settled.
-        crate::inputs::publish(settings.limit_invert, settings.probe_invert, false);
+        crate::inputs::publish(&settings, false);
         let mut syscfg = dp.SYSCFG.constrain(&mut rcc);
         let mut exti = dp.EXTI;
         let mut inputs = pins.inputs;
@@ -484,7 +484,7 @@ mod app {
             // seeks the switches) and in alarm. Published before TIM5 is
             // pended below, so no homing step runs armed.
             let armed = settings.hard_limits && !matches!(state, State::Homing | State::Alarm);
-            crate::inputs::publish(settings.limit_invert, settings.probe_invert, armed);
+            crate::inputs::publish(&settings, armed);
             let busy = queued || stepping || !crate::RT.stepper_idle();
             io.update(crate::inputs::now_ms(), busy, state, &settings);
             // Segments waiting, drivers awake and the timer stopped: TIM5

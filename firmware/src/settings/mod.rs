@@ -66,6 +66,10 @@ pub struct Settings {
     pub arc_tolerance: f32,
     /// `$13` report in inches.
     pub report_inches: bool,
+    /// `$14` control input invert mask (grblHAL's): bit 0 reset/e-stop,
+    /// bit 1 feed hold, bit 2 cycle start. Set bit 0 for a normally-closed
+    /// e-stop, the safe wiring: a broken wire then stops the machine.
+    pub control_invert: u8,
     /// `$20` soft limits.
     pub soft_limits: bool,
     /// `$21` hard limits.
@@ -126,6 +130,7 @@ impl Default for Settings {
             junction_deviation: 0.01,
             arc_tolerance: 0.002,
             report_inches: false,
+            control_invert: 0,
             soft_limits: false,
             hard_limits: false,
             homing_enable: false,

@@ -54,7 +54,7 @@ const AXIS_BITS: u8 = (1 << AXES) - 1;
 const BIG: f32 = 1.0e6;
 
 /// `$0`–`$32`, in order.
-const GLOBAL: [(u16, Kind); 22] = [
+const GLOBAL: [(u16, Kind); 23] = [
     (
         0,
         Kind::Real {
@@ -84,6 +84,7 @@ const GLOBAL: [(u16, Kind); 22] = [
         },
     ),
     (13, Kind::Bool),
+    (14, Kind::Mask { bits: 0b111 }),
     (20, Kind::Bool),
     (21, Kind::Bool),
     (22, Kind::Bool),
@@ -257,6 +258,7 @@ impl Settings {
             11 => self.junction_deviation,
             12 => self.arc_tolerance,
             13 => b(self.report_inches),
+            14 => f32::from(self.control_invert),
             20 => b(self.soft_limits),
             21 => b(self.hard_limits),
             22 => b(self.homing_enable),
@@ -305,6 +307,7 @@ impl Settings {
             11 => self.junction_deviation = v,
             12 => self.arc_tolerance = v,
             13 => self.report_inches = on,
+            14 => self.control_invert = u8v,
             20 => self.soft_limits = on,
             21 => self.hard_limits = on,
             22 => self.homing_enable = on,

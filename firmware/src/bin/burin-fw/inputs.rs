@@ -28,9 +28,9 @@ pub const SETTLE_MS: u32 = 20;
 /// word, so the heartbeat takes both halves of one interrupt together.
 /// Bits as in `burin::inputs`.
 static EDGES: AtomicU16 = AtomicU16::new(0);
-/// `$5` limit invert, `$6` probe invert, published by the parse task.
-static LIMIT_INVERT: AtomicU8 = AtomicU8::new(0);
-static PROBE_INVERT: AtomicBool = AtomicBool::new(false);
+/// The input inverts (`$5`, `$6`, `$14` as `burin::inputs::invert_mask`),
+/// published by the parse task.
+static INVERT: AtomicU8 = AtomicU8::new(0);
 /// Hard limits apply (`$21` on, not homing, not in alarm): the parse task
 /// clears it before it queues a homing move.
 static LIMITS_ARMED: AtomicBool = AtomicBool::new(false);
@@ -51,9 +51,11 @@ pub fn now_ms() -> u32 {
 }
 
 /// Parse task: what the interrupts need of the settings and the state.
-pub fn publish(limit_invert: u8, probe_invert: bool, limits_armed: bool) {
-    LIMIT_INVERT.store(limit_invert, Relaxed);
-    PROBE_INVERT.store(probe_invert, Relaxed);
+pub fn publish(s: &burin::settings::Settings, limits_armed: bool) {
+    INVERT.store(
+        inp::invert_mask(s.limit_invert, s.probe_invert, s.control_invert),
+        Relaxed,
+    );
     LIMITS_ARMED.store(limits_armed, Relaxed);
 }
 
@@ -64,11 +66,7 @@ pub fn report_pins() -> u16 {
 
 /// Active inputs now (one IDR read, inverts applied).
 pub fn active_now() -> u8 {
-    inp::active(
-        board::closed_now(),
-        LIMIT_INVERT.load(Relaxed),
-        PROBE_INVERT.load(Relaxed),
-    )
+    inp::active(board::closed_now(), INVERT.load(Relaxed))
 }
 
 /// The NVIC vector of each input bit (0-2 X/Y/Z limit, 3 probe, 4 feed
