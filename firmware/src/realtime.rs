@@ -32,6 +32,8 @@ pub struct Realtime {
     cycle_start: AtomicBool,
     /// Soft reset (0x18) requested.
     reset: AtomicBool,
+    /// The e-stop input is active (set by the board from the pin).
+    estop: AtomicBool,
     feed_override: AtomicU8,
     rapid_override: AtomicU8,
     override_epoch: AtomicU32,
@@ -65,6 +67,7 @@ impl Realtime {
             hold: AtomicBool::new(false),
             cycle_start: AtomicBool::new(false),
             reset: AtomicBool::new(false),
+            estop: AtomicBool::new(false),
             feed_override: AtomicU8::new(100),
             rapid_override: AtomicU8::new(100),
             override_epoch: AtomicU32::new(0),
@@ -91,6 +94,15 @@ impl Realtime {
     /// 0x18: stop at once and flush everything.
     pub fn request_reset(&self) {
         self.reset.store(true, Relaxed);
+    }
+    /// The e-stop input's level. While it is active the machine stays in
+    /// alarm (it latches there: pressing it raises the alarm, and `$X` and
+    /// homing are refused until it is released).
+    pub fn set_estop(&self, active: bool) {
+        self.estop.store(active, Relaxed);
+    }
+    pub fn estop(&self) -> bool {
+        self.estop.load(Relaxed)
     }
     pub fn hold_requested(&self) -> bool {
         self.hold.load(Relaxed)

@@ -217,6 +217,61 @@ fn reset_while_moving_alarms_then_banner_and_unlock() {
     assert_eq!(st.mpos, Some(vec![-5.0, 0.0, 0.0, 0.0]));
 }
 
+/// The e-stop pin: its interrupt latches the level in `Realtime` and
+/// raises a soft reset, as the board does. The machine stays in alarm,
+/// refusing motion, `$X` and `$H`, until the e-stop is released.
+#[test]
+fn estop_latches_the_alarm_until_released() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    assert_eq!(r.cmd("G1 X-100 F1000"), ["ok"]);
+    r.run(50);
+    r.dev.sim.rt.set_estop(true);
+    r.send(&[0x18]);
+    r.run(2);
+    let out = r.lines();
+    assert!(out.iter().any(|l| l == "ALARM:10"), "{out:?}");
+    assert!(
+        !out.iter().any(|l| l == "ALARM:3"),
+        "one alarm, the e-stop's: {out:?}"
+    );
+    let st = r.status();
+    assert_eq!(st.state, "Alarm");
+    let x = st.mpos.as_ref().map_or(0.0, |p| p[0]);
+    r.run(50);
+    assert_eq!(r.status().mpos.as_ref().map_or(1.0, |p| p[0]), x, "moved");
+    assert_eq!(r.cmd("$X"), ["error:9"]);
+    assert_eq!(r.cmd("$H"), ["error:9"]);
+    assert_eq!(r.cmd("G1 X-5 F1000"), ["error:9"]);
+    r.run(10);
+    assert_eq!(r.status().state, "Alarm");
+    // Released: unlock works and the machine moves again.
+    r.dev.sim.rt.set_estop(false);
+    r.run(2);
+    assert_eq!(r.cmd("$X"), ["[MSG:Caution: Unlocked]", "ok"]);
+    r.run(2);
+    assert_eq!(r.status().state, "Idle");
+    assert_eq!(r.cmd("G1 X-5 F1000"), ["ok"]);
+    let st = r.until_idle();
+    assert_eq!(st.mpos, Some(vec![-5.0, 0.0, 0.0, 0.0]));
+}
+
+/// Pressed at power-up there is no edge: the level alone latches the alarm.
+#[test]
+fn estop_pressed_at_power_up_alarms() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.dev.sim.rt.set_estop(true);
+    r.run(2);
+    let out = r.lines();
+    assert!(out.iter().any(|l| l == "ALARM:10"), "{out:?}");
+    assert_eq!(r.status().state, "Alarm");
+    assert_eq!(r.cmd("G0 X-1"), ["error:9"]);
+}
+
 #[test]
 fn reset_in_a_finished_hold_keeps_the_position_without_alarm() {
     let cfg = origin();

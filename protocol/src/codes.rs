@@ -133,6 +133,9 @@ pub mod alarm {
     pub const HOMING_FAIL_PULLOFF: u16 = 8;
     /// Homing: switch not found within the search distance.
     pub const HOMING_FAIL_APPROACH: u16 = 9;
+    /// E-stop pressed (grblHAL's number): the machine stays in alarm
+    /// until it is released.
+    pub const ESTOP: u16 = 10;
     /// Host link lost while running (burin): the machine was held.
     pub const LINK_LOST: u16 = 20;
 }

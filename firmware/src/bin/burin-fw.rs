@@ -269,6 +269,8 @@ mod app {
         let mut inputs = pins.inputs;
         board::enable_exti(&mut inputs, &mut syscfg, &mut exti);
         let debounce = Debounce::new(crate::inputs::SETTLE_MS, crate::inputs::active_now());
+        // An e-stop already pressed at power-up latches the alarm too.
+        crate::RT.set_estop(debounce.stable() & inp::ESTOP != 0);
 
         // The step timer stays stopped until `parse` queues segments.
         let driver = StepDriver::new(
@@ -537,6 +539,11 @@ mod app {
             crate::inputs::estop();
         }
         crate::inputs::limits_closed(change.pressed);
+        // The e-stop level for the machine's alarm latch, once settled (its
+        // edge interrupt set it already on the first edge).
+        if debounce.masked() & inp::ESTOP == 0 {
+            crate::RT.set_estop(debounce.stable() & inp::ESTOP != 0);
+        }
         if change.pressed | change.released != 0 {
             defmt::info!(
                 "inputs active: {=u8:07b} (bit 0 X limit .. 6 e-stop)",

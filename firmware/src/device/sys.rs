@@ -34,6 +34,7 @@ pub fn alarm_code(e: MachineError) -> u16 {
         MachineError::HardLimit { .. } => alarm::HARD_LIMIT,
         MachineError::SoftLimit { .. } => alarm::SOFT_LIMIT,
         MachineError::ResetDuringMotion => alarm::ABORT_CYCLE,
+        MachineError::EStop => alarm::ESTOP,
         MachineError::ProbeInitialState => alarm::PROBE_FAIL_INITIAL,
         MachineError::ProbeNoContact => alarm::PROBE_FAIL_CONTACT,
         MachineError::HomingPullOff { .. } => alarm::HOMING_FAIL_PULLOFF,
@@ -136,14 +137,21 @@ impl<S: crate::seams::Storage> Device<S> {
                 if held && queued && m.alarm().is_none() {
                     self.quiet_alarm = true;
                 }
-                if moving && m.alarm().is_none() {
+                // The e-stop's reset: its own alarm (the executor latches it).
+                let estop = m.rt().estop();
+                if (moving || estop) && m.alarm().is_none() {
                     // Reported now so that it comes before the banner.
-                    self.seen_alarm = Some(MachineError::ResetDuringMotion);
-                    report_alarm(MachineError::ResetDuringMotion, o);
+                    let e = if estop {
+                        MachineError::EStop
+                    } else {
+                        MachineError::ResetDuringMotion
+                    };
+                    self.seen_alarm = Some(e);
+                    report_alarm(e, o);
                 }
                 if !o.framed() {
                     let _ = reply::banner(o);
-                    if moving || m.alarm().is_some() {
+                    if moving || estop || m.alarm().is_some() {
                         let _ = reply::msg(o, "'$H'|'$X' to unlock");
                     }
                 }
@@ -225,6 +233,9 @@ impl<S: crate::seams::Storage> Device<S> {
                 let _ = o.write_str("$N0=\r\n$N1=\r\n");
             }
             SysCmd::Home(axes) => {
+                if m.rt().estop() {
+                    return Err(Code::Locked.code());
+                }
                 if !s.homing_enable {
                     return Err(Code::SettingDisabled.code());
                 }
@@ -235,6 +246,10 @@ impl<S: crate::seams::Storage> Device<S> {
                 self.sync = true;
             }
             SysCmd::Unlock => {
+                // The e-stop latch holds while it is pressed.
+                if m.rt().estop() {
+                    return Err(Code::Locked.code());
+                }
                 if m.alarm().is_some() {
                     let _ = self.cmds.push_back((0, Command::ClearAlarm));
                     let _ = reply::msg(o, "Caution: Unlocked");

@@ -49,6 +49,9 @@ pub enum MachineError {
     ProbeNoContact,
     /// 425: soft reset during motion; position is lost.
     ResetDuringMotion,
+    /// 426: the e-stop is pressed. Motion, homing and `$X` are refused
+    /// until it is released.
+    EStop,
 }
 
 impl MachineError {
@@ -74,6 +77,7 @@ impl MachineError {
             VerifyHome { .. } => 423,
             ProbeNoContact => 424,
             ResetDuringMotion => 425,
+            EStop => 426,
         }
     }
 
@@ -123,6 +127,7 @@ impl fmt::Display for MachineError {
             }
             ProbeNoContact => f.write_str("probe: no contact"),
             ResetDuringMotion => f.write_str("reset during motion; position lost"),
+            EStop => f.write_str("e-stop pressed; release it, then $X"),
         }
     }
 }

@@ -285,6 +285,7 @@ impl<const N: usize> Machine<N> {
         obs: &mut dyn FnMut(Note),
     ) {
         self.switches = sw;
+        let estop = rt.estop();
         if rt.take_reset() {
             let moving = !self.motion_idle(rt, sink);
             self.flush(rt);
@@ -292,12 +293,29 @@ impl<const N: usize> Machine<N> {
             rt.clear_hold();
             if moving {
                 self.position_lost = true;
+            }
+            if moving && !estop {
                 self.alarm = Some(MachineError::ResetDuringMotion);
                 obs(Note::Error {
                     line: 0,
                     error: MachineError::ResetDuringMotion,
                 });
             }
+        }
+        // A pressed e-stop latches the alarm, also when it was already
+        // pressed at power-up (no edge then).
+        if estop && self.alarm != Some(MachineError::EStop) {
+            if !self.motion_idle(rt, sink) {
+                self.position_lost = true;
+            }
+            self.flush(rt);
+            self.pending = Pending::None;
+            rt.clear_hold();
+            self.alarm = Some(MachineError::EStop);
+            obs(Note::Error {
+                line: 0,
+                error: MachineError::EStop,
+            });
         }
         let epoch = rt.override_epoch();
         if epoch != self.override_epoch {

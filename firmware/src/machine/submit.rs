@@ -22,6 +22,9 @@ impl<const N: usize> Machine<N> {
         if self.alarm.is_some() && !allowed_in_alarm {
             return Err(MachineError::InAlarm);
         }
+        if rt.estop() && matches!(cmd, Command::Home { .. } | Command::ClearAlarm) {
+            return Err(MachineError::EStop);
+        }
         let tol = self.planner.settings.arc_tolerance;
         match cmd {
             Command::Rapid { end } => {

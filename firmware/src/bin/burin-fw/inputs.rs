@@ -141,6 +141,7 @@ pub fn on_estop() -> bool {
 /// Stop the pulses and the spindle now, then let the session do the rest
 /// of a soft reset (exactly as a 0x18 from the host).
 pub fn estop() {
+    crate::RT.set_estop(true);
     crate::RT.halt_stepper();
     board::kill_aux();
     crate::FLAGS.raise(protocol::Rt::SoftReset);
