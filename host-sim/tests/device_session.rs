@@ -258,6 +258,29 @@ fn estop_latches_the_alarm_until_released() {
     assert_eq!(st.mpos, Some(vec![-5.0, 0.0, 0.0, 0.0]));
 }
 
+/// A limit switch closing at rest (the board's limit interrupt, `$21=1`)
+/// raises alarm 1 as GRBL does; nothing moves, `$X` unlocks.
+#[test]
+fn hard_limit_at_rest_alarms() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    assert_eq!(r.cmd("G1 X-5 F1000"), ["ok"]);
+    let before = r.until_idle().mpos;
+    r.dev.sim.rt.hard_limit(0b001);
+    r.run(2);
+    let out = r.lines();
+    assert!(out.iter().any(|l| l == "ALARM:1"), "{out:?}");
+    let st = r.status();
+    assert_eq!(st.state, "Alarm");
+    assert_eq!(st.mpos, before);
+    assert_eq!(r.cmd("G1 X-6"), ["error:9"]);
+    assert_eq!(r.cmd("$X"), ["[MSG:Caution: Unlocked]", "ok"]);
+    assert_eq!(r.cmd("G1 X-6 F1000"), ["ok"]);
+    assert_eq!(r.until_idle().mpos, Some(vec![-6.0, 0.0, 0.0, 0.0]));
+}
+
 /// Pressed at power-up there is no edge: the level alone latches the alarm.
 #[test]
 fn estop_pressed_at_power_up_alarms() {

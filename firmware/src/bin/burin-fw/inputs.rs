@@ -116,11 +116,13 @@ pub fn on_limit(irq: Interrupt, mine: u8) -> bool {
 }
 
 /// A hard-limit trip for the active limits in `act`, if hard limits are
-/// armed and the stepper is moving (a switch touched at rest is not a
-/// crash, and the stepper ignores it too).
+/// armed. As in GRBL, also at rest: a switch that closes while nothing
+/// moves means the machine was pushed, or the wiring picks up noise, and
+/// either wants the operator's attention (alarm 1, position flagged lost
+/// as after any hard limit).
 pub fn limits_closed(act: u8) -> bool {
     let act = act & inp::LIMITS;
-    let trip = act != 0 && LIMITS_ARMED.load(Relaxed) && !crate::RT.stepper_idle();
+    let trip = act != 0 && LIMITS_ARMED.load(Relaxed);
     if trip {
         crate::RT.hard_limit(act);
     }
