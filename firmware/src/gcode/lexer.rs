@@ -158,16 +158,11 @@ impl<'a> Lexer<'a> {
             if self.done {
                 return Ok(None);
             }
-            let line = self.cur.line;
-            let mut i = self.cur.pos;
-            while line.get(i).is_some_and(|&b| blank(b)) {
-                i += 1;
-            }
-            self.cur.pos = i;
-            let Some(&b) = line.get(i) else {
+            let Some(b) = self.cur.peek() else {
                 self.done = true;
                 return Ok(None);
             };
+            let (line, i) = (self.cur.line, self.cur.pos);
             if b.is_ascii_alphabetic() && !self.percent {
                 let l = b.to_ascii_uppercase();
                 let fast = if l != b'N' && l != b'O' {

@@ -117,16 +117,20 @@ pub(crate) struct Block<'a> {
 }
 
 /// Letters that carry values: the axes and F I J K L P Q R S T.
-const VALUE_LETTERS: u32 = {
-    let mut m = 0u32;
-    let l = b"XYZAFIJKLPQRST";
-    let mut i = 0;
-    while i < l.len() {
-        m |= 1 << (l[i] - b'A');
-        i += 1;
-    }
-    m
-};
+const VALUE_LETTERS: u32 = bit(b'X')
+    | bit(b'Y')
+    | bit(b'Z')
+    | bit(b'A')
+    | bit(b'F')
+    | bit(b'I')
+    | bit(b'J')
+    | bit(b'K')
+    | bit(b'L')
+    | bit(b'P')
+    | bit(b'Q')
+    | bit(b'R')
+    | bit(b'S')
+    | bit(b'T');
 
 pub(crate) const fn bit(letter: u8) -> u32 {
     1u32 << (letter.wrapping_sub(b'A') % 26)

@@ -3,8 +3,9 @@
 //! A line either succeeds completely or leaves no trace: its commands are
 //! collected in a small buffer and handed out only when the whole line
 //! interpreted cleanly; on an error the modal state is restored from a
-//! snapshot (it is `Copy` and a few hundred bytes) and the line's parameter
-//! writes are undone from the undo log. This is what lets check mode and the
+//! snapshot (it is `Copy` and under a hundred bytes), the offset tables
+//! from the copy the line made when it first wrote them (if it did), and
+//! the line's parameter writes are undone from the undo log. This is what lets check mode and the
 //! GRBL `error:N` reply continue with the next line safely.
 //!
 //! Positions: the interpreter runs ahead of the machine, so after homing and

@@ -308,14 +308,8 @@ impl<const N: usize> Machine<N> {
             if !self.motion_idle(rt, sink) {
                 self.position_lost = true;
             }
-            self.flush(rt);
-            self.pending = Pending::None;
             rt.clear_hold();
-            self.alarm = Some(MachineError::EStop);
-            obs(Note::Error {
-                line: 0,
-                error: MachineError::EStop,
-            });
+            self.raise_alarm(rt, MachineError::EStop, 0, obs);
         }
         let epoch = rt.override_epoch();
         if epoch != self.override_epoch {
