@@ -76,6 +76,24 @@ impl<'r> Rig<'r> {
         }
         panic!("never idle");
     }
+    /// In alarm, and X stays where it is for `rounds` more rounds.
+    fn alarm_holds(&mut self, rounds: usize) {
+        let st = self.status();
+        assert_eq!(st.state, "Alarm");
+        let x = st.mpos.as_ref().map_or(0.0, |p| p[0]);
+        self.run(rounds);
+        let after = self.status().mpos.as_ref().map_or(1.0, |p| p[0]);
+        assert_eq!(after, x, "moved in alarm");
+    }
+    /// `$X` unlocks, the machine is idle, and a move to X`x` runs to the end.
+    fn unlock_and_move_to(&mut self, x: f32) {
+        assert_eq!(self.cmd("$X"), ["[MSG:Caution: Unlocked]", "ok"]);
+        self.run(2);
+        assert_eq!(self.status().state, "Idle");
+        assert_eq!(self.cmd(&format!("G1 X{x} F1000")), ["ok"]);
+        let st = self.until_idle();
+        assert_eq!(st.mpos, Some(vec![x, 0.0, 0.0, 0.0]));
+    }
 }
 
 #[test]
@@ -199,22 +217,9 @@ fn reset_while_moving_alarms_then_banner_and_unlock() {
         alarm.is_some() && banner.is_some() && alarm < banner,
         "{out:?}"
     );
-    let st = r.status();
-    assert_eq!(st.state, "Alarm");
-    let x = st.mpos.as_ref().map_or(0.0, |p| p[0]);
-    r.run(50);
-    assert_eq!(
-        r.status().mpos.as_ref().map_or(1.0, |p| p[0]),
-        x,
-        "moved after reset"
-    );
+    r.alarm_holds(50);
     assert_eq!(r.cmd("G1 X-5"), ["error:9"]);
-    assert_eq!(r.cmd("$X"), ["[MSG:Caution: Unlocked]", "ok"]);
-    r.run(2);
-    assert_eq!(r.status().state, "Idle");
-    assert_eq!(r.cmd("G1 X-5 F1000"), ["ok"]);
-    let st = r.until_idle();
-    assert_eq!(st.mpos, Some(vec![-5.0, 0.0, 0.0, 0.0]));
+    r.unlock_and_move_to(-5.0);
 }
 
 /// The e-stop pin: its interrupt latches the level in `Realtime` and
@@ -237,11 +242,7 @@ fn estop_latches_the_alarm_until_released() {
         !out.iter().any(|l| l == "ALARM:3"),
         "one alarm, the e-stop's: {out:?}"
     );
-    let st = r.status();
-    assert_eq!(st.state, "Alarm");
-    let x = st.mpos.as_ref().map_or(0.0, |p| p[0]);
-    r.run(50);
-    assert_eq!(r.status().mpos.as_ref().map_or(1.0, |p| p[0]), x, "moved");
+    r.alarm_holds(50);
     assert_eq!(r.cmd("$X"), ["error:9"]);
     assert_eq!(r.cmd("$H"), ["error:9"]);
     assert_eq!(r.cmd("G1 X-5 F1000"), ["error:9"]);
@@ -250,12 +251,7 @@ fn estop_latches_the_alarm_until_released() {
     // Released: unlock works and the machine moves again.
     r.dev.sim.rt.set_estop(false);
     r.run(2);
-    assert_eq!(r.cmd("$X"), ["[MSG:Caution: Unlocked]", "ok"]);
-    r.run(2);
-    assert_eq!(r.status().state, "Idle");
-    assert_eq!(r.cmd("G1 X-5 F1000"), ["ok"]);
-    let st = r.until_idle();
-    assert_eq!(st.mpos, Some(vec![-5.0, 0.0, 0.0, 0.0]));
+    r.unlock_and_move_to(-5.0);
 }
 
 /// A limit switch closing at rest (the board's limit interrupt, `$21=1`)
@@ -276,9 +272,7 @@ fn hard_limit_at_rest_alarms() {
     assert_eq!(st.state, "Alarm");
     assert_eq!(st.mpos, before);
     assert_eq!(r.cmd("G1 X-6"), ["error:9"]);
-    assert_eq!(r.cmd("$X"), ["[MSG:Caution: Unlocked]", "ok"]);
-    assert_eq!(r.cmd("G1 X-6 F1000"), ["ok"]);
-    assert_eq!(r.until_idle().mpos, Some(vec![-6.0, 0.0, 0.0, 0.0]));
+    r.unlock_and_move_to(-6.0);
 }
 
 /// Pressed at power-up there is no edge: the level alone latches the alarm.
