@@ -14,6 +14,7 @@
 
 pub mod arc;
 pub mod command;
+pub mod controller;
 pub mod device;
 pub mod gcode;
 pub mod inputs;

@@ -53,6 +53,15 @@ pub struct Realtime {
     /// A new position for the stepper (after homing), taken at its next segment.
     new_position: [AtomicI32; AXES],
     new_position_set: AtomicBool,
+    /// Path speed of the segment the stepper runs (f32 bits, mm/min) and
+    /// its source line: the status report's `FS:` and `Ln:` (published once
+    /// per segment, not per step).
+    running_speed: AtomicU32,
+    running_line: AtomicU32,
+    /// Hard limits apply now (`$21` on, not homing, not in alarm): decided
+    /// by the controller each pass, read by the stepper at every event and
+    /// by the board's limit interrupts.
+    limits_armed: AtomicBool,
 }
 
 impl Default for Realtime {
@@ -80,6 +89,9 @@ impl Realtime {
             stepper_idle: AtomicBool::new(true),
             new_position: [const { AtomicI32::new(0) }; AXES],
             new_position_set: AtomicBool::new(false),
+            running_speed: AtomicU32::new(0),
+            running_line: AtomicU32::new(0),
+            limits_armed: AtomicBool::new(false),
         }
     }
 
@@ -232,6 +244,26 @@ impl Realtime {
         }
         self.new_position_set.store(true, Relaxed);
     }
+    /// Speed (mm/min) and source line of the running segment; (0, 0)
+    /// while the stepper is idle.
+    pub fn running(&self) -> (f32, u32) {
+        (
+            f32::from_bits(self.running_speed.load(Relaxed)),
+            self.running_line.load(Relaxed),
+        )
+    }
+    pub(crate) fn set_running(&self, speed_mm_min: f32, line: u32) {
+        self.running_speed.store(speed_mm_min.to_bits(), Relaxed);
+        self.running_line.store(line, Relaxed);
+    }
+    /// Whether a closed limit switch trips now (see the field).
+    pub fn limits_armed(&self) -> bool {
+        self.limits_armed.load(Relaxed)
+    }
+    pub fn set_limits_armed(&self, armed: bool) {
+        self.limits_armed.store(armed, Relaxed);
+    }
+
     pub(crate) fn take_new_position(&self) -> Option<[i32; AXES]> {
         if self.new_position_set.swap(false, Relaxed) {
             Some(core::array::from_fn(|i| self.new_position[i].load(Relaxed)))

@@ -28,6 +28,7 @@ use heapless::spsc::Queue;
 use crate::config::MachineConfig;
 use crate::record::{AxisInfo, MoveKind, PinEvent, Recorder, RunError, RunInfo, Summary};
 pub use job::run_job;
+pub use task::DeviceTask;
 pub use world::World;
 
 /// Planner ring size (the F411 build uses the same).
@@ -50,7 +51,7 @@ pub struct Sim<'r> {
     cfg: MachineConfig,
     pub rt: Realtime,
     pub machine: Machine<PLANNER_BLOCKS>,
-    queue: Queue<Segment, SEGMENT_SLOTS>,
+    pub queue: Queue<Segment, SEGMENT_SLOTS>,
     pub stepper: Stepper,
     pub world: World,
     now: u64,
@@ -61,6 +62,12 @@ pub struct Sim<'r> {
     rec: &'r mut dyn Recorder,
     /// Resume automatically after M0/M1 (a batch run has no operator).
     pub auto_resume: bool,
+    /// The parse/plan task is `burin::controller` (a virtual board, see
+    /// `device_sim`): [`Sim::run_until`] hands control back whenever the
+    /// task must run, and only a kick starts the step timer.
+    device_mode: bool,
+    /// Device mode: the task is due now.
+    task_wanted: bool,
     stats: Stats,
 }
 
@@ -147,6 +154,8 @@ impl<'r> Sim<'r> {
             task: host::Task::new(&cfg.host, cfg.tick_hz),
             rec,
             auto_resume: true,
+            device_mode: false,
+            task_wanted: false,
             stats,
         }
     }
@@ -267,7 +276,9 @@ impl<'r> Sim<'r> {
     /// Run events up to and including `until`; afterwards the clock reads
     /// `until` (or later, if it already did).
     pub fn run_until(&mut self, until: u64) {
-        self.plan_task();
+        if !self.device_mode {
+            self.plan_task();
+        }
         loop {
             while let Some(&(t, i)) = self.inputs.front() {
                 if t > self.now {
@@ -277,8 +288,12 @@ impl<'r> Sim<'r> {
                 self.apply_input(i);
                 self.plan_task();
             }
+            if self.device_mode && self.task_wanted {
+                return;
+            }
             // The task starts a stopped timer when it finds segments queued.
-            if self.next_step.is_none()
+            if !self.device_mode
+                && self.next_step.is_none()
                 && !self.queue.is_empty()
                 && self.now >= self.task.busy_until
             {
@@ -289,6 +304,10 @@ impl<'r> Sim<'r> {
             let next = earliest(earliest(self.next_step, t_in), t_task);
             let next = match next {
                 Some(n) => n,
+                None if self.device_mode => {
+                    self.advance_clock(until);
+                    return;
+                }
                 None => {
                     if self.auto_resume
                         && self.machine.prep.hold() == burin::stepper::prep::Hold::Held

@@ -177,8 +177,8 @@ pub fn run(cfg: &MachineConfig, speed: f64, announce: impl FnOnce(&str)) -> io::
         }
         if banner_due && connected_at.elapsed() > Duration::from_millis(50) {
             banner_due = false;
-            if !dev.link.flags().is_framed() && dev.link.mode() == burin::link::LinkMode::Text {
-                dev.device.hello(&mut dev.tx);
+            if !dev.framed() && dev.link_mode() == burin::link::LinkMode::Text {
+                dev.hello();
             }
         }
         // Virtual time follows the wall clock; while idle it waits.

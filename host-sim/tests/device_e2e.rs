@@ -196,7 +196,7 @@ fn stream_text(cfg: &MachineConfig, job: &str, pacing: Pacing) -> ([i32; 4], usi
     panic!(
         "text stream did not finish: sent {sent}, ok {oks}, {last_status}; idle {} drained {} ready {} state {:?} now {} log {:?}",
         dev.sim.idle(),
-        dev.device.drained(),
+        dev.controller.session.drained(),
         dev.sim.machine.ready(),
         dev.sim.machine.state(&dev.sim.rt),
         dev.sim.now(),

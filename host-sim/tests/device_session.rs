@@ -330,19 +330,19 @@ fn realtime_bytes_act_while_the_line_buffer_is_full() {
     let mut rest = job.as_bytes();
     let mut full_rounds = 0;
     while !rest.is_empty() && full_rounds < 20 {
-        let room = 120usize.saturating_sub(r.dev.link.rx_pending());
+        let room = 120usize.saturating_sub(r.dev.rx_pending());
         let n = rest.iter().take(room).count();
         r.send(&rest[..n]);
         rest = &rest[n..];
         r.run(1);
-        full_rounds = if r.dev.link.rx_pending() >= 100 {
+        full_rounds = if r.dev.rx_pending() >= 100 {
             full_rounds + 1
         } else {
             0
         };
     }
     assert!(
-        !rest.is_empty() && r.dev.link.rx_pending() >= 100,
+        !rest.is_empty() && r.dev.rx_pending() >= 100,
         "the line buffer never filled"
     );
     // Status, hold and overrides still get through at once.

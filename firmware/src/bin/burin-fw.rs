@@ -92,16 +92,17 @@ static FLAGS: burin::link::RtFlags = burin::link::RtFlags::new();
 mod app {
     use crate::boards::board;
     use crate::outputs::Io;
-    use crate::session::{AppLink, AppMotion, TxRing, PLANNER_BLOCKS, SEGMENT_SLOTS, TX_RING};
+    use crate::session::{TxRing, PLANNER_BLOCKS, SEGMENT_SLOTS, TX_RING};
     use crate::step::{StepDriver, Tim5, STEPPING};
     #[cfg(feature = "board-qemu")]
     use crate::usart::UsartLink as Link;
     #[cfg(not(feature = "board-qemu"))]
     use crate::usb::UsbLink as Link;
+    use burin::controller::{Controller, Inputs};
     use burin::device::{Device, Identity};
     use burin::inputs::{self as inp, Debounce};
-    use burin::link::{LineAssembler, RxToken, RX_RING};
-    use burin::machine::{Machine, State};
+    use burin::link::{RxToken, RX_RING};
+    use burin::machine::Machine;
     use burin::persist::Persist;
     use burin::settings::Settings;
     use burin::stepper::{Segment, Stepper};
@@ -155,7 +156,7 @@ mod app {
         tx_bytes: Producer<'static, u8>,
         segments: Producer<'static, Segment>,
         machine: Machine<PLANNER_BLOCKS>,
-        device: Device<crate::storage::Store>,
+        controller: Controller<crate::storage::Store>,
         led: PC13<Output>,
         debounce: Debounce,
         io: Io,
@@ -257,13 +258,9 @@ mod app {
         steppers.set_invert(cfg.step_invert, cfg.dir_invert, settings.enable_invert);
         // Outputs: spindle, coolant, and the enable pin for the idle timer
         // (same `$4` polarity as the step port, fixed until reset like it).
-        let io = Io::new(
-            pins.aux,
-            board::enable_pin(settings.enable_invert),
-            &settings,
-        );
+        let io = Io::new(pins.aux, board::enable_pin(settings.enable_invert));
         // Inputs: EXTI on both edges; the levels at power-up are settled.
-        crate::inputs::publish(&settings, false);
+        crate::inputs::publish(&settings);
         let mut syscfg = dp.SYSCFG.constrain(&mut rcc);
         let mut exti = dp.EXTI;
         let mut inputs = pins.inputs;
@@ -326,13 +323,17 @@ mod app {
                 tx_bytes,
                 segments,
                 machine,
-                device: Device::with_storage(
-                    Identity {
-                        board: board::NAME,
-                        caps: 0,
-                    },
-                    persist,
-                    Some(&boot),
+                controller: Controller::new(
+                    Device::with_storage(
+                        Identity {
+                            board: board::NAME,
+                            caps: 0,
+                        },
+                        persist,
+                        Some(&boot),
+                    ),
+                    &settings,
+                    crate::outputs::WAKE_MS,
                 ),
                 led: pins.led,
                 debounce,
@@ -426,11 +427,10 @@ mod app {
         }
     }
 
-    /// Parser -> interpreter -> planner -> segment preparer, one pass per
-    /// wake-up. The session runs only with room for its replies in the TX
-    /// ring (otherwise the link is not read: backpressure, no lost `ok`).
-    #[task(priority = 1, local = [wake, rx_tokens, tx_bytes, segments, machine, device, io,
-        asm: LineAssembler = LineAssembler::new()])]
+    /// Parser -> interpreter -> planner -> segment preparer, one pass of
+    /// `burin::controller` per wake-up; this task only carries its inputs
+    /// in and its pin levels out.
+    #[task(priority = 1, local = [wake, rx_tokens, tx_bytes, segments, machine, controller, io])]
     async fn parse(cx: parse::Context) {
         let parse::LocalResources {
             wake,
@@ -438,60 +438,38 @@ mod app {
             tx_bytes,
             segments,
             machine,
-            device,
+            controller,
             io,
-            asm,
             ..
         } = cx.local;
         let mut tx = TxRing {
             ring: tx_bytes,
             dropped: 0,
         };
-        device.hello(&mut tx);
-        let mut resets = device.stats.resets;
+        controller.hello(&mut tx);
         loop {
-            let mut link = AppLink {
-                asm: &mut *asm,
-                rx: &mut *rx_tokens,
-                flags: &crate::FLAGS,
-            };
-            let mut motion = AppMotion {
-                machine: &mut *machine,
-                segments: &mut *segments,
-                rt: &crate::RT,
-                outputs: &mut io.state,
-            };
             #[cfg(not(feature = "board-qemu"))]
-            if crate::usb::PORT_CLOSED.swap(false, Ordering::AcqRel) {
-                device.port_reset(&mut link, &motion);
-            }
-            // Session, executor, session again: it reacts to what the
-            // executor did (sync points, alarms) in the same wake-up.
-            for _ in 0..2 {
-                if tx.has_room() {
-                    device.poll(&mut link, &mut motion, &mut tx);
-                }
-                // A soft reset (0x18, e-stop) stops spindle and coolant.
-                if device.stats.resets != resets {
-                    resets = device.stats.resets;
-                    motion.outputs.all_off();
-                }
-                motion.poll(board::switches());
-            }
-            let queued = motion.queued();
-            let stepping = STEPPING.load(Ordering::Acquire);
-            let state = motion.machine.state(&crate::RT);
-            let settings = *motion.machine.settings();
-            // Hard limits for the limit interrupts: off while homing (it
-            // seeks the switches) and in alarm. Published before TIM5 is
-            // pended below, so no homing step runs armed.
-            let armed = settings.hard_limits && !matches!(state, State::Homing | State::Alarm);
-            crate::inputs::publish(&settings, armed);
-            let busy = queued || stepping || !crate::RT.stepper_idle();
-            io.update(crate::inputs::now_ms(), busy, state, &settings);
-            // Segments waiting, drivers awake and the timer stopped: TIM5
-            // starts itself.
-            if queued && !stepping && io.may_step() {
+            let port_closed = crate::usb::PORT_CLOSED.swap(false, Ordering::AcqRel);
+            #[cfg(feature = "board-qemu")]
+            let port_closed = false;
+            let input = Inputs {
+                now_ms: crate::inputs::now_ms(),
+                switches: board::switches(),
+                stepping: STEPPING.load(Ordering::Acquire),
+                pins: crate::inputs::report_pins(),
+                port_closed,
+            };
+            let io_rings = burin::controller::Io {
+                rt: &crate::RT,
+                flags: &crate::FLAGS,
+                rx: &mut *rx_tokens,
+                segments: &mut *segments,
+                tx: &mut tx,
+            };
+            let pass = controller.pass(&mut *machine, io_rings, input, &mut |_| {});
+            crate::inputs::publish(machine.settings());
+            io.write(&pass.pins);
+            if pass.kick {
                 rtic::pend(pac::Interrupt::TIM5);
             }
             // Replies out (an idle port raises no interrupt by itself).

@@ -138,13 +138,17 @@ impl<S: Storage> Device<S> {
     /// cycle start); the next client is told so. A text session keeps
     /// running, as GRBL does when its sender goes away: those senders do
     /// not expect a hold they did not ask for.
+    ///
+    /// The receive side (the USB interrupt, host-sim's port) has already
+    /// reset its splitter; its marker resets the assembler in order.
     pub fn port_reset(&mut self, link: &mut impl LinkPort, m: &impl MotionPort) {
         let busy = !m.motion_idle() || !self.cmds.is_empty() || !self.slots.is_empty();
-        if link.framed() && busy {
+        // The splitter is back in text mode already; the assembler switches
+        // only at the marker, so it still tells what the old client spoke.
+        if (link.framed() || link.events_framed()) && busy {
             m.rt().feed_hold();
             self.link_lost = LinkLost::Closed;
         }
-        link.reset();
     }
 
     /// Free framed line slots (the credits).

@@ -16,11 +16,18 @@ use protocol::DeviceMsg;
 /// take every byte: the device writes whole replies only.
 pub trait Tx {
     fn send(&mut self, bytes: &[u8]);
+    /// Bytes it can take now (a ring's free space; unbounded sinks say so).
+    fn room(&self) -> usize {
+        usize::MAX
+    }
 }
 
 impl<T: Tx + ?Sized> Tx for &mut T {
     fn send(&mut self, bytes: &[u8]) {
         (**self).send(bytes)
+    }
+    fn room(&self) -> usize {
+        (**self).room()
     }
 }
 

@@ -2,14 +2,14 @@
 //! core, as traits so the RTIC app and host-sim plug in their own halves.
 
 use crate::command::{Command, Pos};
-use crate::link::{Link, LinkEvent, RtSet};
+use crate::link::{LinkEvent, RtSet};
 use crate::machine::{self, MachineError};
 use crate::realtime::Realtime;
 use crate::settings::table::SettingError;
 use crate::settings::Settings;
 
-/// The link decoder as the device sees it ([`Link`] for host-sim; the RTIC
-/// app wraps its `LineAssembler` and ring consumer the same way).
+/// The link decoder as the device sees it (implemented once, by the
+/// controller, over the assembler and the receive ring).
 pub trait LinkPort {
     fn poll(&mut self) -> Option<LinkEvent<'_>>;
     fn take_realtime(&mut self) -> RtSet;
@@ -19,36 +19,14 @@ pub trait LinkPort {
     /// ahead of the events): replies to realtime commands and unprompted
     /// reports (alarms) use it. Replies to an event use the event's mode.
     fn framed(&self) -> bool;
-    /// The port was closed or reopened: back to text mode.
-    fn reset(&mut self);
     /// Mode of the next event (the assembler's): framed events are always
     /// taken (the session refuses lines without a slot), text lines only
     /// with room for their commands.
     fn events_framed(&self) -> bool;
 }
 
-impl LinkPort for Link {
-    fn poll(&mut self) -> Option<LinkEvent<'_>> {
-        Link::poll(self)
-    }
-    fn take_realtime(&mut self) -> RtSet {
-        Link::take_realtime(self)
-    }
-    fn rx_pending(&self) -> usize {
-        Link::rx_pending(self)
-    }
-    fn framed(&self) -> bool {
-        self.flags().is_framed()
-    }
-    fn reset(&mut self) {
-        Link::reset(self)
-    }
-    fn events_framed(&self) -> bool {
-        self.mode() == crate::link::LinkMode::Framed
-    }
-}
-
-/// The motion core as the device sees it.
+/// The motion core as the device sees it (implemented once, by the
+/// controller).
 pub trait MotionPort {
     fn rt(&self) -> &Realtime;
     /// The executor takes a command now.

@@ -77,6 +77,11 @@ pub trait TokenSink {
 /// Where the assembler takes tokens from.
 pub trait TokenSource {
     fn pop(&mut self) -> Option<RxToken>;
+    /// Tokens waiting.
+    fn len(&self) -> usize;
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
 }
 
 impl TokenSink for spsc::Producer<'_, RxToken> {
@@ -92,6 +97,9 @@ impl TokenSource for spsc::Consumer<'_, RxToken> {
     fn pop(&mut self) -> Option<RxToken> {
         self.dequeue()
     }
+    fn len(&self) -> usize {
+        spsc::Consumer::len(self)
+    }
 }
 
 impl<const N: usize> TokenSink for Deque<RxToken, N> {
@@ -106,6 +114,9 @@ impl<const N: usize> TokenSink for Deque<RxToken, N> {
 impl<const N: usize> TokenSource for Deque<RxToken, N> {
     fn pop(&mut self) -> Option<RxToken> {
         self.pop_front()
+    }
+    fn len(&self) -> usize {
+        Deque::len(self)
     }
 }
 

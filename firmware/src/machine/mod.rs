@@ -373,6 +373,16 @@ impl<const N: usize> Machine<N> {
         {
             self.run_pending(rt, obs);
         }
+        // Before any new segment is queued: a homing move, which seeks the
+        // switches, never runs armed.
+        rt.set_limits_armed(self.limits_armed(rt));
         self.prep.fill(&mut self.planner, rt, sink);
+    }
+
+    /// Hard limits apply (`$21`), except while homing (it seeks the
+    /// switches) and in alarm (nothing moves; a switch still closed after a
+    /// trip must not raise the alarm again and again).
+    pub fn limits_armed(&self, rt: &Realtime) -> bool {
+        self.planner.settings.hard_limits && !matches!(self.state(rt), State::Homing | State::Alarm)
     }
 }

@@ -97,7 +97,6 @@ pub struct StepConfig {
     pub dir_invert: u8,
     pub limit_invert: u8,
     pub probe_invert: bool,
-    pub hard_limits: bool,
 }
 
 impl StepConfig {
@@ -114,7 +113,6 @@ impl StepConfig {
             dir_invert: s.dir_invert,
             limit_invert: s.limit_invert,
             probe_invert: s.probe_invert,
-            hard_limits: s.hard_limits,
         }
     }
 }
@@ -203,7 +201,10 @@ impl Stepper {
         }
         self.last_end = true;
         self.left = 0;
-        self.run.speed_mm_min = 0.0;
+        if self.run.speed_mm_min != 0.0 {
+            self.run.speed_mm_min = 0.0;
+            rt.set_running(0.0, 0);
+        }
         rt.set_stepper_idle(true);
         self.event(0, 0)
     }
@@ -239,6 +240,7 @@ impl Stepper {
             line: s.line,
             moving: s.steps.iter().any(|&n| n != 0),
         };
+        rt.set_running(s.speed_mm_min, s.line);
         if s.new_block {
             self.acc = [self.run.threshold / 2; AXES];
             if s.dir_mask != self.dir {
@@ -286,7 +288,7 @@ impl Stepper {
             if watch.limits & lim != 0 {
                 return self.trip(rt, Trip::Homing, watch.limits & lim, generation);
             }
-            if self.cfg.hard_limits && !watch.homing {
+            if rt.limits_armed() && !watch.homing {
                 return self.trip(rt, Trip::HardLimit, lim, generation);
             }
         }

@@ -1,26 +1,31 @@
-//! The virtual device: the firmware's link decoder, device session and motion
-//! core around the discrete-event engine. Bytes in, bytes out, virtual time
-//! advanced by the caller, so the same device serves the pty
-//! (`cargo xtask sim --pty`, paced to the wall clock) and the deterministic
-//! end-to-end tests (driven tick by tick over an in-memory pipe).
+//! The virtual board: the firmware's receive splitter, controller
+//! (`burin::controller`: device session, executor, outputs) and stepper
+//! around the discrete-event engine. Bytes in, bytes out, virtual time
+//! advanced by the caller, so the same device serves the pty (`cargo xtask
+//! sim --pty`, paced to the wall clock), offline runs (`cargo xtask sim
+//! FILE`) and the deterministic end-to-end tests (driven tick by tick over
+//! an in-memory pipe).
+//!
+//! This shell only moves bytes, pin levels and time, as the RTIC app
+//! does: [`VirtualDevice::receive`] is the USB interrupt (splitter into the
+//! token ring, realtime bytes flagged at once), the engine's task slot is
+//! the parse task (one [`Controller::pass`] each), and the pass's [`Pins`]
+//! are recorded where the board writes registers.
 //!
 //! Settings and offsets persist in a [`SimFlash`]: a RAM copy of the
 //! boards' two 16 KiB sectors under the same record log as the boards. A
 //! fresh device starts erased; [`VirtualDevice::flash`] hands the contents
 //! to [`VirtualDevice::with_flash`] to "reboot" with what was saved.
 
-use burin::command::{Command, Pos};
-use burin::device::{Device, Identity, MotionPort, Tx};
-use burin::link::Link;
-use burin::machine::{self, Machine, MachineError};
+use burin::controller::{Controller, Pins};
+use burin::device::{Device, Identity, Tx};
+use burin::link::{LinkMode, RtFlags, RxSplitter, RxToken, TokenSink, RX_RING, SNIFF};
 use burin::persist::{FlashMap, Persist, RamFlash};
-use burin::realtime::Realtime;
-use burin::settings::table::SettingError;
-use burin::settings::Settings;
 use burin::stepper::Stepper;
+use heapless::Deque;
 
 use crate::config::MachineConfig;
-use crate::engine::{Sim, PLANNER_BLOCKS};
+use crate::engine::{DeviceTask, Sim};
 use crate::record::Recorder;
 
 /// Board name the virtual device reports in `$I` and the handshake.
@@ -29,72 +34,9 @@ pub const BOARD: &str = "host-sim";
 /// The virtual board's settings flash: two 16 KiB sectors, as on the F411.
 pub type SimFlash = RamFlash<{ 2 * 16384 }, 16384>;
 
-/// The engine seen through the device's [`MotionPort`] seam.
-struct SimPort<'a, 'r> {
-    sim: &'a mut Sim<'r>,
-    log: Option<&'a mut Vec<u32>>,
-}
-
-impl MotionPort for SimPort<'_, '_> {
-    fn rt(&self) -> &Realtime {
-        &self.sim.rt
-    }
-    fn ready(&self) -> bool {
-        self.sim.machine.ready()
-    }
-    fn submit(&mut self, cmd: &Command, line: u32) -> Result<(), MachineError> {
-        let Sim { machine, rt, .. } = &mut *self.sim;
-        machine.submit(rt, cmd, line, &mut |_| {})?;
-        if let Some(log) = self.log.as_deref_mut() {
-            log.push(line);
-        }
-        Ok(())
-    }
-    fn state(&self) -> machine::State {
-        self.sim.machine.state(&self.sim.rt)
-    }
-    fn alarm(&self) -> Option<MachineError> {
-        self.sim.machine.alarm()
-    }
-    fn motion_idle(&self) -> bool {
-        self.sim.idle()
-    }
-    fn commanded_position(&self) -> Pos {
-        self.sim.machine.commanded_position()
-    }
-    fn probe_result(&self) -> Option<(Pos, bool)> {
-        self.sim.machine.probe_result
-    }
-    fn feed_and_line(&self) -> (f32, u32) {
-        let st = &self.sim.stepper;
-        (st.speed_mm_min(), st.line())
-    }
-    fn planner_free(&self) -> u16 {
-        (PLANNER_BLOCKS - self.sim.machine.planner.len()) as u16
-    }
-    fn planner_blocks(&self) -> u16 {
-        PLANNER_BLOCKS as u16
-    }
-    fn settings(&self) -> &Settings {
-        self.sim.machine.settings()
-    }
-    /// Rebuilds the executor and stepper with the new settings (only ever
-    /// called while idle), keeping the position in millimetres.
-    fn set_setting(&mut self, n: u16, value: f32) -> Result<(), SettingError> {
-        let mut s = *self.sim.machine.settings();
-        s.set(n, value)?;
-        let pos = self.sim.machine.commanded_position();
-        let tick_hz = self.sim.tick_hz();
-        let sim = &mut *self.sim;
-        sim.machine = Machine::new(s, tick_hz);
-        if sim.machine.set_position(&sim.rt, &pos).is_err() {
-            let _ = sim.machine.set_position(&sim.rt, &[0.0; burin::AXES]);
-        }
-        sim.stepper = Stepper::new(sim.machine.step_config());
-        sim.stepper.set_position(&sim.rt, sim.rt.position());
-        Ok(())
-    }
-}
+/// Driver wake-up between enable and the first step, ms (the board's
+/// `WAKE_MS`).
+const WAKE_MS: u16 = 0;
 
 /// Output bytes collected for the transport.
 #[derive(Debug, Default)]
@@ -109,12 +51,19 @@ impl Tx for TxBuf {
 /// A whole virtual board.
 pub struct VirtualDevice<'r> {
     pub sim: Sim<'r>,
-    pub link: Link,
-    pub device: Device<FlashMap<SimFlash>>,
+    /// The receive interrupt's half of the link and the ring it fills.
+    splitter: RxSplitter,
+    ring: Deque<RxToken, RX_RING>,
+    flags: RtFlags,
+    pub controller: Controller<FlashMap<SimFlash>>,
     pub tx: TxBuf,
     /// When set, the machine line number of every command the executor
     /// accepted, in order (tests check exactly-once delivery with it).
     pub log: Option<Vec<u32>>,
+    /// Output pin levels after the last pass, and every change with its tick.
+    pins: Option<Pins>,
+    pub pin_log: Vec<(u64, Pins)>,
+    port_closed: bool,
 }
 
 impl<'r> VirtualDevice<'r> {
@@ -128,35 +77,42 @@ impl<'r> VirtualDevice<'r> {
     /// file's are the defaults) and offsets from it, as the board's init
     /// does before it builds the machine.
     pub fn with_flash(cfg: &MachineConfig, rec: &'r mut dyn Recorder, flash: SimFlash) -> Self {
-        let mut sim = Sim::new(cfg, rec);
-        // An operator (the host) resumes holds and M0 pauses with `~`.
-        sim.auto_resume = false;
-        let mut persist = Persist::new(FlashMap::new(flash), *sim.machine.settings());
+        let mut persist = Persist::new(FlashMap::new(flash), cfg.settings);
         let boot = persist.load();
-        SimPort {
-            sim: &mut sim,
-            log: None,
-        }
-        .replace_settings(&boot.settings);
+        // The board builds its machine and stepper on the loaded settings.
+        let mut booted = cfg.clone();
+        booted.settings = boot.settings;
+        let mut sim = Sim::new(&booted, rec);
+        sim.set_device_mode();
+        sim.stepper = Stepper::new(sim.machine.step_config());
+        sim.stepper.set_position(&sim.rt, sim.rt.position());
         let ident = Identity {
             board: BOARD,
             caps: protocol::msg::caps::CHECK_MODE | protocol::msg::caps::HOMING,
         };
-        let mut device = Device::with_storage(ident, persist, Some(&boot));
+        let settings = *sim.machine.settings();
+        let session = Device::with_storage(ident, persist, Some(&boot));
+        let mut controller = Controller::new(session, &settings, WAKE_MS);
         let mut tx = TxBuf::default();
-        device.hello(&mut tx);
+        controller.hello(&mut tx);
         VirtualDevice {
             sim,
-            link: Link::new(),
-            device,
+            splitter: RxSplitter::new(),
+            ring: Deque::new(),
+            flags: RtFlags::new(),
+            controller,
             tx,
             log: None,
+            pins: None,
+            pin_log: Vec::new(),
+            port_closed: false,
         }
     }
 
     /// The settings flash as it is now (to power up another device with).
     pub fn flash(&mut self) -> SimFlash {
-        self.device
+        self.controller
+            .session
             .persist()
             .storage()
             .flash()
@@ -166,62 +122,73 @@ impl<'r> VirtualDevice<'r> {
 
     /// Bytes the device can take now (like the USB endpoint, hold the rest).
     pub fn room(&self) -> usize {
-        self.link.room()
+        self.ring.free().saturating_sub(2 + SNIFF)
     }
 
     /// Receive bytes; returns how many were taken (at most [`Self::room`]).
     pub fn receive(&mut self, bytes: &[u8]) -> usize {
         let n = bytes.len().min(self.room());
         if let Some(b) = bytes.get(..n) {
-            self.link.feed(b);
+            self.splitter.feed(b, &mut self.ring, &self.flags);
         }
         n
     }
 
-    /// The host closed the port: the link goes back to text mode (see
-    /// [`Device::port_reset`] for what happens to a running job).
+    /// The host closed the port: the receive side goes back to text mode
+    /// at once, the session hears of it at its next pass (see
+    /// `burin::device::Device::port_reset` for a running job).
     pub fn port_closed(&mut self) {
-        let VirtualDevice {
-            sim,
-            link,
-            device,
-            log,
-            ..
-        } = self;
-        device.port_reset(
-            link,
-            &SimPort {
-                sim,
-                log: log.as_mut(),
-            },
-        );
+        self.splitter.reset(&mut self.ring, &self.flags);
+        self.port_closed = true;
     }
 
-    /// Run the parse/plan task, then virtual time up to `tick`, then the
-    /// task again (it reacts to what the machine did).
+    /// Run the parse/plan task, then virtual time up to `tick` (the task
+    /// runs again whenever the engine says it is due, as the step
+    /// interrupt wakes it on the board), then the task again.
     pub fn advance_to(&mut self, tick: u64) {
-        self.poll();
-        self.sim.run_until(tick);
+        loop {
+            self.poll();
+            self.sim.run_until(tick);
+            if !self.sim.task_wanted() {
+                break;
+            }
+        }
         self.poll();
     }
 
-    /// One pass of the device session.
+    /// One pass of the parse/plan task (skipped while it is still busy).
     pub fn poll(&mut self) {
         let VirtualDevice {
             sim,
-            link,
-            device,
+            ring,
+            flags,
+            controller,
             tx,
             log,
+            port_closed,
+            ..
         } = self;
-        device.poll(
-            link,
-            &mut SimPort {
-                sim,
-                log: log.as_mut(),
-            },
+        let task = DeviceTask {
+            controller,
+            flags,
+            rx: ring,
             tx,
-        );
+            pins: 0,
+            port_closed: *port_closed,
+            log: log.as_mut(),
+        };
+        if let Some(pass) = sim.controller_pass(task) {
+            self.port_closed = false;
+            if self.pins != Some(pass.pins) {
+                self.pins = Some(pass.pins);
+                self.pin_log.push((self.sim.now(), pass.pins));
+            }
+        }
+    }
+
+    /// Output pin levels as the last pass left them.
+    pub fn pins(&self) -> Option<Pins> {
+        self.pins
     }
 
     /// Take the bytes the device wants to send.
@@ -229,9 +196,30 @@ impl<'r> VirtualDevice<'r> {
         std::mem::take(&mut self.tx.0)
     }
 
+    /// Print the banner (a client opened the port in text mode).
+    pub fn hello(&mut self) {
+        self.controller.hello(&mut self.tx);
+    }
+
+    /// The receive side is in framed mode.
+    pub fn framed(&self) -> bool {
+        self.flags.is_framed()
+    }
+
+    /// Mode of the next link event.
+    pub fn link_mode(&self) -> LinkMode {
+        self.controller.link_mode()
+    }
+
+    /// Received bytes not yet turned into events (the `Bf:` figure's
+    /// complement).
+    pub fn rx_pending(&self) -> usize {
+        self.ring.len() + self.controller.rx_partial()
+    }
+
     /// Nothing queued anywhere and the machine stopped.
     pub fn idle(&self) -> bool {
-        self.device.drained() && self.sim.idle() && self.link.rx_pending() == 0
+        self.controller.session.drained() && self.sim.idle() && self.rx_pending() == 0
     }
 
     /// Machine position in steps.

@@ -5,8 +5,12 @@
 
 use std::collections::VecDeque;
 
+use burin::controller::{Controller, Event, Inputs, Io, Pass};
+use burin::device::Tx;
+use burin::link::{RtFlags, TokenSource};
 use burin::machine::Machine;
 use burin::realtime::Realtime;
+use burin::seams::Storage;
 
 use super::{host, machine_error, note, Sim, Stats, PLANNER_BLOCKS};
 use crate::record::Recorder;
@@ -22,6 +26,10 @@ impl Sim<'_> {
             return;
         }
         self.task.wake = None;
+        if self.device_mode {
+            self.task_wanted = true;
+            return;
+        }
         self.task.send(&mut self.lines, self.now);
         let blocks0 = self.stats.blocks;
         let costed = self.task.costed();
@@ -126,4 +134,93 @@ pub(super) fn submit_lines(
         }
     }
     taken
+}
+
+/// Device mode: the parse/plan task is the firmware's own controller.
+pub struct DeviceTask<'a, S: Storage, R, T> {
+    pub controller: &'a mut Controller<S>,
+    pub flags: &'a RtFlags,
+    pub rx: &'a mut R,
+    pub tx: &'a mut T,
+    /// Inputs for the status report.
+    pub pins: u16,
+    pub port_closed: bool,
+    /// Line numbers of the commands the executor accepted, in order.
+    pub log: Option<&'a mut Vec<u32>>,
+}
+
+impl Sim<'_> {
+    /// Hand the parse/plan task to `burin::controller` (see `device_sim`).
+    pub fn set_device_mode(&mut self) {
+        self.device_mode = true;
+        self.auto_resume = false;
+    }
+
+    /// Device mode: the task is due (a segment was taken, the stepper
+    /// stopped, or its busy time ended); [`Sim::run_until`] returned early.
+    pub fn task_wanted(&self) -> bool {
+        self.task_wanted
+    }
+
+    /// One pass of the controller at the current tick, as the board's
+    /// parse task runs it. While the task is still busy with its last pass
+    /// (the host model's cost), it runs when that ends instead; `None`.
+    pub fn controller_pass<S: Storage>(
+        &mut self,
+        t: DeviceTask<'_, S, impl TokenSource, impl Tx>,
+    ) -> Option<Pass> {
+        if self.now < self.task.busy_until {
+            self.task.wake = Some(self.task.busy_until);
+            return None;
+        }
+        self.task_wanted = false;
+        self.task.wake = None;
+        let tick_hz = u64::from(self.cfg.tick_hz.max(1));
+        let input = Inputs {
+            now_ms: (self.now * 1000 / tick_hz) as u32,
+            switches: self.world.switches(),
+            stepping: self.next_step.is_some(),
+            pins: t.pins,
+            port_closed: t.port_closed,
+        };
+        let stats0 = t.controller.session.stats;
+        let blocks0 = self.stats.blocks;
+        let Sim {
+            machine,
+            rt,
+            queue,
+            stats,
+            rec,
+            ..
+        } = self;
+        let mut log = t.log;
+        let io = Io {
+            rt,
+            flags: t.flags,
+            rx: t.rx,
+            segments: queue,
+            tx: t.tx,
+        };
+        let pass = t.controller.pass(machine, io, input, &mut |e| match e {
+            Event::Note(n) => note(stats, &mut **rec, n.clone()),
+            Event::Accepted { line, motion } => {
+                stats.moves += u32::from(motion);
+                if let Some(l) = log.as_deref_mut() {
+                    l.push(line);
+                }
+            }
+        });
+        let s = t.controller.session.stats;
+        let lines = (s.lines_ok + s.lines_err).wrapping_sub(stats0.lines_ok + stats0.lines_err);
+        let cost = self
+            .task
+            .cost(u64::from(lines), self.stats.blocks - blocks0);
+        if cost > 0 {
+            self.task.busy_until = self.now + cost;
+        }
+        if pass.kick && self.next_step.is_none() {
+            self.next_step = Some(self.now);
+        }
+        Some(pass)
+    }
 }

@@ -15,7 +15,7 @@
 //! - the heartbeat unmasks a line once `Debounce` says it settled.
 use crate::boards::board;
 use burin::inputs::{self as inp, Change, Debounce};
-use core::sync::atomic::{AtomicBool, AtomicU16, AtomicU32, AtomicU8, Ordering::Relaxed};
+use core::sync::atomic::{AtomicU16, AtomicU32, AtomicU8, Ordering::Relaxed};
 use cortex_m::peripheral::NVIC;
 use stm32f4xx_hal::pac::{self, Interrupt};
 
@@ -31,9 +31,6 @@ static EDGES: AtomicU16 = AtomicU16::new(0);
 /// The input inverts (`$5`, `$6`, `$14` as `burin::inputs::invert_mask`),
 /// published by the parse task.
 static INVERT: AtomicU8 = AtomicU8::new(0);
-/// Hard limits apply (`$21` on, not homing, not in alarm): the parse task
-/// clears it before it queues a homing move.
-static LIMITS_ARMED: AtomicBool = AtomicBool::new(false);
 /// Debounced active inputs as `Pn:` bits, for the status report.
 static PINS: AtomicU16 = AtomicU16::new(0);
 
@@ -50,13 +47,13 @@ pub fn now_ms() -> u32 {
     NOW_MS.load(Relaxed)
 }
 
-/// Parse task: what the interrupts need of the settings and the state.
-pub fn publish(s: &burin::settings::Settings, limits_armed: bool) {
+/// Parse task: the input inverts for the interrupts. Whether hard limits
+/// are armed is the executor's call (`Realtime::limits_armed`).
+pub fn publish(s: &burin::settings::Settings) {
     INVERT.store(
         inp::invert_mask(s.limit_invert, s.probe_invert, s.control_invert),
         Relaxed,
     );
-    LIMITS_ARMED.store(limits_armed, Relaxed);
 }
 
 /// Debounced inputs for `MotionPort::pins`.
@@ -122,7 +119,7 @@ pub fn on_limit(irq: Interrupt, mine: u8) -> bool {
 /// as after any hard limit).
 pub fn limits_closed(act: u8) -> bool {
     let act = act & inp::LIMITS;
-    let trip = act != 0 && LIMITS_ARMED.load(Relaxed);
+    let trip = act != 0 && crate::RT.limits_armed();
     if trip {
         crate::RT.hard_limit(act);
     }

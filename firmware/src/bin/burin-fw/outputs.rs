@@ -1,5 +1,6 @@
-//! The parse task's outputs: spindle, coolant and stepper enable, driven
-//! from `burin::outputs` (the rules) once per pass of the session.
+//! The parse task's outputs: spindle, coolant and stepper enable, written
+//! from the controller's [`Pins`] once per pass (the rules live in
+//! `burin::controller` and `burin::outputs`).
 //!
 //! Everything here runs at the parse task's priority, the only writer of
 //! these pins, with two exceptions that need no lock: the step interrupt
@@ -8,17 +9,14 @@
 //! once (`board::kill_aux`); both only ever move towards the state this
 //! module writes next anyway.
 use crate::boards::board;
-use burin::command::SpindleDir;
-use burin::machine::State;
-use burin::outputs::{Enable, Motion, Outputs, Spindle};
-use burin::settings::Settings;
+use burin::controller::Pins;
 use stm32f4xx_hal::gpio::PinState;
 
-/// Driver wake-up time between enable and the first step. 0: the common
-/// step/dir drivers (A4988, DRV8825, TMC2209 in step/dir mode) take steps
-/// within microseconds of the enable, and the step interrupt's own enable
-/// comes a full step period before the first edge.
-const WAKE_MS: u16 = 0;
+/// Driver wake-up time between enable and the first step, in ms (the
+/// controller's `Enable` timer). 0: the common step/dir drivers (A4988,
+/// DRV8825, TMC2209 in step/dir mode) take steps within microseconds of
+/// the enable.
+pub const WAKE_MS: u16 = 0;
 
 /// The stepper-enable pin alone: one BSRR store per change.
 pub struct EnablePin {
@@ -54,93 +52,51 @@ impl EnablePin {
     }
 }
 
-/// What was last written, so a pass that changes nothing writes nothing.
-#[derive(Clone, Copy, PartialEq)]
-struct Written {
-    spindle: Spindle,
-    flood: bool,
-    mist: bool,
-}
-
+/// The output pins: spindle PWM/dir/enable, coolant and stepper enable.
 pub struct Io {
     aux: board::Aux,
     enable_pin: EnablePin,
-    pub state: Outputs,
-    enable: Enable,
-    written: Option<Written>,
-    enabled: Option<bool>,
+    /// What was last written, so a pass that changes nothing writes nothing.
+    written: Option<Pins>,
 }
 
 impl Io {
-    pub fn new(aux: board::Aux, enable_pin: EnablePin, s: &Settings) -> Self {
+    pub fn new(aux: board::Aux, enable_pin: EnablePin) -> Self {
         Io {
             aux,
             enable_pin,
-            state: Outputs::new(s),
-            enable: Enable::new(s.idle_delay_ms, WAKE_MS),
             written: None,
-            enabled: None,
         }
     }
 
-    /// Steps may start (drivers on and awake).
-    pub fn may_step(&self) -> bool {
-        self.enable.may_step()
-    }
-
-    /// One pass: settings, alarm, enable timer, then the pins. `busy`:
-    /// segments queued or the step timer running.
-    pub fn update(&mut self, now_ms: u32, busy: bool, state: State, s: &Settings) {
-        self.state.configure(s);
-        self.enable.set_idle_ms(s.idle_delay_ms);
-        let alarm = state == State::Alarm;
-        if alarm {
-            self.state.all_off();
+    /// Copy the controller's pin levels to the hardware.
+    pub fn write(&mut self, p: &Pins) {
+        if self.written.as_ref() == Some(p) {
+            return;
         }
-        let on = self
-            .enable
-            .update(now_ms, busy, state == State::Hold, alarm);
-        if self.enabled != Some(on) {
-            self.enabled = Some(on);
-            self.enable_pin.set(on);
+        if self.written.map(|w| w.enable) != Some(p.enable) {
+            self.enable_pin.set(p.enable);
         }
-        // The step interrupt does not say whether it runs a G0 or a G1:
-        // laser mode fires whenever steps run, see the report in README.
-        let motion = if busy {
-            Motion::Feed { ratio: 1.0 }
-        } else {
-            Motion::Stopped
-        };
-        let want = Written {
-            spindle: self.state.spindle(motion),
-            flood: self.state.flood,
-            mist: self.state.mist,
-        };
-        if self.written != Some(want) {
-            self.written = Some(want);
-            self.write(&want);
-        }
-    }
-
-    fn write(&mut self, w: &Written) {
+        self.written = Some(*p);
         let a = &mut self.aux;
         let max = a.spindle_pwm.get_max_duty();
-        let duty = (w.spindle.duty * f32::from(max)) as u16;
+        let duty = (p.spindle.duty * f32::from(max)) as u16;
         // Any S above zero keeps at least one count: "on" stays on.
-        let duty = if w.spindle.duty > 0.0 { duty.max(1) } else { 0 };
+        let duty = if p.spindle.duty > 0.0 { duty.max(1) } else { 0 };
         a.spindle_pwm.set_duty(duty.min(max));
-        a.spindle_dir.set_state(level(w.spindle.ccw));
-        a.spindle_enable.set_state(level(w.spindle.enable));
-        a.flood.set_state(level(w.flood));
-        a.mist.set_state(level(w.mist));
+        a.spindle_dir.set_state(level(p.spindle.ccw));
+        a.spindle_enable.set_state(level(p.spindle.enable));
+        a.flood.set_state(level(p.flood));
+        a.mist.set_state(level(p.mist));
         defmt::debug!(
-            "outputs: spindle {} {} duty {}/{}, flood {}, mist {}",
-            w.spindle.enable,
-            matches!(self.state.spindle_dir(), SpindleDir::Ccw),
+            "outputs: enable {}, spindle {} ccw {} duty {}/{}, flood {}, mist {}",
+            p.enable,
+            p.spindle.enable,
+            p.spindle.ccw,
             duty,
             max,
-            w.flood,
-            w.mist
+            p.flood,
+            p.mist
         );
     }
 }

@@ -1,0 +1,338 @@
+//! The controller: everything the parse/plan task decides, written once and
+//! driven by both shells.
+//!
+//! One [`Controller::pass`] is one wake-up of the board's lowest-priority
+//! task and one task slot of host-sim's virtual board: the device session
+//! (both protocols) reads the link and feeds the executor, the executor
+//! fills the segment queue, and the outputs (spindle, coolant, stepper
+//! enable with `$1`) follow what was executed. The shells only move bytes
+//! (token ring in, reply bytes out), pin levels ([`Pins`] out, switch
+//! levels in) and time (`now_ms`); the RTIC app writes the result to
+//! registers, host-sim to its recorder. So nothing that decides what the
+//! machine does can drift between the board and the simulator.
+//!
+//! The session meets the rest of the core through two small ports
+//! (`device::LinkPort`, `device::MotionPort`), implemented here and only
+//! here.
+
+use crate::command::{Command, Pos};
+use crate::device::{Device, LinkPort, MotionPort, Tx};
+use crate::link::{LineAssembler, LinkEvent, LinkMode, RtFlags, RtSet, TokenSource};
+use crate::machine::{self, Machine, MachineError, Note, State};
+use crate::outputs::{Enable, Motion, Outputs, Spindle};
+use crate::realtime::Realtime;
+use crate::seams::Storage;
+use crate::settings::table::SettingError;
+use crate::settings::Settings;
+use crate::stepper::prep::SegmentSink;
+use crate::stepper::Switches;
+
+/// The session runs only with this much room for replies: it holds the
+/// longest burst one pass writes (a `$$` listing is about 600 bytes), so a
+/// reply is never dropped; reading the link just pauses while the host is
+/// slow to read.
+pub const TX_HEADROOM: usize = 768;
+
+/// What the shell reports at the start of a pass.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Inputs {
+    /// Milliseconds since power-up (wrapping; the board's heartbeat clock).
+    pub now_ms: u32,
+    /// Limit and probe levels as read now.
+    pub switches: Switches,
+    /// The step timer is running.
+    pub stepping: bool,
+    /// Debounced inputs for the status report (`protocol::msg::pins` bits).
+    pub pins: u16,
+    /// The port was closed or reopened since the last pass (the receive
+    /// side already put its mode-reset marker into the ring).
+    pub port_closed: bool,
+}
+
+/// Output pin levels after a pass, in hardware-free terms.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pins {
+    /// Stepper drivers powered (before the `$4` polarity).
+    pub enable: bool,
+    pub spindle: Spindle,
+    pub flood: bool,
+    pub mist: bool,
+}
+
+/// What the shell does after a pass.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pass {
+    pub pins: Pins,
+    /// Segments wait, the drivers are awake and the step timer is stopped:
+    /// start it (the board pends its timer interrupt).
+    pub kick: bool,
+}
+
+/// What a pass lets its shell watch (host-sim records paths and checks
+/// exactly-once delivery with these; the board ignores them).
+#[derive(Clone, Copy, Debug)]
+pub enum Event<'n, 'c> {
+    /// The executor reported something.
+    Note(&'n Note<'c>),
+    /// The executor accepted a command of this machine line number
+    /// (`motion`: it moves the machine).
+    Accepted { line: u32, motion: bool },
+}
+
+/// The queues and flags a pass works on, owned by the shell because the
+/// interrupts hold their other ends.
+#[derive(Debug)]
+pub struct Io<'a, Q, R, T> {
+    pub rt: &'a Realtime,
+    pub flags: &'a RtFlags,
+    /// Consumer end of the receive token ring.
+    pub rx: &'a mut R,
+    /// Producer end of the segment queue.
+    pub segments: &'a mut Q,
+    pub tx: &'a mut T,
+}
+
+/// The parse/plan task's state besides the executor.
+#[derive(Debug)]
+pub struct Controller<S: Storage> {
+    pub session: Device<S>,
+    asm: LineAssembler,
+    outputs: Outputs,
+    enable: Enable,
+    resets: u32,
+}
+
+impl<S: Storage> Controller<S> {
+    /// `wake_ms`: how long the drivers need between enable and a first step.
+    pub fn new(session: Device<S>, settings: &Settings, wake_ms: u16) -> Self {
+        let resets = session.stats.resets;
+        Controller {
+            session,
+            asm: LineAssembler::new(),
+            outputs: Outputs::new(settings),
+            enable: Enable::new(settings.idle_delay_ms, wake_ms),
+            resets,
+        }
+    }
+
+    /// The banner, as after power-up or a port open (text mode).
+    pub fn hello(&mut self, tx: &mut impl Tx) {
+        self.session.hello(tx);
+    }
+
+    /// Mode of the next link event (the assembler's).
+    pub fn link_mode(&self) -> LinkMode {
+        self.asm.mode()
+    }
+
+    /// Received bytes not yet turned into events, besides those in `rx`.
+    pub fn rx_partial(&self) -> usize {
+        self.asm.pending()
+    }
+
+    /// Spindle and coolant as the executed commands left them.
+    pub fn outputs(&self) -> &Outputs {
+        &self.outputs
+    }
+
+    /// One pass: session, executor, session again (it reacts to what the
+    /// executor did, sync points and alarms, in the same wake-up), then
+    /// the outputs. `obs` sees what the executor did ([`Event`]).
+    pub fn pass<const N: usize>(
+        &mut self,
+        machine: &mut Machine<N>,
+        io: Io<'_, impl SegmentSink, impl TokenSource, impl Tx>,
+        input: Inputs,
+        obs: &mut dyn FnMut(Event),
+    ) -> Pass {
+        let Io {
+            rt,
+            flags,
+            rx,
+            segments,
+            tx,
+        } = io;
+        let mut link = TaskLink {
+            asm: &mut self.asm,
+            rx,
+            flags,
+        };
+        let mut core = Core {
+            machine,
+            segments,
+            rt,
+            outputs: &mut self.outputs,
+            pins: input.pins,
+            obs,
+        };
+        if input.port_closed {
+            self.session.port_reset(&mut link, &core);
+        }
+        for _ in 0..2 {
+            if tx.room() >= TX_HEADROOM {
+                self.session.poll(&mut link, &mut core, tx);
+            }
+            // A soft reset (0x18, e-stop) stops spindle and coolant.
+            if self.session.stats.resets != self.resets {
+                self.resets = self.session.stats.resets;
+                core.outputs.all_off();
+            }
+            core.poll(input.switches);
+        }
+        let queued = !core.segments.is_empty();
+        let state = core.machine.state(rt);
+        let settings = core.machine.settings();
+        let busy = queued || input.stepping || !rt.stepper_idle();
+        core.outputs.configure(settings);
+        self.enable.set_idle_ms(settings.idle_delay_ms);
+        let alarm = state == State::Alarm;
+        if alarm {
+            core.outputs.all_off();
+        }
+        let enable = self
+            .enable
+            .update(input.now_ms, busy, state == State::Hold, alarm);
+        // Laser mode cannot yet tell a rapid from a feed here: it fires
+        // whenever steps run (see README).
+        let motion = if busy {
+            Motion::Feed { ratio: 1.0 }
+        } else {
+            Motion::Stopped
+        };
+        Pass {
+            pins: Pins {
+                enable,
+                spindle: self.outputs.spindle(motion),
+                flood: self.outputs.flood,
+                mist: self.outputs.mist,
+            },
+            kick: queued && !input.stepping && self.enable.may_step(),
+        }
+    }
+}
+
+/// The link decoder's task half: the assembler on the ring's consumer end.
+struct TaskLink<'a, R> {
+    asm: &'a mut LineAssembler,
+    rx: &'a mut R,
+    flags: &'a RtFlags,
+}
+
+impl<R: TokenSource> LinkPort for TaskLink<'_, R> {
+    fn poll(&mut self) -> Option<LinkEvent<'_>> {
+        self.asm.poll(self.rx)
+    }
+    fn take_realtime(&mut self) -> RtSet {
+        let set = self.flags.take();
+        if set.contains(protocol::Rt::SoftReset) {
+            // Input from before the reset is void.
+            self.asm.flush_reset(self.rx, self.flags);
+        }
+        set
+    }
+    fn rx_pending(&self) -> usize {
+        self.rx.len() + self.asm.pending()
+    }
+    fn framed(&self) -> bool {
+        self.flags.is_framed()
+    }
+    fn events_framed(&self) -> bool {
+        self.asm.mode() == LinkMode::Framed
+    }
+}
+
+/// The executor, the producer end of the segment queue and the outputs.
+struct Core<'a, Q, const N: usize> {
+    machine: &'a mut Machine<N>,
+    segments: &'a mut Q,
+    rt: &'a Realtime,
+    outputs: &'a mut Outputs,
+    pins: u16,
+    obs: &'a mut dyn FnMut(Event),
+}
+
+/// Spindle and coolant commands reach the outputs as the executor runs
+/// them: in program order, synced with motion.
+fn note(outputs: &mut Outputs, obs: &mut dyn FnMut(Event), n: Note) {
+    if let Note::Executed { command, .. } = &n {
+        outputs.apply(command);
+    }
+    obs(Event::Note(&n));
+}
+
+impl<Q: SegmentSink, const N: usize> Core<'_, Q, N> {
+    /// Background work of the executor: fill the segment queue.
+    fn poll(&mut self, sw: Switches) {
+        let (outputs, obs) = (&mut *self.outputs, &mut *self.obs);
+        self.machine
+            .poll(self.rt, self.segments, sw, &mut |n| note(outputs, obs, n));
+    }
+}
+
+impl<Q: SegmentSink, const N: usize> MotionPort for Core<'_, Q, N> {
+    fn rt(&self) -> &Realtime {
+        self.rt
+    }
+    fn ready(&self) -> bool {
+        self.machine.ready()
+    }
+    fn submit(&mut self, cmd: &Command, line: u32) -> Result<(), MachineError> {
+        let (outputs, obs) = (&mut *self.outputs, &mut *self.obs);
+        self.machine
+            .submit(self.rt, cmd, line, &mut |n| note(outputs, obs, n))?;
+        (self.obs)(Event::Accepted {
+            line,
+            motion: cmd.end().is_some(),
+        });
+        Ok(())
+    }
+    fn state(&self) -> machine::State {
+        self.machine.state(self.rt)
+    }
+    fn alarm(&self) -> Option<MachineError> {
+        self.machine.alarm()
+    }
+    fn motion_idle(&self) -> bool {
+        self.machine.ready()
+            && self.machine.planner.is_empty()
+            && self.machine.prep.is_idle()
+            && self.segments.is_empty()
+            && self.rt.stepper_idle()
+    }
+    fn commanded_position(&self) -> Pos {
+        self.machine.commanded_position()
+    }
+    fn probe_result(&self) -> Option<(Pos, bool)> {
+        self.machine.probe_result
+    }
+    /// Published by the stepper once per segment.
+    fn feed_and_line(&self) -> (f32, u32) {
+        self.rt.running()
+    }
+    fn planner_free(&self) -> u16 {
+        (N - self.machine.planner.len()) as u16
+    }
+    fn planner_blocks(&self) -> u16 {
+        N as u16
+    }
+    fn settings(&self) -> &Settings {
+        self.machine.settings()
+    }
+    fn pins(&self) -> u16 {
+        self.pins
+    }
+    /// Rebuilds the executor with the new settings (only ever called while
+    /// idle), keeping the position. The step interrupt keeps the pin timing
+    /// and inverts it was started with until the next reset.
+    fn set_setting(&mut self, n: u16, value: f32) -> Result<(), SettingError> {
+        let mut s = *self.machine.settings();
+        s.set(n, value)?;
+        let pos = self.machine.commanded_position();
+        let tick_hz = self.machine.step_config().tick_hz;
+        *self.machine = Machine::new(s, tick_hz);
+        if self.machine.set_position(self.rt, &pos).is_err() {
+            let _ = self.machine.set_position(self.rt, &[0.0; crate::AXES]);
+        }
+        Ok(())
+    }
+}
