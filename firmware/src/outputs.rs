@@ -218,8 +218,12 @@ impl Enable {
     pub fn update(&mut self, now: u32, busy: bool, hold: bool, alarm: bool) -> bool {
         self.state = match self.state {
             _ if alarm && !busy => EnState::Off,
-            EnState::Off if busy && self.wake_ms > 0 => EnState::Waking { since: now },
-            EnState::Off if busy => EnState::On,
+            // `$1=255` powers the drivers for good, also when it is set
+            // while they are off (and again after an alarm has passed).
+            EnState::Off if (busy || self.idle_ms == ALWAYS_ON) && self.wake_ms > 0 => {
+                EnState::Waking { since: now }
+            }
+            EnState::Off if busy || self.idle_ms == ALWAYS_ON => EnState::On,
             EnState::Lingering { .. } if busy || hold || self.idle_ms == ALWAYS_ON => EnState::On,
             EnState::Waking { since } if now.wrapping_sub(since) >= u32::from(self.wake_ms) => {
                 EnState::On

@@ -68,6 +68,9 @@ pub struct Sim<'r> {
     device_mode: bool,
     /// Device mode: the task is due now.
     task_wanted: bool,
+    /// Device mode: the sender still has lines for the board (a planned
+    /// stop meanwhile is a starved planner).
+    pub input_pending: bool,
     stats: Stats,
 }
 
@@ -82,8 +85,6 @@ struct Stats {
     max_speed: f32,
     dir: u8,
     dir_changed: u64,
-    probe: Option<([f32; AXES], bool)>,
-    barrier_done: bool,
     /// Planner blocks pushed (Path notes), for the task's cost.
     blocks: u64,
     /// Stops where the planner ran empty waiting for a line (link or task time).
@@ -156,6 +157,7 @@ impl<'r> Sim<'r> {
             auto_resume: true,
             device_mode: false,
             task_wanted: false,
+            input_pending: false,
             stats,
         }
     }
@@ -222,7 +224,8 @@ impl<'r> Sim<'r> {
             // only there because the next line had not arrived or been parsed.
             let running = self.machine.prep.hold() == burin::stepper::prep::Hold::Running
                 && !self.rt.hold_requested();
-            if running && self.machine.ready() && !self.lines.is_empty() {
+            let waiting = !self.lines.is_empty() || (self.device_mode && self.input_pending);
+            if running && self.machine.ready() && waiting {
                 self.stats.starved += 1;
             }
         }
@@ -377,10 +380,6 @@ impl<'r> Sim<'r> {
     pub fn finish(&mut self, summary: &Summary) -> std::io::Result<()> {
         self.rec.finish(summary)
     }
-
-    fn take_barrier(&mut self) -> bool {
-        std::mem::take(&mut self.stats.barrier_done)
-    }
 }
 
 /// The earlier of two optional times (a plain match: an iterator chain
@@ -406,16 +405,10 @@ fn note(stats: &mut Stats, rec: &mut dyn Recorder, n: Note) {
             rec.commanded(line, kind(k), end);
         }
         Note::Error { line, error } => stats.errors.push(machine_error(line, error)),
-        Note::Probed {
-            position, contact, ..
-        } => {
-            stats.probe = Some((position, contact));
+        Note::Probed { position, .. } => {
             stats.last_path = Some(position);
-            stats.barrier_done = true;
         }
-        Note::Homed { .. } => {
-            stats.barrier_done = true;
-        }
+        Note::Homed { .. } => {}
         Note::Executed { .. } => {}
     }
 }

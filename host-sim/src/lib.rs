@@ -8,6 +8,7 @@ pub mod check;
 pub mod config;
 pub mod device_sim;
 pub mod engine;
+pub mod offline;
 pub mod outputs;
 pub mod plot;
 pub mod pty;

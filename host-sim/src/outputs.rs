@@ -61,7 +61,8 @@ impl Recorder for Named<'_> {
     }
 }
 
-/// Runs `source` on the machine `cfg`, writing the requested files.
+/// Runs `source` on the machine `cfg` (streamed through the virtual
+/// board, see [`crate::offline`]), writing the requested files.
 /// Every file is created before the run starts, so a bad path fails fast;
 /// a write error comes back naming its file.
 pub fn simulate(
@@ -117,7 +118,7 @@ pub fn simulate(
     }
     let summary = {
         let mut tee = Tee(named.iter_mut().map(|n| n as &mut dyn Recorder).collect());
-        crate::engine::run_job(cfg, source, &mut tee)
+        crate::offline::run_file(cfg, source, &mut tee)
     };
     match named.into_iter().find_map(|n| n.error) {
         Some(e) => Err(e),

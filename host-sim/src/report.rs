@@ -200,7 +200,7 @@ pub fn print_summary<W: Write>(
         for e in s.errors.iter().take(MAX_LISTED_ERRORS) {
             writeln!(
                 w,
-                "    line {:>6}  error {:>3}  {}",
+                "    {job_name}:{}: error[{}]: {}",
                 e.line, e.code, e.message
             )?;
         }

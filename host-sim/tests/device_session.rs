@@ -3,98 +3,12 @@
 //! realtime bytes while the line buffer is full. Deterministic: bytes go in
 //! directly and virtual time advances in fixed steps.
 
-use host_sim::config::MachineConfig;
-use host_sim::device_sim::VirtualDevice;
 use host_sim::record::Discard;
-use protocol::client::grbl::{classify, parse_status, TextEvent};
+use protocol::client::grbl::{classify, TextEvent};
 
-/// The default machine, powered up at machine zero.
-fn origin() -> MachineConfig {
-    MachineConfig {
-        start_position_mm: [0.0; 4],
-        ..MachineConfig::default()
-    }
-}
+mod rig;
 
-struct Rig<'r> {
-    dev: VirtualDevice<'r>,
-    text: String,
-    step: u64,
-}
-
-impl<'r> Rig<'r> {
-    fn new(cfg: &MachineConfig, rec: &'r mut Discard) -> Self {
-        let dev = VirtualDevice::new(cfg, rec);
-        let mut r = Rig {
-            dev,
-            text: String::new(),
-            step: u64::from(cfg.tick_hz) / 500,
-        };
-        r.run(1);
-        r
-    }
-    fn send(&mut self, bytes: &[u8]) {
-        let n = self.dev.receive(bytes);
-        assert_eq!(n, bytes.len(), "link full");
-    }
-    fn run(&mut self, rounds: usize) {
-        for _ in 0..rounds {
-            let t = self.dev.sim.now() + self.step;
-            self.dev.advance_to(t);
-            self.text
-                .push_str(&String::from_utf8_lossy(&self.dev.take_output()));
-        }
-    }
-    /// Everything received since the last call, as lines.
-    fn lines(&mut self) -> Vec<String> {
-        let t = std::mem::take(&mut self.text);
-        t.split("\r\n")
-            .filter(|l| !l.is_empty())
-            .map(str::to_string)
-            .collect()
-    }
-    fn cmd(&mut self, line: &str) -> Vec<String> {
-        self.send(line.as_bytes());
-        self.send(b"\n");
-        self.run(2);
-        self.lines()
-    }
-    fn status(&mut self) -> protocol::client::grbl::TextStatus {
-        self.send(b"?");
-        self.run(1);
-        let lines = self.lines();
-        let st = lines.iter().rev().find_map(|l| parse_status(l));
-        st.unwrap_or_else(|| panic!("no status in {lines:?}"))
-    }
-    fn until_idle(&mut self) -> protocol::client::grbl::TextStatus {
-        for _ in 0..100_000 {
-            self.run(10);
-            let st = self.status();
-            if st.state == "Idle" {
-                return st;
-            }
-        }
-        panic!("never idle");
-    }
-    /// In alarm, and X stays where it is for `rounds` more rounds.
-    fn alarm_holds(&mut self, rounds: usize) {
-        let st = self.status();
-        assert_eq!(st.state, "Alarm");
-        let x = st.mpos.as_ref().map_or(0.0, |p| p[0]);
-        self.run(rounds);
-        let after = self.status().mpos.as_ref().map_or(1.0, |p| p[0]);
-        assert_eq!(after, x, "moved in alarm");
-    }
-    /// `$X` unlocks, the machine is idle, and a move to X`x` runs to the end.
-    fn unlock_and_move_to(&mut self, x: f32) {
-        assert_eq!(self.cmd("$X"), ["[MSG:Caution: Unlocked]", "ok"]);
-        self.run(2);
-        assert_eq!(self.status().state, "Idle");
-        assert_eq!(self.cmd(&format!("G1 X{x} F1000")), ["ok"]);
-        let st = self.until_idle();
-        assert_eq!(st.mpos, Some(vec![x, 0.0, 0.0, 0.0]));
-    }
-}
+use rig::{origin, Rig};
 
 #[test]
 fn banner_info_settings_and_parser_state() {

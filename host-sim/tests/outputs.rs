@@ -229,7 +229,7 @@ fn terminal_summary_lists_everything() {
     ] {
         assert!(text.contains(label), "{label} missing:\n{text}");
     }
-    assert!(text.contains("line      7  error  33"), "{text}");
+    assert!(text.contains("square.nc:7: error[33]: "), "{text}");
     assert!(text.contains(&format!("X {:>10}", s.steps[0])), "{text}");
 }
 

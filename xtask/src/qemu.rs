@@ -142,17 +142,29 @@ fn expect(
     }
 }
 
-/// A short job and where it must end (machine mm, X Y Z).
-/// Lines, an arc (G2 half circle), a helix-free Z move, a dwell and a rapid.
-const JOB: [&str; 6] = [
-    "G21 G90 G94",
-    "G1 X10 Y5 F3000",
-    "G2 X20 Y5 I5 J0 F2000",
-    "G1 X12.5 Y-2 Z1",
-    "G4 P0.1",
-    "G0 X3 Y4 Z0",
-];
-const JOB_END: [f64; 3] = [3.0, 4.0, 0.0];
+/// The job every path must agree on (`host-sim/tests/three_paths.rs` runs
+/// it offline and over the pty): lines, arcs in two planes, a dwell,
+/// tool/spindle/coolant words on one line and an `M2` mid-file.
+const JOB: &str = include_str!("../../host-sim/jobs/agree.gcode");
+
+/// Where the offline run (the virtual board, booted at machine zero like
+/// the QEMU board) ends the job, in steps, and the steps per mm to read
+/// `MPos` with.
+fn offline_end() -> Result<([i64; 4], [f64; 4])> {
+    let cfg = host_sim::config::MachineConfig {
+        start_position_mm: [0.0; 4],
+        ..Default::default()
+    };
+    let s = host_sim::offline::run_file(&cfg, JOB, &mut host_sim::record::Discard);
+    if !s.errors.is_empty() {
+        bail!(
+            "the offline run of the agreement job failed: {:?}",
+            s.errors
+        );
+    }
+    let spm = std::array::from_fn(|i| f64::from(cfg.settings.axes[i].steps_per_mm));
+    Ok((s.final_position_steps, spm))
+}
 
 /// The end-to-end test: boot the app, wait until its device session answers
 /// `$I` over USART1, stream a job GRBL-style and check the final position
@@ -192,9 +204,13 @@ pub fn run() -> Result<i32> {
     while let Ok(chunk) = rx.recv_timeout(Duration::from_millis(700)) {
         seen.extend(chunk);
     }
-    job_test(&mut stdin, &rx, &mut seen)?;
+    let (want, spm) = offline_end()?;
+    job_test(&mut stdin, &rx, &mut seen, want, spm)?;
     settings_test(&mut stdin, &rx, &mut seen)?;
-    println!("qemu: the RTIC app ran a job on {MACHINE} over USART1 and ended at {JOB_END:?}");
+    println!(
+        "qemu: the RTIC app ran host-sim/jobs/agree.gcode on {MACHINE} over USART1 \
+         and ended on the offline run's step {want:?}"
+    );
     if let Some(status) = guard.0.try_wait()? {
         bail!("{QEMU} exited by itself ({status})");
     }
@@ -213,6 +229,8 @@ fn job_test(
     stdin: &mut impl Write,
     rx: &mpsc::Receiver<Vec<u8>>,
     seen: &mut Vec<u8>,
+    want: [i64; 4],
+    spm: [f64; 4],
 ) -> Result<()> {
     // The `$I` reply ends with its `ok`.
     if !expect(rx, seen, b"ok", Duration::from_secs(10)) {
@@ -221,7 +239,7 @@ fn job_test(
             String::from_utf8_lossy(seen)
         );
     }
-    for line in JOB {
+    for line in JOB.lines() {
         seen.clear();
         stdin.write_all(format!("{line}\n").as_bytes())?;
         stdin.flush()?;
@@ -252,14 +270,17 @@ fn job_test(
                 }
                 if report.starts_with("Idle") {
                     let pos = mpos(report).with_context(|| format!("no MPos in <{report}>"))?;
-                    let at_end = pos.len() >= 3
-                        && pos.iter().zip(JOB_END).all(|(p, e)| (p - e).abs() <= 1e-3);
-                    if at_end {
-                        println!("status: <{report}> (saw Run: {ran})");
+                    let steps: Vec<i64> = pos
+                        .iter()
+                        .zip(spm)
+                        .map(|(p, s)| (p * s).round() as i64)
+                        .collect();
+                    if steps == want {
+                        println!("status: <{report}> (saw Run: {ran}), steps {steps:?}");
                         return Ok(());
                     }
                     if ran {
-                        bail!("job ended at <{report}>, expected MPos {JOB_END:?}");
+                        bail!("job ended at <{report}> = steps {steps:?}, offline {want:?}");
                     }
                 }
             }

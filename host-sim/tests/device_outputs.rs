@@ -1,0 +1,120 @@
+//! The outputs as the board drives them, through the virtual board: the
+//! controller's pin levels after each pass (spindle, coolant, stepper
+//! enable with `$1`, laser mode), recorded where the board writes its
+//! registers.
+
+mod rig;
+
+use host_sim::record::Discard;
+use rig::{origin, Rig};
+
+#[test]
+fn spindle_and_coolant_follow_the_program() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    let p = r.dev.pins().expect("a pass ran");
+    assert!(!p.spindle.enable && !p.flood && !p.mist, "{p:?}");
+    // Tool, spindle and coolant words on one line.
+    assert_eq!(r.cmd("T2 M3 S500 M8"), ["ok"]);
+    r.run(2);
+    let p = r.dev.pins().expect("pins");
+    assert!(
+        p.spindle.enable && !p.spindle.ccw && p.flood && !p.mist,
+        "{p:?}"
+    );
+    // S500 of $30=1000 with $31=0: half duty.
+    assert!((p.spindle.duty - 0.5).abs() < 1e-3, "{p:?}");
+    assert_eq!(r.cmd("M4 S1000 M7"), ["ok"]);
+    r.run(2);
+    let p = r.dev.pins().expect("pins");
+    assert!(p.spindle.enable && p.spindle.ccw && p.mist, "{p:?}");
+    assert_eq!(p.spindle.duty, 1.0);
+    assert_eq!(r.cmd("M5 M9"), ["ok"]);
+    r.run(2);
+    let p = r.dev.pins().expect("pins");
+    assert!(!p.spindle.enable && !p.flood && !p.mist, "{p:?}");
+}
+
+#[test]
+fn soft_reset_and_program_end_turn_everything_off() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    assert_eq!(r.cmd("M3 S300 M7 M8"), ["ok"]);
+    r.run(2);
+    assert!(r.dev.pins().is_some_and(|p| p.spindle.enable && p.flood));
+    r.send(&[0x18]);
+    r.run(2);
+    assert!(r.lines().iter().any(|l| l.starts_with("Grbl")), "no banner");
+    let p = r.dev.pins().expect("pins");
+    assert!(
+        !p.spindle.enable && !p.flood && !p.mist,
+        "after reset: {p:?}"
+    );
+    assert_eq!(r.cmd("M3 S300 M8"), ["ok"]);
+    assert_eq!(r.cmd("M2"), ["ok"]);
+    r.run(5);
+    let p = r.dev.pins().expect("pins");
+    assert!(!p.spindle.enable && !p.flood, "after M2: {p:?}");
+}
+
+/// `$1`: the drivers are on while steps run and go off `$1` ms after the
+/// last one.
+#[test]
+fn drivers_disable_after_the_idle_delay() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    assert_eq!(r.cmd("$1=100"), ["ok"]);
+    assert!(r.dev.pins().is_some_and(|p| !p.enable), "off at power-up");
+    assert_eq!(r.cmd("G1 X2 F600"), ["ok"]);
+    r.until_idle();
+    r.run(100);
+    let hz = f64::from(cfg.tick_hz);
+    let secs = |t: u64| t as f64 / hz;
+    let log = &r.dev.pin_log;
+    let on = log.iter().position(|(_, p)| p.enable).expect("enabled");
+    let off = log[on..].iter().find(|(_, p)| !p.enable).expect("disabled");
+    let (on, off) = (secs(log[on].0), secs(off.0));
+    // 2 mm at 10 mm/s: 0.2 s plus the ramps (about 20 ms), then 100 ms.
+    assert!(
+        off - on > 0.3 && off - on < 0.34,
+        "enabled at {on:.3} s, disabled at {off:.3} s"
+    );
+    // `$1=255`: on for good.
+    assert_eq!(r.cmd("$1=255"), ["ok"]);
+    r.run(5);
+    assert!(r.dev.pins().is_some_and(|p| p.enable));
+}
+
+/// Laser mode (`$32=1`): no beam while nothing moves, even with M3 on.
+#[test]
+fn laser_is_dark_while_stopped() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    assert_eq!(r.cmd("$32=1"), ["ok"]);
+    assert_eq!(r.cmd("M3 S800"), ["ok"]);
+    r.run(3);
+    assert!(
+        r.dev.pins().is_some_and(|p| !p.spindle.enable),
+        "lit at rest"
+    );
+    assert_eq!(r.cmd("G1 X5 F600"), ["ok"]);
+    r.run(20);
+    let p = r.dev.pins().expect("pins");
+    assert!(
+        p.spindle.enable && (p.spindle.duty - 0.8).abs() < 1e-3,
+        "{p:?}"
+    );
+    r.until_idle();
+    assert!(
+        r.dev.pins().is_some_and(|p| !p.spindle.enable),
+        "lit after the move"
+    );
+}

@@ -1,0 +1,97 @@
+//! A virtual board driven the way a GRBL text sender drives it: bytes in,
+//! fixed virtual-time rounds, replies split into lines. Shared by the
+//! device tests.
+#![allow(dead_code)]
+
+use host_sim::config::MachineConfig;
+use host_sim::device_sim::VirtualDevice;
+use host_sim::record::Discard;
+use protocol::client::grbl::parse_status;
+
+/// The default machine, powered up at machine zero.
+pub fn origin() -> MachineConfig {
+    MachineConfig {
+        start_position_mm: [0.0; 4],
+        ..MachineConfig::default()
+    }
+}
+
+pub struct Rig<'r> {
+    pub dev: VirtualDevice<'r>,
+    text: String,
+    step: u64,
+}
+
+impl<'r> Rig<'r> {
+    pub fn new(cfg: &MachineConfig, rec: &'r mut Discard) -> Self {
+        let dev = VirtualDevice::new(cfg, rec);
+        let mut r = Rig {
+            dev,
+            text: String::new(),
+            step: u64::from(cfg.tick_hz) / 500,
+        };
+        r.run(1);
+        r
+    }
+    pub fn send(&mut self, bytes: &[u8]) {
+        let n = self.dev.receive(bytes);
+        assert_eq!(n, bytes.len(), "link full");
+    }
+    pub fn run(&mut self, rounds: usize) {
+        for _ in 0..rounds {
+            let t = self.dev.sim.now() + self.step;
+            self.dev.advance_to(t);
+            self.text
+                .push_str(&String::from_utf8_lossy(&self.dev.take_output()));
+        }
+    }
+    /// Everything received since the last call, as lines.
+    pub fn lines(&mut self) -> Vec<String> {
+        let t = std::mem::take(&mut self.text);
+        t.split("\r\n")
+            .filter(|l| !l.is_empty())
+            .map(str::to_string)
+            .collect()
+    }
+    pub fn cmd(&mut self, line: &str) -> Vec<String> {
+        self.send(line.as_bytes());
+        self.send(b"\n");
+        self.run(2);
+        self.lines()
+    }
+    pub fn status(&mut self) -> protocol::client::grbl::TextStatus {
+        self.send(b"?");
+        self.run(1);
+        let lines = self.lines();
+        let st = lines.iter().rev().find_map(|l| parse_status(l));
+        st.unwrap_or_else(|| panic!("no status in {lines:?}"))
+    }
+    pub fn until_idle(&mut self) -> protocol::client::grbl::TextStatus {
+        for _ in 0..100_000 {
+            self.run(10);
+            let st = self.status();
+            if st.state == "Idle" {
+                return st;
+            }
+        }
+        panic!("never idle");
+    }
+    /// In alarm, and X stays where it is for `rounds` more rounds.
+    pub fn alarm_holds(&mut self, rounds: usize) {
+        let st = self.status();
+        assert_eq!(st.state, "Alarm");
+        let x = st.mpos.as_ref().map_or(0.0, |p| p[0]);
+        self.run(rounds);
+        let after = self.status().mpos.as_ref().map_or(1.0, |p| p[0]);
+        assert_eq!(after, x, "moved in alarm");
+    }
+    /// `$X` unlocks, the machine is idle, and a move to X`x` runs to the end.
+    pub fn unlock_and_move_to(&mut self, x: f32) {
+        assert_eq!(self.cmd("$X"), ["[MSG:Caution: Unlocked]", "ok"]);
+        self.run(2);
+        assert_eq!(self.status().state, "Idle");
+        assert_eq!(self.cmd(&format!("G1 X{x} F1000")), ["ok"]);
+        let st = self.until_idle();
+        assert_eq!(st.mpos, Some(vec![x, 0.0, 0.0, 0.0]));
+    }
+}
