@@ -16,7 +16,7 @@ pub const SEGMENT_S: f32 = 0.002;
 /// Smoothing keeps the fine event rate at or below this (Hz).
 pub const AMASS_FINE_HZ: f32 = 16_000.0;
 /// Longest event period of a dwell segment, seconds.
-const DWELL_CHUNK_S: f32 = 0.01;
+pub(super) const DWELL_CHUNK_S: f32 = 0.01;
 
 pub use super::sink::SegmentSink;
 
@@ -148,6 +148,11 @@ impl Preparer {
 
     /// Push segments until the queue is full or there is nothing to prepare.
     ///
+    /// Bounded work: each pass of the loop pushes a segment or ends it, so
+    /// at most the queue's free slots; each segment costs at most one
+    /// planner block per block finished without a step (a ring of `N`) and
+    /// [`MAX_WALKS_PER_SEGMENT`] profile walk steps of at most 3 phases.
+    ///
     /// A limit or e-stop interrupt may preempt this at any point: it records
     /// the trip, then bumps the generation. Taking the generation first and
     /// stamping it on every segment of this fill makes whatever this pass
@@ -276,6 +281,7 @@ impl Preparer {
                 self.replan(pl);
             }
         }
+        // Each pass returns or finishes a planner block: at most N + 1 passes.
         loop {
             if !self.active && !self.start_block(pl) {
                 return None;
@@ -306,31 +312,6 @@ impl Preparer {
                 return None;
             }
         }
-    }
-
-    fn dwell_segment(&mut self, rt: &Realtime, b: &Block) -> Option<Segment> {
-        if self.dwell_left == 0 {
-            return None;
-        }
-        let chunk = (DWELL_CHUNK_S * self.cfg.tick_hz as f32) as u64;
-        let period = self.dwell_left.min(chunk.max(1)) as u32;
-        let events = (self.dwell_left / period as u64).min(u32::MAX as u64) as u32;
-        self.dwell_left -= period as u64 * events as u64;
-        let first = core::mem::replace(&mut self.new_block, false);
-        Some(Segment {
-            events,
-            period,
-            amass: 0,
-            new_block: first,
-            steps: [0; crate::AXES],
-            count: 1,
-            dir_mask: self.last_dir,
-            watch: Default::default(),
-            end_of_motion: true,
-            generation: rt.generation(),
-            speed_mm_min: 0.0,
-            line: b.line,
-        })
     }
 
     fn motion_segment<const N: usize>(

@@ -1,4 +1,5 @@
-//! Walking the speed profile in time, with every loop bounded.
+//! Walking the speed profile in time, with every loop bounded, and the
+//! segments that stand still (waits and dwells).
 //!
 //! The old walk took fixed [`SEGMENT_S`] steps until a whole step was
 //! covered. At `G1 X-1 F0.0001` one step is 7 500 s away: 3.75 million
@@ -20,7 +21,7 @@
 //!   cruise would need that (`FeedTooSlow`) and floors the feed override
 //!   at the timer's reach, so only slow ramps get there.
 
-use super::{Preparer, SEGMENT_S};
+use super::{Preparer, DWELL_CHUNK_S, SEGMENT_S};
 use crate::planner::Block;
 use crate::realtime::Realtime;
 use crate::stepper::{Segment, MAX_AMASS};
@@ -138,5 +139,32 @@ impl Preparer {
             speed_mm_min: self.v * 60.0,
             line: self.last_line,
         }
+    }
+
+    /// The next piece of a G4 dwell: events that step nothing, at most
+    /// [`DWELL_CHUNK_S`] apart.
+    pub(super) fn dwell_segment(&mut self, rt: &Realtime, b: &Block) -> Option<Segment> {
+        if self.dwell_left == 0 {
+            return None;
+        }
+        let chunk = (DWELL_CHUNK_S * self.cfg.tick_hz as f32) as u64;
+        let period = self.dwell_left.min(chunk.max(1)) as u32;
+        let events = (self.dwell_left / period as u64).min(u32::MAX as u64) as u32;
+        self.dwell_left -= period as u64 * events as u64;
+        let first = core::mem::replace(&mut self.new_block, false);
+        Some(Segment {
+            events,
+            period,
+            amass: 0,
+            new_block: first,
+            steps: [0; crate::AXES],
+            count: 1,
+            dir_mask: self.last_dir,
+            watch: Default::default(),
+            end_of_motion: true,
+            generation: rt.generation(),
+            speed_mm_min: 0.0,
+            line: b.line,
+        })
     }
 }
