@@ -37,6 +37,14 @@ pub enum MachineError {
     NotHomed,
     /// 411: G38.2/G38.4 probe started in the state it waits for.
     ProbeInitialState,
+    /// 412: the feed is so slow that the dominant axis's steps would be
+    /// further apart than the 32-bit step timer can time (`u32::MAX` ticks,
+    /// 44.7 s at 96 MHz). GRBL silently raises such feeds to its minimum of
+    /// 1 mm/min; burin refuses instead, because a move that runs faster
+    /// than programmed is worse than one that does not start: a feed like
+    /// `F0.0001` is almost always a typo or a units mistake, and a refused
+    /// line says so while nothing has moved yet.
+    FeedTooSlow,
     /// 420: a limit switch closed during motion; position is lost.
     HardLimit { mask: u8 },
     /// 421: homing seek ended without finding this axis's switch.
@@ -71,6 +79,7 @@ impl MachineError {
             HomingDisabled => 409,
             NotHomed => 410,
             ProbeInitialState => 411,
+            FeedTooSlow => 412,
             HardLimit { .. } => 420,
             HomingNoSwitch { .. } => 421,
             HomingPullOff { .. } => 422,
@@ -113,6 +122,9 @@ impl fmt::Display for MachineError {
             HomingDisabled => f.write_str("homing is disabled"),
             NotHomed => f.write_str("machine is not homed"),
             ProbeInitialState => f.write_str("probe already in target state"),
+            FeedTooSlow => f.write_str(
+                "feed too slow: steps would be further apart than the step timer reaches",
+            ),
             HardLimit { .. } => f.write_str("hard limit triggered; position lost"),
             HomingNoSwitch { axis } => write!(f, "homing: no switch found on {}", axis_name(axis)),
             HomingPullOff { axis } => write!(

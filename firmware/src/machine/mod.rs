@@ -126,8 +126,10 @@ pub struct Machine<const N: usize> {
 impl<const N: usize> Machine<N> {
     pub fn new(settings: Settings, tick_hz: u32) -> Self {
         let cfg = StepConfig::new(&settings, tick_hz);
+        let mut planner = Planner::new(settings);
+        planner.set_tick_hz(tick_hz);
         Machine {
-            planner: Planner::new(settings),
+            planner,
             prep: Preparer::new(settings, cfg),
             cfg,
             pending: Pending::None,

@@ -71,6 +71,9 @@ pub struct Block {
     pub nominal: f32,
     /// Path acceleration the axes allow, mm/s².
     pub accel: f32,
+    /// Slowest path speed the step timer can time, mm/s: the feed override
+    /// never takes `nominal` below it.
+    pub floor: f32,
     /// Cornering limit at the junction with the previous block, mm/s.
     pub junction: f32,
     pub max_entry: f32,
@@ -93,6 +96,7 @@ impl Block {
         cap: 0.0,
         nominal: 0.0,
         accel: 1.0,
+        floor: 0.0,
         junction: 0.0,
         max_entry: 0.0,
         entry: 0.0,
@@ -135,6 +139,9 @@ pub struct Planner<const N: usize> {
     prev_length: f32,
     feed_pct: f32,
     rapid_pct: f32,
+    /// Fewest dominant-axis steps per second the step timer can time
+    /// (`tick_hz / u32::MAX`); 0 until [`set_tick_hz`](Self::set_tick_hz).
+    min_step_hz: f32,
     pub settings: Settings,
 }
 
@@ -151,8 +158,17 @@ impl<const N: usize> Planner<N> {
             prev_length: 0.0,
             feed_pct: 1.0,
             rapid_pct: 1.0,
+            min_step_hz: 0.0,
             settings,
         }
+    }
+
+    /// The step timer's clock: with it, feeds whose steps would be further
+    /// apart than the 32-bit timer reaches are refused
+    /// ([`MachineError::FeedTooSlow`]). The executor sets it; a bare planner
+    /// (tests, benches) checks nothing and the preparer still stays bounded.
+    pub fn set_tick_hz(&mut self, tick_hz: u32) {
+        self.min_step_hz = tick_hz as f32 / u32::MAX as f32;
     }
 
     pub fn len(&self) -> usize {
@@ -312,6 +328,15 @@ impl<const N: usize> Planner<N> {
             }
             _ => return Err(MachineError::InvalidFeed),
         }
+        // Steps further apart than the timer reaches cannot be timed by one
+        // period. Refused here, before anything moved, rather than run
+        // faster than programmed (see `FeedTooSlow`). At 100 % override:
+        // a lower override is floored at this speed instead, so a job that
+        // was accepted never fails halfway through.
+        b.floor = self.min_step_hz * b.length / b.count as f32;
+        if b.programmed.min(b.cap) < b.floor {
+            return Err(MachineError::FeedTooSlow);
+        }
         b.nominal = self.nominal(&b);
         b.junction = self.junction_speed(&unit, b.length, curve);
         b.max_entry = b.junction.min(b.nominal).min(self.prev_nominal);
@@ -357,6 +382,6 @@ impl<const N: usize> Planner<N> {
         } else {
             b.programmed * pct
         };
-        v.min(b.cap)
+        v.max(b.floor).min(b.cap)
     }
 }

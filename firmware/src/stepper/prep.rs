@@ -16,11 +16,15 @@ pub const SEGMENT_S: f32 = 0.002;
 /// Smoothing keeps the fine event rate at or below this (Hz).
 pub const AMASS_FINE_HZ: f32 = 16_000.0;
 /// Longest event period of a dwell segment, seconds.
-const DWELL_CHUNK_S: f32 = 0.01;
+pub(super) const DWELL_CHUNK_S: f32 = 0.01;
 
 pub use super::sink::SegmentSink;
 
 mod hold;
+mod walk;
+
+use walk::MAX_SEGMENT_TICKS;
+pub use walk::MAX_WALKS_PER_SEGMENT;
 
 /// Feed hold progress.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -53,6 +57,11 @@ pub struct Preparer {
     /// Fractional dominant steps covered at the end of the last segment.
     frac_prev: f32,
     dwell_left: u64,
+    /// Ticks still to wait before the next segment: the part of a step
+    /// interval beyond the timer's range, or time walked without a step.
+    wait_left: u64,
+    /// The segment the wait follows ended the motion.
+    wait_end: bool,
     last_dir: u8,
     hold: Hold,
     /// The hold is a motion cancel (probe contact): cycle start does not
@@ -62,6 +71,9 @@ pub struct Preparer {
     /// crosses into the next block is still evaluated with it).
     pshape: Shape,
     last_line: u32,
+    /// Profile walk steps taken so far (wrapping): the work measure that
+    /// tests and the bench budget hold against [`MAX_WALKS_PER_SEGMENT`].
+    walks: u32,
     /// Highest segment speed so far, mm/min.
     pub max_speed_mm_min: f32,
 }
@@ -86,6 +98,8 @@ impl Preparer {
             tick_carry: 0.0,
             frac_prev: 0.0,
             dwell_left: 0,
+            wait_left: 0,
+            wait_end: false,
             last_dir: 0,
             hold: Hold::Running,
             cancel: false,
@@ -94,6 +108,7 @@ impl Preparer {
                 jerk: 0.0,
             },
             last_line: 0,
+            walks: 0,
             max_speed_mm_min: 0.0,
         }
     }
@@ -104,6 +119,7 @@ impl Preparer {
         self.block = None;
         self.v = 0.0;
         self.tick_carry = 0.0;
+        self.wait_left = 0;
         self.hold = Hold::Running;
         self.cancel = false;
     }
@@ -113,7 +129,7 @@ impl Preparer {
     }
     /// No block in progress.
     pub fn is_idle(&self) -> bool {
-        !self.active
+        !self.active && self.wait_left == 0
     }
     /// Source line of the block prepared last.
     pub fn line(&self) -> u32 {
@@ -123,8 +139,19 @@ impl Preparer {
     pub fn speed(&self) -> f32 {
         self.v
     }
+    /// Profile walk steps taken since power-up (wrapping). One segment
+    /// takes at most [`MAX_WALKS_PER_SEGMENT`], one fill at most that
+    /// times the free queue slots.
+    pub fn walks(&self) -> u32 {
+        self.walks
+    }
 
     /// Push segments until the queue is full or there is nothing to prepare.
+    ///
+    /// Bounded work: each pass of the loop pushes a segment or ends it, so
+    /// at most the queue's free slots; each segment costs at most one
+    /// planner block per block finished without a step (a ring of `N`) and
+    /// [`MAX_WALKS_PER_SEGMENT`] profile walk steps of at most 3 phases.
     ///
     /// A limit or e-stop interrupt may preempt this at any point: it records
     /// the trip, then bumps the generation. Taking the generation first and
@@ -196,47 +223,6 @@ impl Preparer {
         self.set_profile(p);
     }
 
-    /// Walk the profile for `dt` seconds; returns the time actually walked
-    /// and whether the profile ended.
-    fn advance(&mut self, mut dt: f32) -> (f32, bool) {
-        let mut used = 0.0;
-        while dt > 0.0 && self.phase < 3 {
-            let ph = self.profile.phases[self.phase];
-            let rem = ph.time - self.tau;
-            if dt < rem {
-                self.tau += dt;
-                used += dt;
-                dt = 0.0;
-            } else {
-                used += rem.max(0.0);
-                dt -= rem.max(0.0);
-                self.phase += 1;
-                self.s_phase0 += ph.dist;
-                self.tau = 0.0;
-            }
-        }
-        if self.phase < 3 {
-            let ph = self.profile.phases[self.phase];
-            let (v, s) = if ph.v0 == ph.v1 {
-                (ph.v0, ph.v0 * self.tau)
-            } else if ph.t0 > 0.0 {
-                // The tail of a ramp that started before this profile.
-                let sh = self.pshape;
-                let (v, s) = sh.eval(ph.v0, ph.v1, ph.t0 + self.tau);
-                (v, s - sh.eval(ph.v0, ph.v1, ph.t0).1)
-            } else {
-                self.pshape.eval(ph.v0, ph.v1, self.tau)
-            };
-            self.v = v;
-            self.s_done = self.s_phase0 + s;
-            (used, false)
-        } else {
-            self.v = self.profile.exit_speed();
-            self.s_done = self.s_phase0;
-            (used, true)
-        }
-    }
-
     fn start_block<const N: usize>(&mut self, pl: &Planner<N>) -> bool {
         let Some(b) = pl.block(0).copied() else {
             return false;
@@ -279,6 +265,9 @@ impl Preparer {
         pl: &mut Planner<N>,
         rt: &Realtime,
     ) -> Option<Segment> {
+        if self.wait_left > 0 {
+            return Some(self.wait_chunk(rt));
+        }
         if rt.hold_requested() && self.hold == Hold::Running {
             self.begin_hold();
         }
@@ -292,6 +281,7 @@ impl Preparer {
                 self.replan(pl);
             }
         }
+        // Each pass returns or finishes a planner block: at most N + 1 passes.
         loop {
             if !self.active && !self.start_block(pl) {
                 return None;
@@ -324,31 +314,6 @@ impl Preparer {
         }
     }
 
-    fn dwell_segment(&mut self, rt: &Realtime, b: &Block) -> Option<Segment> {
-        if self.dwell_left == 0 {
-            return None;
-        }
-        let chunk = (DWELL_CHUNK_S * self.cfg.tick_hz as f32) as u64;
-        let period = self.dwell_left.min(chunk.max(1)) as u32;
-        let events = (self.dwell_left / period as u64).min(u32::MAX as u64) as u32;
-        self.dwell_left -= period as u64 * events as u64;
-        let first = core::mem::replace(&mut self.new_block, false);
-        Some(Segment {
-            events,
-            period,
-            amass: 0,
-            new_block: first,
-            steps: [0; crate::AXES],
-            count: 1,
-            dir_mask: self.last_dir,
-            watch: Default::default(),
-            end_of_motion: true,
-            generation: rt.generation(),
-            speed_mm_min: 0.0,
-            line: b.line,
-        })
-    }
-
     fn motion_segment<const N: usize>(
         &mut self,
         pl: &mut Planner<N>,
@@ -356,9 +321,12 @@ impl Preparer {
     ) -> Option<Segment> {
         let b = self.block?;
         let mut time = 0.0f32;
+        let mut walks = 0u32;
         let (target, block_end, stopped) = loop {
-            let (dt, ended) = self.advance(SEGMENT_S);
+            let (dt, ended) = self.advance(self.walk_dt(&b));
             time += dt;
+            walks += 1;
+            self.walks = self.walks.wrapping_add(1);
             let block_end =
                 self.s_done >= b.length - 1e-6 || (ended && self.hold != Hold::Decelerating);
             let hold_done = ended && self.hold == Hold::Decelerating && !block_end;
@@ -370,6 +338,11 @@ impl Preparer {
             };
             if target > self.steps_done || block_end || hold_done {
                 break (target, block_end, hold_done);
+            }
+            // No whole step yet (a slow ramp): hand the time walked so far
+            // to the stepper as a wait, so this call stays bounded.
+            if walks >= MAX_WALKS_PER_SEGMENT {
+                return Some(self.begin_wait(time * self.cfg.tick_hz as f32, false, rt));
             }
         };
         let n = target.saturating_sub(self.steps_done);
@@ -442,11 +415,19 @@ impl Preparer {
             }
         }
         let events = n << amass;
-        let ticks = (dominant * n as f32).min(u32::MAX as f32) + self.tick_carry;
+        let ticks = (dominant * n as f32).min(MAX_SEGMENT_TICKS) + self.tick_carry;
         let period_f = ticks / events as f32;
         let period = if period_f >= self.cfg.min_period as f32 {
             let p = (period_f.min(u32::MAX as f32) as u32).max(self.cfg.min_period);
-            self.tick_carry = crate::num::clamp(ticks - p as f32 * events as f32, 0.0, p as f32);
+            let rest = ticks - p as f32 * events as f32;
+            if period_f > u32::MAX as f32 {
+                // Beyond the timer's range: the rest waits after the steps.
+                self.tick_carry = 0.0;
+                self.wait_left = rest as u64;
+                self.wait_end = end_speed_zero || self.hold == Hold::Held;
+            } else {
+                self.tick_carry = crate::num::clamp(rest, 0.0, p as f32);
+            }
             p
         } else {
             // Never faster than the ceiling; the lost time is not made up.
