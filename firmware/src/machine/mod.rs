@@ -22,6 +22,11 @@ use crate::stepper::prep::{Preparer, SegmentSink};
 use crate::stepper::{StepConfig, Switches};
 use crate::AXES;
 
+/// Chords (arc, spline or rapid legs) the executor plans in one call: a
+/// bound on the task's work per pass, above the planner ring (a productive
+/// chord takes a slot) so it never limits planning.
+pub const CHORDS_PER_CALL: u32 = 256;
+
 /// What kind of move a path vertex ends (for traces and plots).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PathKind {

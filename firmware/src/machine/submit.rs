@@ -193,8 +193,17 @@ impl<const N: usize> Machine<N> {
         Ok(Speed::Feed(len / t))
     }
 
+    ///
+    /// At most [`CHORDS_PER_CALL`] chords per call: a chord shorter than a
+    /// step takes no planner slot, so "until the planner is full" alone
+    /// could mean 2^24 chords (a many-turn helix of a radius under one
+    /// step) and stall the task for seconds. The rest waits for the next
+    /// poll; the device keeps answering meanwhile.
     pub(super) fn feed_chords(&mut self, obs: &mut dyn FnMut(Note)) -> Result<(), MachineError> {
-        while !self.planner.is_full() {
+        for _ in 0..CHORDS_PER_CALL {
+            if self.planner.is_full() {
+                break;
+            }
             let Pending::Chords {
                 chords,
                 speed,
