@@ -56,8 +56,23 @@ impl Storage for NoStorage {
     }
 }
 
-/// Byte link to the PC (USB-CDC on the MCU; a pty or pipe on the host).
-pub trait Serial {
-    /// Queue bytes for transmission; returns how many were accepted.
-    fn write(&mut self, bytes: &[u8]) -> usize;
+/// Reply bytes towards the host: the TX ring the USB (or USART)
+/// interrupt drains on the board, a buffer host-sim hands to its pty or
+/// pipe. It must take every byte: the session writes whole replies only,
+/// and runs only while [`Tx::room`] holds its longest burst.
+pub trait Tx {
+    fn send(&mut self, bytes: &[u8]);
+    /// Bytes it can take now (a ring's free space; unbounded sinks say so).
+    fn room(&self) -> usize {
+        usize::MAX
+    }
+}
+
+impl<T: Tx + ?Sized> Tx for &mut T {
+    fn send(&mut self, bytes: &[u8]) {
+        (**self).send(bytes)
+    }
+    fn room(&self) -> usize {
+        (**self).room()
+    }
 }

@@ -12,24 +12,7 @@ use protocol::frame::MAX_WIRE;
 use protocol::msg::MsgText;
 use protocol::DeviceMsg;
 
-/// The byte sink towards the host (USB-CDC, a pty, a test pipe). It must
-/// take every byte: the device writes whole replies only.
-pub trait Tx {
-    fn send(&mut self, bytes: &[u8]);
-    /// Bytes it can take now (a ring's free space; unbounded sinks say so).
-    fn room(&self) -> usize {
-        usize::MAX
-    }
-}
-
-impl<T: Tx + ?Sized> Tx for &mut T {
-    fn send(&mut self, bytes: &[u8]) {
-        (**self).send(bytes)
-    }
-    fn room(&self) -> usize {
-        (**self).room()
-    }
-}
+pub use crate::seams::Tx;
 
 /// A reply writer for one protocol.
 pub struct Out<'a, T: Tx> {
