@@ -309,6 +309,9 @@ impl<Q: SegmentSink, const N: usize> MotionPort for Core<'_, Q, N> {
     fn feed_and_line(&self) -> (f32, u32) {
         self.rt.running()
     }
+    fn spindle_speed(&self) -> f32 {
+        self.outputs.speed()
+    }
     fn planner_free(&self) -> u16 {
         (N - self.machine.planner.len()) as u16
     }

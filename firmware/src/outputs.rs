@@ -104,6 +104,15 @@ impl Outputs {
         self.dir
     }
 
+    /// The spindle speed running now, rpm (0 while stopped): the status
+    /// report's `FS:` second figure, which follows execution, not parsing.
+    pub fn speed(&self) -> f32 {
+        match self.dir {
+            SpindleDir::Off => 0.0,
+            _ => self.speed,
+        }
+    }
+
     /// The spindle pins for the current motion.
     ///
     /// Spindle mode: M3/M4 enable the spindle whatever the motion; S maps

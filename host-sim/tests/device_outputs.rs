@@ -118,3 +118,20 @@ fn laser_is_dark_while_stopped() {
         "lit after the move"
     );
 }
+
+/// The status report's spindle figure is the spindle as it runs: `S500`
+/// with `M3`, 0 after `M5` (the programmed S stays 500 in `$G`).
+#[test]
+fn status_spindle_follows_execution() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    assert_eq!(r.cmd("M3 S500"), ["ok"]);
+    r.run(2);
+    assert_eq!(r.status().spindle, Some(500.0));
+    assert_eq!(r.cmd("M5"), ["ok"]);
+    r.run(2);
+    assert_eq!(r.status().spindle, Some(0.0));
+    assert!(r.cmd("$G")[0].contains("S500"));
+}

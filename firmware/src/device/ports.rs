@@ -42,6 +42,8 @@ pub trait MotionPort {
     fn probe_result(&self) -> Option<(Pos, bool)>;
     /// Current feed, mm/min, and the machine line number executing.
     fn feed_and_line(&self) -> (f32, u32);
+    /// Spindle speed as executed (0 after M5), rpm.
+    fn spindle_speed(&self) -> f32;
     fn planner_free(&self) -> u16;
     fn planner_blocks(&self) -> u16;
     fn settings(&self) -> &Settings;

@@ -94,7 +94,7 @@ impl<S: crate::seams::Storage> Device<S> {
             mpos,
             wco,
             feed,
-            spindle: self.interp.state().speed,
+            spindle: m.spindle_speed(),
             planner_free: m.planner_free(),
             rx_free,
             line: (line != 0 && state != MachineState::Idle).then_some(line),
