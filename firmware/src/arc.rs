@@ -8,11 +8,23 @@
 use core::f32::consts::PI;
 
 use crate::command::{Arc, ArcDir, Pos, Spline};
-use crate::machine::MachineError;
 use crate::AXES;
 
 /// More chords than this in one arc or spline is refused rather than run for hours.
 pub const MAX_CHORDS: u32 = 1 << 24;
+
+/// Why an arc or spline cannot be cut into chords. The executor maps each
+/// onto its own error of the same name, so the reported codes do not change.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ArcError {
+    /// A point, the centre or the tolerance is not finite (or the tolerance
+    /// is not positive).
+    InvalidNumber,
+    /// The start or end point sits on the centre: zero radius.
+    InvalidArc,
+    /// More than [`MAX_CHORDS`] chords.
+    TooManySegments,
+}
 
 /// Largest chord angle whose sagitta stays within `tol` on radius `r`.
 ///
@@ -49,7 +61,7 @@ pub struct ArcChords {
 }
 
 impl ArcChords {
-    pub fn new(start: &Pos, arc: &Arc, tol: f32) -> Result<Self, MachineError> {
+    pub fn new(start: &Pos, arc: &Arc, tol: f32) -> Result<Self, ArcError> {
         let plane = arc.plane.axes();
         let (a, b, _) = plane;
         let [ca, cb] = arc.center;
@@ -59,14 +71,14 @@ impl ArcChords {
             && tol.is_finite()
             && tol > 0.0;
         if !finite {
-            return Err(MachineError::InvalidNumber);
+            return Err(ArcError::InvalidNumber);
         }
         let (sa, sb) = (start[a] - ca, start[b] - cb);
         let (ea, eb) = (arc.end[a] - ca, arc.end[b] - cb);
         let r0 = libm::hypotf(sa, sb);
         let r1 = libm::hypotf(ea, eb);
         if r0 < 1e-6 || r1 < 1e-6 {
-            return Err(MachineError::InvalidArc);
+            return Err(ArcError::InvalidArc);
         }
         let theta0 = libm::atan2f(sb, sa);
         let theta1 = libm::atan2f(eb, ea);
@@ -90,7 +102,7 @@ impl ArcChords {
         let phi = max_chord_angle(r0.max(r1), tol);
         let n = libm::ceilf(libm::fabsf(sweep) / phi).max(1.0);
         if n > MAX_CHORDS as f32 {
-            return Err(MachineError::TooManySegments);
+            return Err(ArcError::TooManySegments);
         }
         Ok(ArcChords {
             start: *start,
@@ -182,14 +194,14 @@ pub struct SplineChords {
 }
 
 impl SplineChords {
-    pub fn new(start: &Pos, s: &Spline, tol: f32) -> Result<Self, MachineError> {
+    pub fn new(start: &Pos, s: &Spline, tol: f32) -> Result<Self, ArcError> {
         let all = start
             .iter()
             .chain(s.end.iter())
             .chain(s.p1.iter())
             .chain(s.p2.iter());
         if !(all.clone().all(|v| v.is_finite()) && tol > 0.0 && tol.is_finite()) {
-            return Err(MachineError::InvalidNumber);
+            return Err(ArcError::InvalidNumber);
         }
         let d = |p0: [f32; 2], p1: [f32; 2], p2: [f32; 2]| {
             libm::hypotf(p0[0] - 2.0 * p1[0] + p2[0], p0[1] - 2.0 * p1[1] + p2[1])
@@ -199,7 +211,7 @@ impl SplineChords {
         let l = d(p0, s.p1, s.p2).max(d(s.p1, s.p2, p3));
         let n = libm::ceilf(libm::sqrtf(0.75 * l / tol)).max(1.0);
         if n > MAX_CHORDS as f32 {
-            return Err(MachineError::TooManySegments);
+            return Err(ArcError::TooManySegments);
         }
         Ok(SplineChords {
             start: *start,

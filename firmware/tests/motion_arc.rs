@@ -1,6 +1,6 @@
 //! Segmenter: chord error within tolerance in every plane, helix, full
 //! circles, multi-turn, exact end points; splines flattened to tolerance.
-use burin::arc::{ArcChords, SplineChords};
+use burin::arc::{ArcChords, ArcError, SplineChords};
 use burin::command::{Arc, ArcDir, Feed, Plane, Pos, Spline};
 
 const TOL: f32 = 0.002;
@@ -123,18 +123,25 @@ fn cw_vs_ccw_go_opposite_ways() {
 #[test]
 fn bad_arcs_are_errors_not_panics() {
     let s = [0.0, 0.0, 0.0, 0.0];
-    assert!(ArcChords::new(
-        &s,
-        &arc([1.0, 0.0, 0.0, 0.0], [0.0, 0.0], Plane::XY, ArcDir::Cw, 0),
-        TOL
-    )
-    .is_err());
-    assert!(ArcChords::new(
-        &[f32::NAN; 4],
-        &arc(s, [1.0, 0.0], Plane::XY, ArcDir::Cw, 0),
-        TOL
-    )
-    .is_err());
+    assert_eq!(
+        ArcChords::new(
+            &s,
+            &arc([1.0, 0.0, 0.0, 0.0], [0.0, 0.0], Plane::XY, ArcDir::Cw, 0),
+            TOL
+        )
+        .err(),
+        Some(ArcError::InvalidArc),
+        "zero start radius"
+    );
+    assert_eq!(
+        ArcChords::new(
+            &[f32::NAN; 4],
+            &arc(s, [1.0, 0.0], Plane::XY, ArcDir::Cw, 0),
+            TOL
+        )
+        .err(),
+        Some(ArcError::InvalidNumber)
+    );
     let huge = arc(
         [1.0, 0.0, 0.0, 0.0],
         [0.0, 0.0],
@@ -142,8 +149,9 @@ fn bad_arcs_are_errors_not_panics() {
         ArcDir::Cw,
         u16::MAX,
     );
-    assert!(
-        ArcChords::new(&[1.0, 0.0, 0.0, 0.0], &huge, 1e-6).is_err(),
+    assert_eq!(
+        ArcChords::new(&[1.0, 0.0, 0.0, 0.0], &huge, 1e-6).err(),
+        Some(ArcError::TooManySegments),
         "too many chords is refused"
     );
 }

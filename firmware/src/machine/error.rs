@@ -9,6 +9,9 @@
 
 use core::fmt;
 
+use crate::arc::ArcError;
+use crate::planner::PlanError;
+
 /// What went wrong in the motion core.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum MachineError {
@@ -96,6 +99,32 @@ impl MachineError {
     }
 }
 
+/// The segmenter's errors keep the codes they had when it returned these
+/// directly: 405, 402, 403.
+impl From<ArcError> for MachineError {
+    fn from(e: ArcError) -> Self {
+        match e {
+            ArcError::InvalidNumber => MachineError::InvalidNumber,
+            ArcError::InvalidArc => MachineError::InvalidArc,
+            ArcError::TooManySegments => MachineError::TooManySegments,
+        }
+    }
+}
+
+/// The planner's errors keep the codes they had when it returned these
+/// directly: 408, 405, 404, 401, 406.
+impl From<PlanError> for MachineError {
+    fn from(e: PlanError) -> Self {
+        match e {
+            PlanError::Full => MachineError::Busy,
+            PlanError::InvalidNumber => MachineError::InvalidNumber,
+            PlanError::MoveTooLong => MachineError::MoveTooLong,
+            PlanError::StepRateTooHigh { axis } => MachineError::StepRateTooHigh { axis },
+            PlanError::InvalidFeed => MachineError::InvalidFeed,
+        }
+    }
+}
+
 fn axis_name(axis: u8) -> char {
     crate::AXIS_NAMES.get(axis as usize).copied().unwrap_or('?')
 }
@@ -141,5 +170,38 @@ impl fmt::Display for MachineError {
             ResetDuringMotion => f.write_str("reset during motion; position lost"),
             EStop => f.write_str("e-stop pressed; release it, then $X"),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The segmenter's and the planner's own errors reach the host with the
+    /// codes they had when those modules returned `MachineError` directly.
+    #[test]
+    fn lower_errors_keep_their_codes() {
+        let arc = [
+            (ArcError::InvalidNumber, 405),
+            (ArcError::InvalidArc, 402),
+            (ArcError::TooManySegments, 403),
+        ];
+        for (e, code) in arc {
+            assert_eq!(MachineError::from(e).code(), code, "{e:?}");
+        }
+        let plan = [
+            (PlanError::Full, 408),
+            (PlanError::InvalidNumber, 405),
+            (PlanError::MoveTooLong, 404),
+            (PlanError::StepRateTooHigh { axis: 2 }, 401),
+            (PlanError::InvalidFeed, 406),
+        ];
+        for (e, code) in plan {
+            assert_eq!(MachineError::from(e).code(), code, "{e:?}");
+        }
+        assert_eq!(
+            MachineError::from(PlanError::StepRateTooHigh { axis: 2 }),
+            MachineError::StepRateTooHigh { axis: 2 }
+        );
     }
 }

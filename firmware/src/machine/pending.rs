@@ -82,7 +82,7 @@ impl<const N: usize> Machine<N> {
                         let ticks = (seconds as f64 * self.cfg.tick_hz as f64) as u64;
                         match self.planner.push_dwell(ticks, line) {
                             Ok(()) => self.pending = Pending::Homing(h),
-                            Err(e) => self.raise_alarm(rt, e, line, obs),
+                            Err(e) => self.raise_alarm(rt, e.into(), line, obs),
                         }
                     }
                     Ok(homing::Action::Redefine { position }) => {

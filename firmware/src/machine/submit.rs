@@ -81,7 +81,7 @@ impl<const N: usize> Machine<N> {
                     return Err(MachineError::InvalidNumber);
                 }
                 let ticks = (*seconds as f64 * self.cfg.tick_hz as f64) as u64;
-                self.planner.push_dwell(ticks, line)
+                Ok(self.planner.push_dwell(ticks, line)?)
             }
             Command::Probe { end, feed, kind } => {
                 self.check_soft(end, end)?;
@@ -235,7 +235,7 @@ impl<const N: usize> Machine<N> {
             });
             if let Err(e) = pushed {
                 self.pending = Pending::None;
-                return Err(e);
+                return Err(e.into());
             }
             self.commanded = p;
             obs(Note::Path { line, kind, end: p });

@@ -12,10 +12,26 @@ mod passes;
 pub mod ramp;
 
 use crate::command::Pos;
-use crate::machine::MachineError;
 use crate::settings::Settings;
 use crate::AXES;
 pub use ramp::{Phase, Profile, Shape};
+
+/// Why a block was not queued. The executor maps `Full` onto its `Busy` and
+/// the rest onto its errors of the same name, so the reported codes do not
+/// change.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PlanError {
+    /// The ring has no free slot (the caller checks `is_full` first).
+    Full,
+    /// A target, steps/mm, rate or acceleration is not a finite number in range.
+    InvalidNumber,
+    /// One block would need more than [`MAX_BLOCK_STEPS`] steps on an axis.
+    MoveTooLong,
+    /// This axis's max rate times its steps/mm exceeds `max_step_rate_hz`.
+    StepRateTooHigh { axis: u8 },
+    /// Feed rate or move time zero, negative or not finite.
+    InvalidFeed,
+}
 
 /// What a block does.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -220,12 +236,12 @@ impl<const N: usize> Planner<N> {
 
     /// Steps for a machine position in mm: rounded from the absolute target,
     /// so the step count of a job never drifts from summing rounded deltas.
-    pub fn to_steps(&self, mm: &Pos) -> Result<[i32; AXES], MachineError> {
+    pub fn to_steps(&self, mm: &Pos) -> Result<[i32; AXES], PlanError> {
         let mut out = [0i32; AXES];
         for i in 0..AXES {
             let v = libm::roundf(mm[i] * self.settings.axes[i].steps_per_mm);
             if !v.is_finite() || v.abs() > 1.0e9 {
-                return Err(MachineError::InvalidNumber);
+                return Err(PlanError::InvalidNumber);
             }
             out[i] = v as i32;
         }
@@ -240,7 +256,7 @@ impl<const N: usize> Planner<N> {
         speed: Speed,
         watch: Watch,
         line: u32,
-    ) -> Result<(), MachineError> {
+    ) -> Result<(), PlanError> {
         self.push(target, speed, watch, line, false)
     }
 
@@ -252,7 +268,7 @@ impl<const N: usize> Planner<N> {
         target: [i32; AXES],
         speed: Speed,
         line: u32,
-    ) -> Result<(), MachineError> {
+    ) -> Result<(), PlanError> {
         self.push(target, speed, Watch::default(), line, true)
     }
 
@@ -263,9 +279,9 @@ impl<const N: usize> Planner<N> {
         watch: Watch,
         line: u32,
         curve: bool,
-    ) -> Result<(), MachineError> {
+    ) -> Result<(), PlanError> {
         if self.is_full() {
-            return Err(MachineError::Busy);
+            return Err(PlanError::Full);
         }
         let s = &self.settings;
         let mut b = Block {
@@ -279,12 +295,12 @@ impl<const N: usize> Planner<N> {
         for i in 0..AXES {
             let spm = s.axes[i].steps_per_mm;
             if !(spm.is_finite() && spm > 0.0) {
-                return Err(MachineError::InvalidNumber);
+                return Err(PlanError::InvalidNumber);
             }
             let d = target[i] as i64 - self.position[i] as i64;
             let ad = d.unsigned_abs();
             if ad > MAX_BLOCK_STEPS as u64 {
-                return Err(MachineError::MoveTooLong);
+                return Err(PlanError::MoveTooLong);
             }
             b.steps[i] = ad as u32;
             if d < 0 {
@@ -308,10 +324,10 @@ impl<const N: usize> Planner<N> {
             let ax = &s.axes[i];
             let sane = |v: f32| v.is_finite() && v > 0.0;
             if !(sane(ax.max_rate) && sane(ax.max_accel) && sane(ax.steps_per_mm)) {
-                return Err(MachineError::InvalidNumber);
+                return Err(PlanError::InvalidNumber);
             }
             if ax.max_rate / 60.0 * ax.steps_per_mm > s.max_step_rate_hz {
-                return Err(MachineError::StepRateTooHigh { axis: i as u8 });
+                return Err(PlanError::StepRateTooHigh { axis: i as u8 });
             }
             let u = unit[i].abs();
             cap = cap.min(ax.max_rate / 60.0 / u);
@@ -326,7 +342,7 @@ impl<const N: usize> Planner<N> {
                 b.programmed = f32::INFINITY;
                 b.rapid = true;
             }
-            _ => return Err(MachineError::InvalidFeed),
+            _ => return Err(PlanError::InvalidFeed),
         }
         // Steps further apart than the timer reaches cannot be timed by one
         // period. Refused here, before anything moved, rather than run
@@ -353,9 +369,9 @@ impl<const N: usize> Planner<N> {
     }
 
     /// Queue a dwell; motion stops before it.
-    pub fn push_dwell(&mut self, ticks: u64, line: u32) -> Result<(), MachineError> {
+    pub fn push_dwell(&mut self, ticks: u64, line: u32) -> Result<(), PlanError> {
         if self.is_full() {
-            return Err(MachineError::Busy);
+            return Err(PlanError::Full);
         }
         let b = Block {
             kind: BlockKind::Dwell { ticks },
