@@ -121,6 +121,7 @@ impl From<PlanError> for MachineError {
             PlanError::MoveTooLong => MachineError::MoveTooLong,
             PlanError::StepRateTooHigh { axis } => MachineError::StepRateTooHigh { axis },
             PlanError::InvalidFeed => MachineError::InvalidFeed,
+            PlanError::FeedTooSlow => MachineError::FeedTooSlow,
         }
     }
 }
@@ -195,6 +196,7 @@ mod tests {
             (PlanError::MoveTooLong, 404),
             (PlanError::StepRateTooHigh { axis: 2 }, 401),
             (PlanError::InvalidFeed, 406),
+            (PlanError::FeedTooSlow, 412),
         ];
         for (e, code) in plan {
             assert_eq!(MachineError::from(e).code(), code, "{e:?}");

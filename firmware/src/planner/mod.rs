@@ -31,6 +31,9 @@ pub enum PlanError {
     StepRateTooHigh { axis: u8 },
     /// Feed rate or move time zero, negative or not finite.
     InvalidFeed,
+    /// So slow that one step would be further apart than the step timer
+    /// can count (see `Planner::set_tick_hz`).
+    FeedTooSlow,
 }
 
 /// What a block does.
@@ -181,7 +184,7 @@ impl<const N: usize> Planner<N> {
 
     /// The step timer's clock: with it, feeds whose steps would be further
     /// apart than the 32-bit timer reaches are refused
-    /// ([`MachineError::FeedTooSlow`]). The executor sets it; a bare planner
+    /// ([`PlanError::FeedTooSlow`]). The executor sets it; a bare planner
     /// (tests, benches) checks nothing and the preparer still stays bounded.
     pub fn set_tick_hz(&mut self, tick_hz: u32) {
         self.min_step_hz = tick_hz as f32 / u32::MAX as f32;
@@ -351,7 +354,7 @@ impl<const N: usize> Planner<N> {
         // was accepted never fails halfway through.
         b.floor = self.min_step_hz * b.length / b.count as f32;
         if b.programmed.min(b.cap) < b.floor {
-            return Err(MachineError::FeedTooSlow);
+            return Err(PlanError::FeedTooSlow);
         }
         b.nominal = self.nominal(&b);
         b.junction = self.junction_speed(&unit, b.length, curve);
