@@ -12,16 +12,16 @@
 //! machine does can drift between the board and the simulator.
 //!
 //! The session meets the rest of the core through two small ports
-//! (`device::LinkPort`, `device::MotionPort`), implemented here and only
+//! (`session::LinkPort`, `session::MotionPort`), implemented here and only
 //! here.
 
 use crate::command::{Command, Pos};
-use crate::device::{Device, LinkPort, MotionPort, Tx};
+use crate::executor::{self, Machine, MachineError, Note, State};
 use crate::link::{LineAssembler, LinkEvent, LinkMode, RtFlags, RtSet, TokenSource};
-use crate::machine::{self, Machine, MachineError, Note, State};
 use crate::outputs::{Enable, Motion, Outputs, Spindle};
 use crate::realtime::Realtime;
 use crate::seams::Storage;
+use crate::session::{Device, LinkPort, MotionPort, Tx};
 use crate::settings::table::SettingError;
 use crate::settings::Settings;
 use crate::stepper::prep::SegmentSink;
@@ -286,7 +286,7 @@ impl<Q: SegmentSink, const N: usize> MotionPort for Core<'_, Q, N> {
         });
         Ok(())
     }
-    fn state(&self) -> machine::State {
+    fn state(&self) -> executor::State {
         self.machine.state(self.rt)
     }
     fn alarm(&self) -> Option<MachineError> {

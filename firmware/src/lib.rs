@@ -6,30 +6,41 @@
 //! is why the hardware appears here only as the small traits in [`seams`].
 //!
 //! Pipeline, one module per stage:
-//! `gcode` (lexer/parser) -> `interp` (modal state) -> [`command`] ->
-//! `arc` (segmenter) -> `planner` (look-ahead) -> `stepper` (segments, pulses).
+//! `link` (bytes) -> `session` (lines, replies) -> `gcode` (lexer/parser)
+//! -> `interp` (modal state) -> [`command`] -> `executor` -> `arc`
+//! (segmenter) -> `planner` (look-ahead) -> `stepper` (segments, pulses).
+//! [`controller`] is the whole parse/plan task, which both shells drive.
 #![cfg_attr(not(test), no_std)]
 #![deny(unsafe_code)]
 #![warn(missing_debug_implementations)]
 
-pub mod arc;
-pub mod command;
-pub mod controller;
-pub mod device;
-pub mod gcode;
-pub mod inputs;
-pub mod interp;
-pub mod link;
-pub mod machine;
+// In pipeline order; a module imports only from modules above it (the
+// hardware seams and the number and settings types first).
 pub mod num;
-pub mod outputs;
-pub mod persist;
-pub mod planner;
-pub mod realtime;
 pub mod seams;
 pub mod settings;
-pub mod stepper;
 pub mod usb_ids;
+
+pub mod command;
+pub mod gcode;
+pub mod interp;
+
+pub mod arc;
+pub mod planner;
+
+pub mod realtime;
+pub mod stepper;
+
+pub mod executor;
+
+pub mod inputs;
+pub mod link;
+pub mod outputs;
+pub mod persist;
+
+pub mod session;
+
+pub mod controller;
 
 /// Number of axes the core drives: X, Y, Z and A.
 pub const AXES: usize = 4;

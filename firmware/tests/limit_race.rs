@@ -2,7 +2,7 @@
 //! segment fill: nothing that fill prepared from the old plan may run.
 
 use burin::command::{Command, Feed};
-use burin::machine::Machine;
+use burin::executor::Machine;
 use burin::realtime::Realtime;
 use burin::settings::Settings;
 use burin::stepper::sink::SegmentSink;

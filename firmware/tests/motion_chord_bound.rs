@@ -5,7 +5,7 @@
 //! should.
 
 use burin::command::{Arc, ArcDir, Command, Feed, Plane};
-use burin::machine::{Machine, Note, CHORDS_PER_CALL};
+use burin::executor::{Machine, Note, CHORDS_PER_CALL};
 use burin::realtime::Realtime;
 use burin::settings::Settings;
 use burin::stepper::{Segment, Stepper, Switches};

@@ -10,7 +10,7 @@ use std::sync::mpsc;
 use std::time::Duration;
 
 use burin::command::{Command, Feed};
-use burin::machine::{Machine, MachineError};
+use burin::executor::{Machine, MachineError};
 use burin::realtime::Realtime;
 use burin::settings::Settings;
 use burin::stepper::prep::MAX_WALKS_PER_SEGMENT;
@@ -55,7 +55,7 @@ fn run_move(settings: Settings, dx: f32, feed: f32) -> Outcome {
     loop {
         let before = m.prep.walks();
         m.poll(&rt, &mut q, Switches::default(), &mut |n| {
-            if let burin::machine::Note::Error { error, .. } = n {
+            if let burin::executor::Note::Error { error, .. } = n {
                 late = Some(error);
             }
         });

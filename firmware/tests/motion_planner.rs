@@ -181,7 +181,7 @@ fn exact_steps_with_smoothing_at_low_rates() {
 
 #[test]
 fn motion_core_fits_the_f411_ram_budget() {
-    use burin::machine::Machine;
+    use burin::executor::Machine;
     let m = core::mem::size_of::<Machine<64>>();
     let q = core::mem::size_of::<Queue<burin::stepper::Segment, 16>>();
     let st = core::mem::size_of::<Stepper>();

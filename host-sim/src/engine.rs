@@ -19,7 +19,7 @@ mod world;
 use std::collections::VecDeque;
 
 use burin::command::Command;
-use burin::machine::{Machine, MachineError, Note, PathKind};
+use burin::executor::{Machine, MachineError, Note, PathKind};
 use burin::realtime::Realtime;
 use burin::stepper::{Segment, Stepper};
 use burin::AXES;

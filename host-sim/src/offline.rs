@@ -204,7 +204,7 @@ impl Link {
 
 /// Held at a program pause (or any hold) with the stepper stopped.
 fn paused(dev: &VirtualDevice) -> bool {
-    dev.sim.machine.state(&dev.sim.rt) == burin::machine::State::Hold && dev.sim.rt.stepper_idle()
+    dev.sim.machine.state(&dev.sim.rt) == burin::executor::State::Hold && dev.sim.rt.stepper_idle()
 }
 
 /// Characters one `DeviceMsg::Msg` frame holds.

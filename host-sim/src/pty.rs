@@ -13,7 +13,7 @@
 //! flushed (the next client must not receive stale replies glued to its
 //! first frame) and the link resets to text mode, as DTR dropping or a USB
 //! reset does on the board. What happens to a running job is the device
-//! session's rule (`burin::device::Device::port_reset`): a framed job is
+//! session's rule (`burin::session::Device::port_reset`): a framed job is
 //! held and the next client is told; a text-mode job keeps running, as
 //! GRBL does when its sender goes away.
 //!

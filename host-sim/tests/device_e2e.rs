@@ -84,7 +84,7 @@ fn stream_framed(cfg: &MachineConfig, lines: &[&str], cut: Option<usize>) -> (Ve
             let mut held = false;
             for _ in 0..50 {
                 round(&mut dev, &mut dpipe, &mut pending, step);
-                held |= dev.sim.machine.state(&dev.sim.rt) == burin::machine::State::Hold;
+                held |= dev.sim.machine.state(&dev.sim.rt) == burin::executor::State::Hold;
             }
             let mut told = false;
             while let Some(ev) = client.poll().expect("poll") {

@@ -20,7 +20,7 @@
 //!    level: they only mask their line and record the edge; the heartbeat
 //!    acts once the level has settled (a button must not act on a glitch,
 //!    and their action goes through the session like `~`/`!` anyway);
-//! 1. `parse` (async software task): the device session (`burin::device`:
+//! 1. `parse` (async software task): the device session (`burin::session`:
 //!    parser, interpreter, executor) and `Machine::poll` (planner, segment
 //!    preparer). It sleeps on a wake channel the other tasks signal.
 //!    `heartbeat` (SysTick, 100 Hz) shares this level: LED, input debounce
@@ -99,11 +99,11 @@ mod app {
     #[cfg(not(feature = "board-qemu"))]
     use crate::usb::UsbLink as Link;
     use burin::controller::{Controller, Inputs};
-    use burin::device::{Device, Identity};
+    use burin::executor::Machine;
     use burin::inputs::{self as inp, Debounce};
     use burin::link::{RxToken, RX_RING};
-    use burin::machine::Machine;
     use burin::persist::Persist;
+    use burin::session::{Device, Identity};
     use burin::settings::Settings;
     use burin::stepper::{Segment, Stepper};
     #[cfg(not(feature = "board-qemu"))]

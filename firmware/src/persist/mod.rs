@@ -18,7 +18,7 @@
 //! When the device writes (flash writes stall the CPU, and so the step
 //! interrupt, which runs from flash too): only while no motion is queued
 //! or running. `$n=` is refused unless idle; G10 L2/L20, G28.1, G30.1,
-//! M500 and M501 are sync points (see `device::persist`).
+//! M500 and M501 are sync points (see `session::persist`).
 
 pub mod flash;
 pub mod record;

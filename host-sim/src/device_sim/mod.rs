@@ -18,9 +18,9 @@
 //! to [`VirtualDevice::with_flash`] to "reboot" with what was saved.
 
 use burin::controller::{Controller, Pins};
-use burin::device::{Device, Identity, Tx};
 use burin::link::{LinkMode, RtFlags, RxSplitter, RxToken, TokenSink, RX_RING, SNIFF};
 use burin::persist::{FlashMap, Persist, RamFlash};
+use burin::session::{Device, Identity, Tx};
 use burin::stepper::Stepper;
 use heapless::Deque;
 
@@ -136,7 +136,7 @@ impl<'r> VirtualDevice<'r> {
 
     /// The host closed the port: the receive side goes back to text mode
     /// at once, the session hears of it at its next pass (see
-    /// `burin::device::Device::port_reset` for a running job).
+    /// `burin::session::Device::port_reset` for a running job).
     pub fn port_closed(&mut self) {
         self.splitter.reset(&mut self.ring, &self.flags);
         self.port_closed = true;

@@ -6,11 +6,11 @@
 use std::collections::VecDeque;
 
 use burin::controller::{Controller, Event, Inputs, Io, Pass};
-use burin::device::Tx;
+use burin::executor::Machine;
 use burin::link::{RtFlags, TokenSource};
-use burin::machine::Machine;
 use burin::realtime::Realtime;
 use burin::seams::Storage;
+use burin::session::Tx;
 
 use super::{host, machine_error, note, Sim, Stats, PLANNER_BLOCKS};
 use crate::record::Recorder;

@@ -1,7 +1,7 @@
 //! The parse task's byte sink and the sizes of the queues between the
 //! tasks. Everything the task decides lives in `burin::controller`; this
 //! file only hands reply bytes to the link interrupt.
-use burin::device::Tx;
+use burin::session::Tx;
 use heapless::spsc::Producer;
 
 /// Planner ring size (blocks of look-ahead).

@@ -3,9 +3,9 @@
 
 use super::{Device, MotionPort, Out, Tx};
 use crate::command::{Command, Feed};
+use crate::executor::{self, MachineError};
 use crate::link::reply::{self, BuildInfo, Format};
 use crate::link::SysCmd;
-use crate::machine::{self, MachineError};
 use core::fmt::Write;
 use protocol::codes::alarm;
 use protocol::{Code, DeviceMsg, MachineState, Overrides, Rt, Status, WIRE_AXES};
@@ -78,11 +78,11 @@ impl<S: crate::seams::Storage> Device<S> {
         let ms = m.state();
         let state = match ms {
             _ if self.check => MachineState::Check,
-            machine::State::Alarm => MachineState::Alarm,
-            machine::State::Homing => MachineState::Home,
-            machine::State::Hold => MachineState::Hold,
+            executor::State::Alarm => MachineState::Alarm,
+            executor::State::Homing => MachineState::Home,
+            executor::State::Hold => MachineState::Hold,
             _ if self.jogging => MachineState::Jog,
-            machine::State::Idle if self.cmds.is_empty() && self.slots.is_empty() => {
+            executor::State::Idle if self.cmds.is_empty() && self.slots.is_empty() => {
                 MachineState::Idle
             }
             _ => MachineState::Run,
@@ -122,7 +122,7 @@ impl<S: crate::seams::Storage> Device<S> {
                 // alarm then. The executor alarms whenever anything was
                 // queued, so that alarm is cleared again quietly.
                 let queued = !m.motion_idle();
-                let held = m.state() == machine::State::Hold && m.rt().stepper_idle();
+                let held = m.state() == executor::State::Hold && m.rt().stepper_idle();
                 let moving = queued && !held;
                 m.rt().request_reset();
                 self.cmds.clear();

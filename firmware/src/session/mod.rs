@@ -46,9 +46,9 @@ pub use out::{Out, Tx};
 pub use ports::{LinkPort, MotionPort};
 
 use crate::command::Command;
+use crate::executor::{self, MachineError};
 use crate::interp::{Interpreter, LINE_COMMANDS};
 use crate::link::{FramedAction, FramedPort, LinkEvent};
-use crate::machine::{self, MachineError};
 use crate::persist::{Persist, Report};
 use crate::seams::{NoStorage, Storage};
 use crate::settings::Settings;
@@ -245,7 +245,7 @@ impl<S: Storage> Device<S> {
                 }
             }
         }
-        if self.jog_cancel && m.state() == machine::State::Hold && m.rt().stepper_idle() {
+        if self.jog_cancel && m.state() == executor::State::Hold && m.rt().stepper_idle() {
             self.jog_cancel = false;
             self.quiet_alarm = true;
             m.rt().request_reset();

@@ -2,8 +2,8 @@
 //! core, as traits so the RTIC app and host-sim plug in their own halves.
 
 use crate::command::{Command, Pos};
+use crate::executor::{self, MachineError};
 use crate::link::{LinkEvent, RtSet};
-use crate::machine::{self, MachineError};
 use crate::realtime::Realtime;
 use crate::settings::table::SettingError;
 use crate::settings::Settings;
@@ -32,7 +32,7 @@ pub trait MotionPort {
     /// The executor takes a command now.
     fn ready(&self) -> bool;
     fn submit(&mut self, cmd: &Command, line: u32) -> Result<(), MachineError>;
-    fn state(&self) -> machine::State;
+    fn state(&self) -> executor::State;
     fn alarm(&self) -> Option<MachineError>;
     /// Nothing queued, planned or moving.
     fn motion_idle(&self) -> bool;
