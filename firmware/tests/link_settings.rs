@@ -122,7 +122,7 @@ fn settings_listing() {
     );
     let mut all = String::new();
     reply::settings(&mut all, &Settings::default()).expect("string sink");
-    assert_eq!(all.lines().count(), 46);
+    assert_eq!(all.lines().count(), 47);
     assert!(all.starts_with("$0=2.000\r\n$1=25\r\n$2=0\r\n"));
 }
 
