@@ -147,9 +147,8 @@ impl StepDriver {
             if early > 0 {
                 continue;
             }
-            let cfg = stepper.cfg;
             match self.phase {
-                Phase::High => self.fall(&cfg, hw),
+                Phase::High => self.fall(&stepper.cfg, hw),
                 _ => {
                     if !self.rise(stepper, hw, rt, &mut pop) {
                         self.phase = Phase::Stopped;
@@ -162,6 +161,18 @@ impl StepDriver {
         }
     }
 
+    /// [`Stepper::on_event`] off the hot path (start, the slot after the
+    /// last event): kept out of line so the rise's own call inlines alone.
+    #[inline(never)]
+    fn poll_cold(
+        stepper: &mut Stepper,
+        rt: &Realtime,
+        pop: &mut impl FnMut() -> Option<Segment>,
+        sw: crate::stepper::Switches,
+    ) -> StepEvent {
+        stepper.on_event(rt, pop, sw)
+    }
+
     /// From rest: the first event, drivers on, its rise `$207` from now.
     /// False when there is nothing to run (the queue held only flushed
     /// segments, or a halt holds).
@@ -172,7 +183,7 @@ impl StepDriver {
         rt: &Realtime,
         pop: &mut impl FnMut() -> Option<Segment>,
     ) -> bool {
-        let ev = stepper.on_event(rt, pop, hw.switches());
+        let ev = Self::poll_cold(stepper, rt, pop, hw.switches());
         if ev.ticks == 0 {
             return false;
         }
@@ -194,7 +205,7 @@ impl StepDriver {
 
     /// Applies the pending event and computes the next one. False: the
     /// stepper is idle at this slot, stop.
-    #[inline(always)]
+    #[inline(never)]
     fn rise<H: StepPins + StepTimer>(
         &mut self,
         stepper: &mut Stepper,
@@ -206,7 +217,7 @@ impl StepDriver {
         if ev.ticks == 0 {
             // The slot after the last event: go on if more was queued
             // meanwhile, else stop.
-            ev = stepper.on_event(rt, pop, hw.switches());
+            ev = Self::poll_cold(stepper, rt, pop, hw.switches());
             if ev.ticks == 0 {
                 return false;
             }
@@ -220,14 +231,15 @@ impl StepDriver {
             next = later(next, now.wrapping_add(cfg.dir_setup_ticks));
         }
         self.planned = next;
-        if ev.step_mask != 0 {
+        let steps = ev.step_mask != 0;
+        if steps {
             self.last_rise = now;
             self.phase = Phase::High;
             self.target = now.wrapping_add(cfg.pulse_ticks);
             hw.schedule_at(self.target);
-            self.pending = stepper.on_event(rt, pop, hw.switches());
-        } else {
-            self.pending = stepper.on_event(rt, pop, hw.switches());
+        }
+        self.pending = stepper.on_event(rt, pop, hw.switches());
+        if !steps {
             self.phase = Phase::Low;
             self.target = self.rise_target(&stepper.cfg);
             hw.schedule_at(self.target);
@@ -235,8 +247,9 @@ impl StepDriver {
         true
     }
 
-    /// Ends the pulse and schedules the next rise.
-    #[inline(always)]
+    /// Ends the pulse and schedules the next rise. Out of line: the fall
+    /// handler then runs this and the loop only, not the rise's spills.
+    #[inline(never)]
     fn fall<H: StepPins + StepTimer>(&mut self, cfg: &StepConfig, hw: &mut H) {
         hw.step_low();
         self.last_fall = hw.now();

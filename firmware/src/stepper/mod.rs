@@ -261,7 +261,9 @@ impl Stepper {
     }
 
     /// One timer event. `pop` takes the next segment from the queue;
-    /// `sw` are the switch pin levels as read now.
+    /// `sw` are the switch pin levels as read now. Inlined into the step
+    /// driver's rise, its one hot caller.
+    #[inline]
     pub fn on_event(
         &mut self,
         rt: &Realtime,
