@@ -4,8 +4,8 @@
 use burin::interp::Interpreter;
 use burin::planner::{Planner, Speed, Watch};
 use burin::realtime::Realtime;
-use burin::settings::Settings;
 use burin::seams::{StepPins, StepTimer};
+use burin::settings::Settings;
 use burin::stepper::driver::StepDriver;
 use burin::stepper::{Segment, StepConfig, Stepper, Switches};
 use burin::AXES;
@@ -51,7 +51,8 @@ struct BenchHw {
 impl StepPins for BenchHw {
     #[inline(always)]
     fn step_high(&mut self, dir_mask: u8, step_mask: u8) {
-        let word = self.dirs[usize::from(dir_mask & 0xF)] | self.step_on[usize::from(step_mask & 0xF)];
+        let word =
+            self.dirs[usize::from(dir_mask & 0xF)] | self.step_on[usize::from(step_mask & 0xF)];
         BSRR.store(word, Relaxed);
     }
     #[inline(always)]

@@ -93,11 +93,13 @@ fn segment(steps: u32, dir: u8, new_block: bool) -> Segment {
 /// Runs to a stop; every interrupt enters `late` ticks after its target.
 fn run(late: u64, segments: &[Segment]) -> Toy {
     let rt = Realtime::new();
-    let mut s = Settings::default();
-    s.step_pulse_us = 2.0;
-    s.dir_setup_us = 3.0;
-    s.enable_delay_us = 5.0;
-    s.max_step_rate_hz = 200_000.0;
+    let s = Settings {
+        step_pulse_us: 2.0,
+        dir_setup_us: 3.0,
+        enable_delay_us: 5.0,
+        max_step_rate_hz: 200_000.0,
+        ..Settings::default()
+    };
     let mut stepper = Stepper::new(StepConfig::new(&s, 1_000_000 * US as u32));
     let mut d = StepDriver::new();
     let mut hw = Toy::new();
