@@ -10,8 +10,8 @@ use std::time::Duration;
 /// step driver moved into the core it was the rise's `on_event` and two
 /// stores only, goals 120 and 250, with the pulse-end handler uncounted).
 const GOALS: [(&str, Option<f64>, &str); 9] = [
-    ("step_event_insns_1axis", Some(300.0), "insns"),
-    ("step_event_insns_4axis", Some(330.0), "insns"),
+    ("step_event_insns_1axis", Some(240.0), "insns"),
+    ("step_event_insns_4axis", Some(260.0), "insns"),
     ("step_rise_insns_1axis", None, "insns"),
     ("step_fall_insns_1axis", None, "insns"),
     ("step_rise_insns_4axis", None, "insns"),

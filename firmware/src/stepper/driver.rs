@@ -122,7 +122,43 @@ impl StepDriver {
     /// The whole step interrupt: a kick from rest, a due rise or fall (and
     /// any that fell due meanwhile), or nothing if it came early. `pop`
     /// takes the next segment.
+    ///
+    /// The common cases, a due fall or rise whose next action is not due
+    /// yet, run straight through inline in the caller's handler; kicks,
+    /// stops and late chains go through the general loop.
+    #[inline(always)]
     pub fn on_interrupt<H: StepPins + StepTimer>(
+        &mut self,
+        stepper: &mut Stepper,
+        hw: &mut H,
+        rt: &Realtime,
+        pop: &mut impl FnMut() -> Option<Segment>,
+    ) -> WakeTask {
+        let due = (self.target.wrapping_sub(hw.now()) as i32) <= 0;
+        if due && self.phase == Phase::High {
+            self.fall(&stepper.cfg, hw);
+            if (self.target.wrapping_sub(hw.now()) as i32) > SPIN_TICKS as i32 {
+                return false;
+            }
+        } else if due && self.phase == Phase::Low && self.pending.ticks != 0 {
+            let mut took = false;
+            let mut pop = || {
+                let s = pop();
+                took |= s.is_some();
+                s
+            };
+            self.rise(stepper, hw, rt, &mut pop);
+            if (self.target.wrapping_sub(hw.now()) as i32) > SPIN_TICKS as i32 {
+                return took;
+            }
+            let more = self.run(stepper, hw, rt, &mut pop);
+            return more | took;
+        }
+        self.run(stepper, hw, rt, pop)
+    }
+
+    #[inline(never)]
+    fn run<H: StepPins + StepTimer>(
         &mut self,
         stepper: &mut Stepper,
         hw: &mut H,
@@ -205,7 +241,7 @@ impl StepDriver {
 
     /// Applies the pending event and computes the next one. False: the
     /// stepper is idle at this slot, stop.
-    #[inline(never)]
+    #[inline(always)]
     fn rise<H: StepPins + StepTimer>(
         &mut self,
         stepper: &mut Stepper,
@@ -238,6 +274,7 @@ impl StepDriver {
             self.target = now.wrapping_add(cfg.pulse_ticks);
             hw.schedule_at(self.target);
         }
+        // One call site, so the inlined stepper exists once here.
         self.pending = stepper.on_event(rt, pop, hw.switches());
         if !steps {
             self.phase = Phase::Low;
@@ -247,9 +284,8 @@ impl StepDriver {
         true
     }
 
-    /// Ends the pulse and schedules the next rise. Out of line: the fall
-    /// handler then runs this and the loop only, not the rise's spills.
-    #[inline(never)]
+    /// Ends the pulse and schedules the next rise.
+    #[inline(always)]
     fn fall<H: StepPins + StepTimer>(&mut self, cfg: &StepConfig, hw: &mut H) {
         hw.step_low();
         self.last_fall = hw.now();

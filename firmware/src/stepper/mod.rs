@@ -262,8 +262,9 @@ impl Stepper {
 
     /// One timer event. `pop` takes the next segment from the queue;
     /// `sw` are the switch pin levels as read now. Inlined into the step
-    /// driver's rise, its one hot caller.
-    #[inline]
+    /// driver's rise, its one hot caller (saves the call and the returned
+    /// event's round trip through the stack, about 20 instructions a step).
+    #[inline(always)]
     pub fn on_event(
         &mut self,
         rt: &Realtime,
