@@ -84,6 +84,8 @@ struct Stats {
     max_speed: f32,
     dir: u8,
     dir_changed: u64,
+    /// Step pin levels after the last store.
+    step_level: u8,
     probe: Option<([f32; AXES], bool)>,
     barrier_done: bool,
     /// Planner blocks pushed (Path notes), for the task's cost.

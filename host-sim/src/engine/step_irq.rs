@@ -76,8 +76,13 @@ impl Sim<'_> {
                 self.stats.dir_changed = e.tick;
             }
             if e.step == 0 {
+                if self.stats.step_level != 0 {
+                    self.rec.step_fall(e.tick, self.stats.step_level);
+                }
+                self.stats.step_level = 0;
                 continue;
             }
+            self.stats.step_level = e.step;
             for i in 0..AXES {
                 self.stats.steps[i] += u64::from(e.step >> i & 1);
             }
