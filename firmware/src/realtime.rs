@@ -50,6 +50,10 @@ pub struct Realtime {
     trip_position: [AtomicI32; AXES],
     /// The stepper has no segment and the timer is stopped.
     stepper_idle: AtomicBool,
+    /// The step driver runs (its timer is armed); written only by the
+    /// step interrupt. While false the task starts it by pending the
+    /// interrupt once segments are queued.
+    stepping: AtomicBool,
     /// A new position for the stepper (after homing), taken at its next segment.
     new_position: [AtomicI32; AXES],
     new_position_set: AtomicBool,
@@ -87,6 +91,7 @@ impl Realtime {
             position: [const { AtomicI32::new(0) }; AXES],
             trip_position: [const { AtomicI32::new(0) }; AXES],
             stepper_idle: AtomicBool::new(true),
+            stepping: AtomicBool::new(false),
             new_position: [const { AtomicI32::new(0) }; AXES],
             new_position_set: AtomicBool::new(false),
             running_speed: AtomicU32::new(0),
@@ -233,6 +238,14 @@ impl Realtime {
     }
     pub(crate) fn set_stepper_idle(&self, idle: bool) {
         self.stepper_idle.store(idle, Relaxed);
+    }
+    /// The step driver is running: no kick needed (see `stepper::driver`).
+    pub fn stepping(&self) -> bool {
+        self.stepping.load(core::sync::atomic::Ordering::Acquire)
+    }
+    pub(crate) fn set_stepping(&self, on: bool) {
+        self.stepping
+            .store(on, core::sync::atomic::Ordering::Release);
     }
 
     /// Redefine the machine position (homing). Only while the stepper is idle;

@@ -1,29 +1,51 @@
 //! The only places the motion core touches hardware. The RTIC binary
 //! implements these with registers; host-sim with a virtual clock, a
-//! recorder and files.
+//! recorder and files. There are four: [`StepPins`] and [`StepTimer`]
+//! (driven by `stepper::driver` from the step interrupt), [`Storage`]
+//! (settings and offsets; `persist::FlashMap` over an `embedded-storage`
+//! `NorFlash` on both) and [`Tx`] (reply bytes). Inputs arrive as values
+//! (switch levels, bytes, the millisecond clock) in
+//! `controller::Inputs`.
 
-/// Step and direction outputs. Bit n of each mask is axis n (X, Y, Z, A).
-/// Implementations write all set bits at once (one BSRR write on STM32), so
-/// the axes of one event pulse together.
+/// Step, direction and enable outputs. Bit n of each mask is axis n
+/// (X, Y, Z, A); masks are logical (bit set: negative direction, or
+/// "this axis steps"), implementations apply the `$2`/`$3`/`$4` inverts.
+/// Each call is one store (one BSRR write on STM32), so the axes of an
+/// event change in the same bus cycle and nothing is read-modified-written.
 pub trait StepPins {
-    /// Set the direction pins: bit set means negative direction
-    /// (before the invert mask, which implementations apply).
-    fn set_dirs(&mut self, dir_mask: u8);
-    /// Raise the step pins in `step_mask`.
-    fn step_high(&mut self, step_mask: u8);
-    /// Lower all step pins (end of pulse).
+    /// Direction pins of every axis plus a rising edge on the step pins in
+    /// `step_mask`, in ONE store. `step_mask` 0 is a direction change on
+    /// its own (the stepper gives it `$200` before the first step).
+    fn step_high(&mut self, dir_mask: u8, step_mask: u8);
+    /// Lower all step pins (end of pulse); directions stay.
     fn step_low(&mut self);
     /// Stepper drivers on/off.
     fn set_enabled(&mut self, on: bool);
+    /// Limit and probe pin levels (before the `$5`/`$6` inverts). The
+    /// driver reads them right after each rising edge, so the stepper
+    /// judges a switch with every step so far taken and a trip position
+    /// is exact; it is the step interrupt's own read, a closed limit stops
+    /// pulses within one event even if its edge interrupt was missed.
+    fn switches(&self) -> crate::stepper::Switches;
 }
 
-/// The step timer: a free-running tick counter with one pending compare.
+/// The step timer: a free-running 32-bit tick counter with one compare that
+/// raises the step interrupt. Targets are absolute counter values, so a late
+/// interrupt delays the next edge instead of shifting every later one, and
+/// the driver can tell "already past" from "not yet" (wrapping difference).
 pub trait StepTimer {
     /// Tick rate in Hz (96 MHz TIM5 on the F411; whatever host-sim chooses).
     fn tick_hz(&self) -> u32;
-    /// Fire the next step event `ticks` after the current one.
-    fn schedule_in(&mut self, ticks: u32);
-    /// Stop firing events (idle, hold complete, alarm).
+    /// The counter now (wraps at 2^32; compare with `wrapping_sub`).
+    fn now(&self) -> u32;
+    /// Raise the step interrupt when the counter reaches `at`, replacing the
+    /// previous target; a match of the previous target that is still
+    /// pending is dropped. A target already past fires only after the
+    /// counter wraps, so the caller re-reads [`StepTimer::now`] afterwards.
+    fn schedule_at(&mut self, at: u32);
+    /// Counting, with the compare interrupt enabled.
+    fn start(&mut self);
+    /// No more interrupts (idle, hold complete, alarm).
     fn stop(&mut self);
 }
 

@@ -11,14 +11,14 @@ fn numbers_are_ascending_unique_and_all_readable() {
     let s = Settings::default();
     let nums: Vec<u16> = table::numbers().collect();
     assert!(nums.windows(2).all(|w| w[0] < w[1]));
-    assert_eq!(nums.len(), 23 + 16 + 7);
+    assert_eq!(nums.len(), 23 + 16 + 8);
     for n in &nums {
         let v = s.get(*n).unwrap_or_else(|| panic!("${n} unreadable"));
         let mut t = s;
         assert_eq!(t.set(*n, v), Ok(()), "${n}={v} default must be valid");
         assert_eq!(t, s);
     }
-    for n in [7, 15, 99, 104, 114, 140, 199, 207, 65535] {
+    for n in [7, 15, 99, 104, 114, 140, 199, 208, 65535] {
         assert_eq!(s.get(n), None, "${n}");
     }
 }
@@ -122,7 +122,7 @@ fn settings_listing() {
     );
     let mut all = String::new();
     reply::settings(&mut all, &Settings::default()).expect("string sink");
-    assert_eq!(all.lines().count(), 46);
+    assert_eq!(all.lines().count(), 47);
     assert!(all.starts_with("$0=2.000\r\n$1=25\r\n$2=0\r\n"));
 }
 
@@ -209,4 +209,16 @@ fn wco_and_overrides_every_tenth_report_or_on_change() {
     assert!(c.next(&s).ov, "a change shows at once");
     s.wco[0] = 1.0;
     assert!(c.next(&s).wco);
+}
+
+#[test]
+fn enable_delay_is_checked() {
+    let mut s = Settings::default();
+    assert_eq!(s.get(207), Some(0.0));
+    assert_eq!(s.set(207, 5.0), Ok(()));
+    assert_eq!(s.enable_delay_us, 5.0);
+    assert_eq!(s.set(207, -1.0), Err(SettingError::Negative));
+    assert_eq!(s.set(207, 20_000.0), Err(SettingError::OutOfRange));
+    assert_eq!(s.set(207, f32::NAN), Err(SettingError::NotANumber));
+    assert_eq!(s.enable_delay_us, 5.0);
 }

@@ -21,6 +21,7 @@ fn config() -> MachineConfig {
         probe: None,
         start_position_mm: [0.0; AXES],
         host: host_sim::config::HostModel::default(),
+        interrupts: host_sim::config::Interrupts::default(),
     }
 }
 

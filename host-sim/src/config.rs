@@ -5,6 +5,9 @@
 //! machine written out as a file with every key explained.
 
 mod file;
+mod interrupts;
+
+pub use interrupts::{Interrupts, IrqTicks, MaskPhase, Masks};
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -85,6 +88,8 @@ pub struct MachineConfig {
     pub start_position_mm: [f32; AXES],
     /// Link and parse/plan task timing.
     pub host: HostModel,
+    /// Step interrupt latency, handler times and masked windows.
+    pub interrupts: Interrupts,
 }
 
 /// The default machine: a small 300 × 300 × 100 mm gantry mill on the
@@ -108,6 +113,8 @@ pub struct MachineConfig {
 ///   closed at power-up.
 /// * `host` = [`HostModel::default`]: the parse/plan task costs its measured
 ///   on-target time per line and per block; the link is instant.
+/// * `interrupts` = [`Interrupts::IDEAL`]: step handlers take no time and
+///   nothing masks them (set them to study latency, see `machines/default.toml`).
 impl Default for MachineConfig {
     fn default() -> Self {
         let settings = Settings::default();
@@ -126,6 +133,7 @@ impl Default for MachineConfig {
             }),
             start_position_mm: [-1.0, -1.0, -1.0, 0.0],
             host: HostModel::default(),
+            interrupts: Interrupts::default(),
         }
     }
 }
@@ -227,6 +235,19 @@ impl MachineConfig {
         positive("motion.max_step_rate_hz", s.max_step_rate_hz)?;
         positive("pulses.step_pulse_us", s.step_pulse_us)?;
         at_least_zero("pulses.dir_setup_us", s.dir_setup_us)?;
+        at_least_zero("pulses.enable_delay_us", s.enable_delay_us)?;
+        let irq = &self.interrupts;
+        at_least_zero("interrupts.mask_window_us", irq.mask_window_us)?;
+        positive("interrupts.mask_period_us", irq.mask_period_us)?;
+        if irq.mask_window_us >= irq.mask_period_us {
+            return Err(ConfigError::invalid(
+                "interrupts.mask_window_us",
+                "must be shorter than interrupts.mask_period_us",
+            ));
+        }
+        if let MaskPhase::Fixed(at) = irq.mask_phase {
+            at_least_zero("interrupts.mask_phase", at)?;
+        }
         if s.step_pulse_us * s.max_step_rate_hz >= 1e6 {
             return Err(ConfigError::invalid(
                 "pulses.step_pulse_us",

@@ -13,6 +13,8 @@
 
 mod host;
 mod job;
+mod pins;
+mod step_irq;
 mod task;
 mod world;
 
@@ -21,13 +23,15 @@ use std::collections::VecDeque;
 use burin::command::Command;
 use burin::executor::{Machine, MachineError, Note, PathKind};
 use burin::realtime::Realtime;
+use burin::stepper::driver::StepDriver;
 use burin::stepper::{Segment, Stepper};
 use burin::AXES;
 use heapless::spsc::Queue;
 
-use crate::config::MachineConfig;
-use crate::record::{AxisInfo, MoveKind, PinEvent, Recorder, RunError, RunInfo, Summary};
+use crate::config::{MachineConfig, Masks};
+use crate::record::{AxisInfo, MoveKind, Recorder, RunError, RunInfo, Summary};
 pub use job::run_job;
+pub use pins::{Edge, VirtualHw};
 pub use task::DeviceTask;
 pub use world::World;
 
@@ -54,7 +58,12 @@ pub struct Sim<'r> {
     pub queue: Queue<Segment, SEGMENT_SLOTS>,
     pub stepper: Stepper,
     pub world: World,
+    /// The core's step interrupt, on [`VirtualHw`].
+    driver: StepDriver,
+    hw: VirtualHw,
+    masks: Masks,
     now: u64,
+    /// When the step interrupt enters next (None: not armed).
     next_step: Option<u64>,
     inputs: VecDeque<(u64, Input)>,
     lines: VecDeque<host::Line>,
@@ -85,6 +94,8 @@ struct Stats {
     max_speed: f32,
     dir: u8,
     dir_changed: u64,
+    /// Step pin levels after the last store.
+    step_level: u8,
     /// Planner blocks pushed (Path notes), for the task's cost.
     blocks: u64,
     /// Stops where the planner ran empty waiting for a line (link or task time).
@@ -116,6 +127,7 @@ impl<'r> Sim<'r> {
         let mut machine = Machine::new(cfg.settings, cfg.tick_hz);
         let mut stepper = Stepper::new(machine.step_config());
         let world = World::new(cfg);
+        let irq = cfg.interrupts.ticks(cfg.tick_hz);
         let start = cfg.start_position_mm;
         // An out-of-range start position falls back to 0.
         if machine.set_position(&rt, &start).is_err() {
@@ -148,6 +160,9 @@ impl<'r> Sim<'r> {
             queue: Queue::new(),
             stepper,
             world,
+            driver: StepDriver::new(),
+            hw: VirtualHw::new(irq, cfg.tick_hz),
+            masks: irq.masks,
             now: 0,
             next_step: None,
             inputs: VecDeque::new(),
@@ -213,53 +228,6 @@ impl<'r> Sim<'r> {
         }
     }
 
-    /// Prio 3: one step-timer event.
-    fn step_event(&mut self) {
-        let sw = self.world.switches();
-        let queue = &mut self.queue;
-        let underruns = self.rt.underruns();
-        let ev = self.stepper.on_event(&self.rt, &mut || queue.dequeue(), sw);
-        if ev.ticks == 0 && self.next_step.is_some() && self.rt.underruns() == underruns {
-            // Ran dry at a planned stop: a starved planner if the stop was
-            // only there because the next line had not arrived or been parsed.
-            let running = self.machine.prep.hold() == burin::stepper::prep::Hold::Running
-                && !self.rt.hold_requested();
-            let waiting = !self.lines.is_empty() || (self.device_mode && self.input_pending);
-            if running && self.machine.ready() && waiting {
-                self.stats.starved += 1;
-            }
-        }
-        if ev.dir_mask != self.stats.dir {
-            self.stats.dir = ev.dir_mask;
-            self.stats.dir_changed = self.now;
-        }
-        if ev.step_mask != 0 {
-            self.world.step(ev.step_mask, ev.dir_mask);
-            for i in 0..AXES {
-                self.stats.steps[i] += u64::from(ev.step_mask >> i & 1);
-            }
-            let p = self.stepper.position();
-            self.rec.step_event(&PinEvent {
-                tick: self.now,
-                dir_mask: ev.dir_mask,
-                step_mask: ev.step_mask,
-                dir_changed_tick: self.stats.dir_changed,
-                pos: [p[0] as i64, p[1] as i64, p[2] as i64, p[3] as i64],
-            });
-        }
-        let v = self.stepper.speed_mm_min();
-        if v != self.stats.last_speed {
-            self.stats.last_speed = v;
-            self.stats.max_speed = self.stats.max_speed.max(v);
-            self.rec.velocity(self.now, v);
-        }
-        self.next_step = if ev.ticks == 0 {
-            None
-        } else {
-            Some(self.now + u64::from(ev.ticks))
-        };
-    }
-
     /// True when nothing is moving, queued or pending.
     pub fn idle(&self) -> bool {
         self.lines.is_empty()
@@ -300,7 +268,7 @@ impl<'r> Sim<'r> {
                 && !self.queue.is_empty()
                 && self.now >= self.task.busy_until
             {
-                self.next_step = Some(self.now);
+                self.next_step = Some(self.masks.unmasked_at(self.now));
             }
             let t_in = self.inputs.front().map(|(t, _)| *t);
             let t_task = self.task_due();

@@ -46,6 +46,9 @@ impl Recorder for Named<'_> {
     fn step_event(&mut self, ev: &PinEvent) {
         self.rec.step_event(ev);
     }
+    fn step_fall(&mut self, tick: u64, mask: u8) {
+        self.rec.step_fall(tick, mask);
+    }
     fn commanded(&mut self, line: u32, kind: MoveKind, to_mm: [f32; AXES]) {
         self.rec.commanded(line, kind, to_mm);
     }

@@ -12,8 +12,9 @@ pub struct PinEvent {
     pub tick: u64,
     /// Direction pin levels after this event (bit n: axis n negative), before inversion.
     pub dir_mask: u8,
-    /// Axes that stepped at this event (rising edge at `tick`, falling edge
-    /// `Recording::pulse_ticks` later).
+    /// Axes that stepped at this event (rising edge at `tick`; the falling
+    /// edge follows as [`Recorder::step_fall`], at least
+    /// `RunInfo::pulse_ticks` later).
     pub step_mask: u8,
     /// Tick at which the direction pins last changed (for setup-time checks).
     pub dir_changed_tick: u64,
@@ -82,6 +83,9 @@ pub struct Summary {
 pub trait Recorder {
     fn start(&mut self, _info: &RunInfo) {}
     fn step_event(&mut self, _ev: &PinEvent) {}
+    /// The step pins in `mask` fell at `tick` (the real end of the pulses
+    /// the step driver raised; at least `RunInfo::pulse_ticks` after them).
+    fn step_fall(&mut self, _tick: u64, _mask: u8) {}
     /// A commanded path vertex (arcs and splines arrive as their chords).
     fn commanded(&mut self, _line: u32, _kind: MoveKind, _to_mm: [f32; AXES]) {}
     /// Commanded path speed at `tick`, recorded whenever it changes.
@@ -104,6 +108,9 @@ impl Recorder for Tee<'_> {
     }
     fn step_event(&mut self, ev: &PinEvent) {
         self.0.iter_mut().for_each(|r| r.step_event(ev));
+    }
+    fn step_fall(&mut self, tick: u64, mask: u8) {
+        self.0.iter_mut().for_each(|r| r.step_fall(tick, mask));
     }
     fn commanded(&mut self, line: u32, kind: MoveKind, to_mm: [f32; AXES]) {
         self.0

@@ -3,7 +3,9 @@
 //!
 //! Eight 1-bit wires, `X_step X_dir … A_step A_dir`, at their logical levels
 //! (the invert masks are not applied: this shows what the core asked for).
-//! A step pin rises at the event's tick and falls `pulse_ticks` later; a
+//! A step pin rises at the event's tick and falls when the engine reports
+//! its real fall (`Recorder::step_fall`: late step interrupts stretch
+//! pulses), or `pulse_ticks` later from sources that report no falls; a
 //! direction pin changes at the event's `dir_changed_tick`.
 //!
 //! Time: VCD only allows time units of 1, 10 or 100 s/ms/us/ns/ps/fs. The
@@ -283,6 +285,13 @@ impl<W: Write> Recorder for Vcd<W> {
     fn step_event(&mut self, ev: &PinEvent) {
         if self.started {
             self.event(ev);
+        }
+    }
+
+    fn step_fall(&mut self, tick: u64, mask: u8) {
+        // The pulses still queued to fall at `pulse_ticks` end later.
+        for f in self.falls.iter_mut().filter(|f| f.1 & mask != 0) {
+            f.0 = f.0.max(tick);
         }
     }
 

@@ -71,7 +71,8 @@ impl Board {
             Board::F401 => 64 * KIB,
         }
     }
-    /// The project's budget (issue 2): flash 128 KiB on both; static RAM
+    /// The project's budget: flash 192 KiB on both (issue 2 set 128 KiB; the
+    /// project raised it once the whole app outgrew that); static RAM
     /// 64 KiB on the F411 and 48 KiB on the F401, which leaves it 16 KiB of stack.
     pub fn budget(self) -> Sizes {
         let ram = match self {
@@ -79,7 +80,7 @@ impl Board {
             Board::F401 => 48 * KIB,
         };
         Sizes {
-            flash: 128 * KIB,
+            flash: 192 * KIB,
             ram,
             ..Sizes::default()
         }
@@ -553,14 +554,14 @@ mod tests {
     #[test]
     fn budgets_fail_when_exceeded() {
         let ok = Sizes {
-            flash: 128 * KIB,
+            flash: 192 * KIB,
             ram: 64 * KIB,
             ..Sizes::default()
         };
         assert!(check_budget(Board::F411, &ok).is_ok());
         assert!(check_budget(Board::F401, &ok).is_err());
         let big = Sizes {
-            flash: 128 * KIB + 1,
+            flash: 192 * KIB + 1,
             ..ok
         };
         assert!(check_budget(Board::F411, &big).is_err());

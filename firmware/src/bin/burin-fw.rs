@@ -11,8 +11,10 @@
 //!    step timing pays nothing in normal running. The step interrupt's own
 //!    IDR read at every event remains the guarantee that a closed limit
 //!    stops pulses within one step event;
-//! 3. `step` (TIM5): the core's `Stepper` on the segment queue's consumer:
-//!    one BSRR write per event, next period into ARR, pulse end on CC1;
+//! 3. `step` (TIM5): the core's step driver (`burin::stepper::driver`) on
+//!    the segment queue's consumer: a rise (one BSRR write, next event
+//!    computed while the pulse is high) and a fall per step, each at an
+//!    absolute CC1 target of the free-running counter;
 //! 2. `usb` (OTG_FS, or `usart` on QEMU): bytes through the link's
 //!    `RxSplitter` into the token ring (realtime bytes flag at once), reply
 //!    bytes out of the TX ring;
@@ -93,7 +95,7 @@ mod app {
     use crate::boards::board;
     use crate::outputs::Io;
     use crate::session::{TxRing, PLANNER_BLOCKS, SEGMENT_SLOTS, TX_RING};
-    use crate::step::{StepDriver, Tim5, STEPPING};
+    use crate::step::{StepHw, StepTask, Tim5};
     #[cfg(feature = "board-qemu")]
     use crate::usart::UsartLink as Link;
     #[cfg(not(feature = "board-qemu"))]
@@ -108,6 +110,7 @@ mod app {
     use burin::stepper::{Segment, Stepper};
     #[cfg(not(feature = "board-qemu"))]
     use burin::usb_ids::{serial_from_uid, USB_SERIAL_LEN};
+    #[cfg(not(feature = "board-qemu"))]
     use core::sync::atomic::Ordering;
     use cortex_m::peripheral::syst::SystClkSource;
     use heapless::spsc::{Consumer, Producer, Queue};
@@ -139,7 +142,7 @@ mod app {
 
     #[local]
     struct Local {
-        driver: StepDriver,
+        driver: StepTask,
         wake_step: Wake,
         /// USB-CDC (`usb.rs`), or USART1 on QEMU (`usart.rs`). Two names
         /// because RTIC checks task locals before cfg removes a task.
@@ -270,12 +273,13 @@ mod app {
         crate::RT.set_estop(debounce.stable() & inp::ESTOP != 0);
 
         // The step timer stays stopped until `parse` queues segments.
-        let driver = StepDriver::new(
-            timer,
-            steppers,
+        let driver = StepTask::new(
+            StepHw {
+                port: steppers,
+                timer,
+            },
             Stepper::new(cfg),
             seg_recv,
-            cfg.pulse_ticks,
         );
         let (wake_step, wake) = rtic_sync::make_channel!((), 1);
 
@@ -356,11 +360,12 @@ mod app {
         }
     }
 
-    /// Step events, pulse ends and restarts (see `step::StepDriver`). The
-    /// switches are one IDR read; a taken segment or a stop wakes `parse`.
+    /// Step rises, falls and restarts (see `burin::stepper::driver`). The
+    /// switches are one IDR read after each rise; a taken segment or a
+    /// stop wakes `parse`.
     #[task(binds = TIM5, priority = 3, local = [driver, wake_step])]
     fn step(cx: step::Context) {
-        if cx.local.driver.on_interrupt(&crate::RT, board::switches()) {
+        if cx.local.driver.on_interrupt(&crate::RT) {
             let _ = cx.local.wake_step.try_send(());
         }
     }
@@ -455,7 +460,7 @@ mod app {
             let input = Inputs {
                 now_ms: crate::inputs::now_ms(),
                 switches: board::switches(),
-                stepping: STEPPING.load(Ordering::Acquire),
+                stepping: crate::RT.stepping(),
                 pins: crate::inputs::report_pins(),
                 port_closed,
             };

@@ -108,6 +108,13 @@ pub struct Settings {
     /// `$206` homing order: up to four cycles, a nibble of axes each, first
     /// cycle in the low nibble. Default: Z alone, then X and Y together.
     pub homing_order: u16,
+    /// `$207` delay from driver enable to the first step pulse, µs. The
+    /// step interrupt asserts the enable pin when it starts from rest and
+    /// holds the first edge back this long: opto-isolated drivers such as
+    /// the DM542 ignore steps for at least 5 µs after enable. 0 (the
+    /// default) suits A4988/DRV8825/TMC drivers. Costs this much once per
+    /// start from rest, never while stepping.
+    pub enable_delay_us: f32,
 }
 
 impl Default for Settings {
@@ -155,6 +162,7 @@ impl Default for Settings {
             rapid_mode: RapidMode::Coordinated,
             verify_home_tolerance: 0.05,
             homing_order: 0x34,
+            enable_delay_us: 0.0,
         }
     }
 }

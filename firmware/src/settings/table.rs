@@ -131,8 +131,8 @@ const AXIS_GROUPS: [(u16, Kind); 4] = [
     (130, Kind::Real { min: 0.0, max: BIG }),
 ];
 
-/// burin's own, `$200`–`$206` (documented on the [`Settings`] fields).
-const BURIN: [(u16, Kind); 7] = [
+/// burin's own, `$200`–`$207` (documented on the [`Settings`] fields).
+const BURIN: [(u16, Kind); 8] = [
     (
         200,
         Kind::Real {
@@ -168,6 +168,15 @@ const BURIN: [(u16, Kind); 7] = [
         Kind::Int {
             min: 0,
             max: 0xFFFF,
+        },
+    ),
+    // Up to 10 ms: longer than any driver's wake-up, and short enough that
+    // a start from rest never looks like a stall.
+    (
+        207,
+        Kind::Real {
+            min: 0.0,
+            max: 10_000.0,
         },
     ),
 ];
@@ -286,6 +295,7 @@ impl Settings {
             204 => b(self.rapid_mode == RapidMode::Independent),
             205 => self.verify_home_tolerance,
             206 => f32::from(self.homing_order),
+            207 => self.enable_delay_us,
             _ => return None,
         })
     }
@@ -350,6 +360,7 @@ impl Settings {
             }
             205 => self.verify_home_tolerance = v,
             206 => self.homing_order = u16v,
+            207 => self.enable_delay_us = v,
             _ => return Err(SettingError::Unknown),
         }
         Ok(())

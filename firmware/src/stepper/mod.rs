@@ -16,14 +16,15 @@
 //!   the `Producer` (it implements [`prep::SegmentSink`]) and calls
 //!   `Machine::poll` whenever the step interrupt took a segment or a command
 //!   arrived; the step interrupt owns the `Consumer` and the [`Stepper`]:
-//!   `stepper.on_event(&RT, &mut || consumer.dequeue(), switches)`, writes
-//!   `dir_pins`, then after the setup already folded into the event timing
-//!   raises `step_pins`, lowers them `pulse_ticks` later (compare channel),
-//!   and loads `ticks` into the auto-reload register;
-//! - `ticks == 0` means the stepper went idle: stop the timer. Whenever the
-//!   queue is not empty and the timer is stopped, the task starts it with an
-//!   immediate event (this also lets the stepper drop flushed segments).
+//!   [`driver::StepDriver::on_interrupt`] runs [`Stepper::on_event`] and
+//!   drives the pins and the timer through the hardware seams (pulse
+//!   edges, direction setup, enable delay, stop; see [`driver`]);
+//! - `ticks == 0` means the stepper went idle: the driver stops the timer.
+//!   Whenever the queue is not empty and the driver is not running
+//!   ([`Realtime::stepping`]), the task pends the step interrupt, which
+//!   starts it (this also lets the stepper drop flushed segments).
 
+pub mod driver;
 pub mod prep;
 pub mod sink;
 
@@ -93,6 +94,13 @@ pub struct StepConfig {
     pub dir_setup_ticks: u32,
     /// Shortest time between two events: the pulse must end first.
     pub min_period: u32,
+    /// Shortest low time between two pulses the step driver guarantees,
+    /// however late its interrupt runs: the pulse width (`$0`), and at
+    /// least 1 µs (drivers specify low minimums alike; a few need more,
+    /// and then `$0` should be raised).
+    pub min_low_ticks: u32,
+    /// `$207`: from driver enable to the first step edge.
+    pub enable_ticks: u32,
     pub step_invert: u8,
     pub dir_invert: u8,
     pub limit_invert: u8,
@@ -101,7 +109,8 @@ pub struct StepConfig {
 
 impl StepConfig {
     pub fn new(s: &Settings, tick_hz: u32) -> Self {
-        let ticks = |us: f32| libm::ceilf(us.max(0.0) * tick_hz as f32 / 1.0e6).max(1.0) as u32;
+        let exact = |us: f32| libm::ceilf(us.max(0.0) * tick_hz as f32 / 1.0e6) as u32;
+        let ticks = |us: f32| exact(us).max(1);
         let pulse_ticks = ticks(s.step_pulse_us);
         let ceiling = libm::ceilf(tick_hz as f32 / s.max_step_rate_hz.max(1.0)) as u32;
         StepConfig {
@@ -109,6 +118,8 @@ impl StepConfig {
             pulse_ticks,
             dir_setup_ticks: ticks(s.dir_setup_us),
             min_period: ceiling.max(pulse_ticks + 1),
+            min_low_ticks: pulse_ticks.max(ticks(1.0)),
+            enable_ticks: exact(s.enable_delay_us),
             step_invert: s.step_invert,
             dir_invert: s.dir_invert,
             limit_invert: s.limit_invert,
@@ -252,7 +263,10 @@ impl Stepper {
     }
 
     /// One timer event. `pop` takes the next segment from the queue;
-    /// `sw` are the switch pin levels as read now.
+    /// `sw` are the switch pin levels as read now. Inlined into the step
+    /// driver's rise, its one hot caller (saves the call and the returned
+    /// event's round trip through the stack, about 20 instructions a step).
+    #[inline(always)]
     pub fn on_event(
         &mut self,
         rt: &Realtime,

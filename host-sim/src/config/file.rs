@@ -7,7 +7,7 @@
 
 use serde::Deserialize;
 
-use super::{ConfigError, LimitSwitch, MachineConfig, ProbeSurface};
+use super::{ConfigError, LimitSwitch, MachineConfig, MaskPhase, ProbeSurface};
 use burin::settings::{Profile, RapidMode};
 use burin::{AXES, AXIS_NAMES};
 
@@ -59,6 +59,28 @@ struct File {
     report: Report,
     #[serde(default)]
     host: Host,
+    #[serde(default)]
+    interrupts: Irq,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct Irq {
+    step_entry_ns: Option<u32>,
+    step_handler_ns: Option<u32>,
+    step_fall_ns: Option<u32>,
+    mask_window_us: Option<f32>,
+    mask_period_us: Option<f32>,
+    /// "random", or an offset in µs.
+    mask_phase: Option<PhaseValue>,
+    mask_seed: Option<u64>,
+}
+
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum PhaseValue {
+    Word(String),
+    Us(f32),
 }
 
 #[derive(Deserialize, Default)]
@@ -122,6 +144,7 @@ struct Pulses {
     dir_invert: Option<String>,
     enable_invert: Option<bool>,
     idle_delay_ms: Option<u16>,
+    enable_delay_us: Option<f32>,
 }
 
 #[derive(Deserialize, Default)]
@@ -221,6 +244,7 @@ pub(super) fn apply(text: &str, cfg: &mut MachineConfig) -> Result<(), ConfigErr
     set(&mut cfg.host.rx_window_bytes, h.rx_window_bytes);
     set(&mut cfg.host.line_ns, h.line_ns);
     set(&mut cfg.host.block_ns, h.block_ns);
+    apply_interrupts(cfg, f.interrupts)?;
     let s = &mut cfg.settings;
 
     let axes = [f.axes.x, f.axes.y, f.axes.z, f.axes.a];
@@ -257,6 +281,7 @@ pub(super) fn apply(text: &str, cfg: &mut MachineConfig) -> Result<(), ConfigErr
     set_mask(&mut s.dir_invert, "pulses.dir_invert", p.dir_invert)?;
     set(&mut s.enable_invert, p.enable_invert);
     set(&mut s.idle_delay_ms, p.idle_delay_ms);
+    set(&mut s.enable_delay_us, p.enable_delay_us);
 
     let h = f.homing;
     set(&mut s.homing_enable, h.enable);
@@ -295,6 +320,34 @@ pub(super) fn apply(text: &str, cfg: &mut MachineConfig) -> Result<(), ConfigErr
     bit(&mut s.status_mask, 1, r.machine_position);
     bit(&mut s.status_mask, 2, r.buffer_state);
     set(&mut s.report_inches, r.inches);
+    Ok(())
+}
+
+fn apply_interrupts(cfg: &mut MachineConfig, i: Irq) -> Result<(), ConfigError> {
+    let m = &mut cfg.interrupts;
+    set(&mut m.step_entry_ns, i.step_entry_ns);
+    set(&mut m.step_handler_ns, i.step_handler_ns);
+    set(&mut m.step_fall_ns, i.step_fall_ns);
+    set(&mut m.mask_window_us, i.mask_window_us);
+    set(&mut m.mask_period_us, i.mask_period_us);
+    let seed = match (i.mask_seed, m.mask_phase) {
+        (Some(s), _) | (None, MaskPhase::Random(s)) => s,
+        (None, MaskPhase::Fixed(_)) => 1,
+    };
+    m.mask_phase = match i.mask_phase {
+        Some(PhaseValue::Us(at)) => MaskPhase::Fixed(at),
+        Some(PhaseValue::Word(w)) if w == "random" => MaskPhase::Random(seed),
+        Some(PhaseValue::Word(w)) => {
+            return Err(ConfigError::invalid(
+                "interrupts.mask_phase",
+                format!("`{w}`: use \"random\" or an offset in µs"),
+            ))
+        }
+        None => match m.mask_phase {
+            MaskPhase::Random(_) => MaskPhase::Random(seed),
+            fixed => fixed,
+        },
+    };
     Ok(())
 }
 

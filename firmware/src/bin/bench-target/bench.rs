@@ -4,7 +4,9 @@
 use burin::interp::Interpreter;
 use burin::planner::{Planner, Speed, Watch};
 use burin::realtime::Realtime;
+use burin::seams::{StepPins, StepTimer};
 use burin::settings::Settings;
+use burin::stepper::driver::StepDriver;
 use burin::stepper::{Segment, StepConfig, Stepper, Switches};
 use burin::AXES;
 use core::hint::black_box;
@@ -27,12 +29,63 @@ const PLANNER_BLOCKS: usize = 64;
 /// Step timer rate the stepper is configured with (TIM5 at 96 MHz).
 const TICK_HZ: u32 = 96_000_000;
 
-/// Stand-ins for GPIOB BSRR and TIM5 ARR: the ISR's two register stores.
-/// Plain RAM words cost the same instructions as the registers and keep the
-/// measurement independent of QEMU's GPIO stub.
+/// Stand-ins for the step interrupt's registers: GPIOB BSRR and IDR, TIM5
+/// CNT, CCR1 and SR. Plain RAM words cost the same instructions as the
+/// registers and keep the measurement independent of QEMU's models.
 static BSRR: AtomicU32 = AtomicU32::new(0);
-static ARR: AtomicU32 = AtomicU32::new(0);
+static IDR: AtomicU32 = AtomicU32::new(0xFFFF);
+static CNT: AtomicU32 = AtomicU32::new(0);
+static CCR1: AtomicU32 = AtomicU32::new(0);
+static SR: AtomicU32 = AtomicU32::new(0);
 static RT: Realtime = Realtime::new();
+
+/// The board's `StepHw` on the stand-ins, store for store: BSRR words from
+/// 16-entry tables, one IDR read for the switches, CNT reads, and the
+/// compare's flag clear + CCR1 write.
+struct BenchHw {
+    step_on: [u32; 16],
+    dirs: [u32; 16],
+    step_off: u32,
+}
+
+impl StepPins for BenchHw {
+    #[inline(always)]
+    fn step_high(&mut self, dir_mask: u8, step_mask: u8) {
+        let word =
+            self.dirs[usize::from(dir_mask & 0xF)] | self.step_on[usize::from(step_mask & 0xF)];
+        BSRR.store(word, Relaxed);
+    }
+    #[inline(always)]
+    fn step_low(&mut self) {
+        BSRR.store(self.step_off, Relaxed);
+    }
+    fn set_enabled(&mut self, _on: bool) {}
+    #[inline(always)]
+    fn switches(&self) -> Switches {
+        let closed = !IDR.load(Relaxed);
+        Switches {
+            limits: ((closed >> 4) & 0b111) as u8,
+            probe: closed & (1 << 3) != 0,
+        }
+    }
+}
+
+impl StepTimer for BenchHw {
+    fn tick_hz(&self) -> u32 {
+        TICK_HZ
+    }
+    #[inline(always)]
+    fn now(&self) -> u32 {
+        CNT.load(Relaxed)
+    }
+    #[inline(always)]
+    fn schedule_at(&mut self, at: u32) {
+        SR.store(!2, Relaxed);
+        CCR1.store(at, Relaxed);
+    }
+    fn start(&mut self) {}
+    fn stop(&mut self) {}
+}
 
 struct Clock {
     /// Owned so nothing else reconfigures SysTick while it is the clock.
@@ -115,45 +168,70 @@ fn segment(steps: [u32; AXES], events: u32, dir_mask: u8, new_block: bool) -> Se
     }
 }
 
-/// Per-event instructions of `Stepper::on_event` plus the ISR's two stores
-/// (BSRR word from a 16-entry table, next period into ARR), averaged over
-/// `CHUNKS` x 1000 events. Each chunk is two 500-event segments from the
-/// spsc queue, the second continuing the first's block, as the preparer
-/// emits them (2 ms segments at 250 kHz).
-fn step_event(clock: &mut Clock, steps: [u32; AXES], dir_mask: u8) -> f32 {
+/// Per-step instructions of the step interrupt's two handlers, rise and
+/// fall: `StepDriver::on_interrupt` (the rise runs `Stepper::on_event`
+/// while the pulse is high) with every register access on [`BenchHw`].
+/// Each handler is timed on its own and the figures are averaged over
+/// `CHUNKS` x 1000 steps. The harness plays the counter: in each timed
+/// region it first sets CNT to the armed CCR1 (one load and one store,
+/// counted). Each chunk is two 500-event segments from the spsc queue, the
+/// second continuing the first's block, as the preparer emits them (2 ms
+/// segments at 250 kHz); a chunk's first rise (the kick from rest) and its
+/// stop are not timed. Returns (rise, fall).
+fn step_event(clock: &mut Clock, steps: [u32; AXES], dir_mask: u8) -> (f32, f32) {
     const CHUNK: u32 = 1000;
     const CHUNKS: u32 = 20;
     let settings = Settings::default();
     let mut stepper = Stepper::new(StepConfig::new(&settings, TICK_HZ));
-    let table: [u32; 16] = core::array::from_fn(|m| (m as u32) << 12);
+    let mut driver = StepDriver::new();
+    let mut hw = BenchHw {
+        step_on: core::array::from_fn(|m| (m as u32) << 12),
+        dirs: core::array::from_fn(|m| ((m as u32) << 4) | ((!m as u32 & 0xF) << 20)),
+        step_off: 0xF << 28,
+    };
     let mut queue: heapless::spsc::Queue<Segment, 4> = heapless::spsc::Queue::new();
     let (mut tx, mut rx) = queue.split();
-    let mut total = 0u32;
-    let sw = Switches::default();
+    let (mut rise, mut fall, mut rises, mut falls) = (0u32, 0u32, 0u32, 0u32);
     for chunk in 0..=CHUNKS {
         let half = CHUNK / 2;
         let _ = tx.enqueue(segment(steps, half, dir_mask, true));
         let _ = tx.enqueue(segment(steps, half, dir_mask, false));
         let mut pop = || rx.dequeue();
-        let ticks = clock.time(|| {
-            for _ in 0..CHUNK {
-                let ev = stepper.on_event(&RT, &mut pop, sw);
-                BSRR.store(table[usize::from(ev.step_pins & 0xF)], Relaxed);
-                ARR.store(ev.ticks, Relaxed);
+        // The kick: starts, and (target = now) does the first rise, or a
+        // direction change whose first step then follows untimed too.
+        driver.on_interrupt(&mut stepper, &mut hw, &RT, &mut pop);
+        let mut high = BSRR.load(Relaxed) & 0xF000 != 0;
+        while !high {
+            CNT.store(CCR1.load(Relaxed), Relaxed);
+            driver.on_interrupt(&mut stepper, &mut hw, &RT, &mut pop);
+            high = BSRR.load(Relaxed) & 0xF000 != 0;
+        }
+        let mut n = 0;
+        while driver.is_running() && n < 2 * CHUNK {
+            let ticks = clock.time(|| {
+                CNT.store(CCR1.load(Relaxed), Relaxed);
+                driver.on_interrupt(&mut stepper, &mut hw, &RT, &mut pop);
+            });
+            // A fall leaves the step pins low; the slot after the last
+            // step (the stop) is no step's cost.
+            let was_high = high;
+            high = BSRR.load(Relaxed) & 0xF000 != 0;
+            if chunk > 0 && driver.is_running() {
+                if was_high {
+                    fall += ticks.saturating_sub(clock.overhead);
+                    falls += 1;
+                } else {
+                    rise += ticks.saturating_sub(clock.overhead);
+                    rises += 1;
+                }
             }
-        });
-        // Chunk 0 warms up (its first event is a direction setup).
-        if chunk > 0 {
-            total += ticks;
+            n += 1;
         }
         black_box(stepper.position());
     }
-    // Read the stand-in registers back: a static that is only ever written
-    // is removed by the optimizer, stores and all.
-    black_box(BSRR.load(Relaxed) ^ ARR.load(Relaxed));
-    // The per-chunk overhead is subtracted once per chunk.
-    let overhead = clock.overhead * (CHUNKS - 1);
-    clock.insns(total.saturating_sub(overhead), CHUNKS * CHUNK)
+    black_box(BSRR.load(Relaxed) ^ SR.load(Relaxed));
+    let per = |t: u32, n: u32| t as f32 / clock.ticks_per_insn / n.max(1) as f32;
+    (per(rise, rises), per(fall, falls))
 }
 
 /// One typical line through the lexer and the interpreter, commands out.
@@ -262,19 +340,25 @@ pub fn run() -> ! {
     if !(0.16..0.176).contains(&clock.ticks_per_insn) {
         hprintln!("# WARNING: not 0.168; is QEMU running with -icount shift=0?");
     }
-    let one = step_event(&mut clock, [1000, 0, 0, 0], 0);
-    let four = step_event(&mut clock, [1000, 750, 500, 250], 0b0101);
+    let (rise1, fall1) = step_event(&mut clock, [1000, 0, 0, 0], 0);
+    let (rise4, fall4) = step_event(&mut clock, [1000, 750, 500, 250], 0b0101);
+    let (one, four) = (rise1 + fall1, rise4 + fall4);
     let line = line(&mut clock);
     let plan = plan_block(&mut clock);
-    let cycles = one * CPI + ISR_ENTRY_EXIT;
+    // Two interrupts per step: rise and fall.
+    let cycles = one * CPI + 2.0 * ISR_ENTRY_EXIT;
     let rate = TARGET_HZ / cycles;
     hprintln!("step_event_insns_1axis {}", libm::roundf(one) as u32);
     hprintln!("step_event_insns_4axis {}", libm::roundf(four) as u32);
+    hprintln!("step_rise_insns_1axis {}", libm::roundf(rise1) as u32);
+    hprintln!("step_fall_insns_1axis {}", libm::roundf(fall1) as u32);
+    hprintln!("step_rise_insns_4axis {}", libm::roundf(rise4) as u32);
+    hprintln!("step_fall_insns_4axis {}", libm::roundf(fall4) as u32);
     hprintln!("line_insns {}", libm::roundf(line) as u32);
     hprintln!("plan_block_insns {}", libm::roundf(plan) as u32);
     hprintln!("max_step_rate_hz_1axis {}", libm::roundf(rate) as u32);
     hprintln!(
-        "# max_step_rate_hz_1axis = 96 MHz / (step_event_insns_1axis x {} CPI + {} cycles ISR entry/exit)",
+        "# max_step_rate_hz_1axis = 96 MHz / (step_event_insns_1axis x {} CPI + 2 x {} cycles ISR entry/exit); step_event = rise + fall handler",
         CPI,
         ISR_ENTRY_EXIT
     );

@@ -13,9 +13,10 @@ use burin::controller::Pins;
 use stm32f4xx_hal::gpio::PinState;
 
 /// Driver wake-up time between enable and the first step, in ms (the
-/// controller's `Enable` timer). 0: the common step/dir drivers (A4988,
-/// DRV8825, TMC2209 in step/dir mode) take steps within microseconds of
-/// the enable.
+/// controller's `Enable` timer). 0: the common step/dir drivers take steps
+/// within microseconds of the enable, and the step interrupt asserts
+/// enable itself when it starts and holds the first edge back `$207` µs
+/// (see `burin::stepper::driver`).
 pub const WAKE_MS: u16 = 0;
 
 /// The stepper-enable pin alone: one BSRR store per change.

@@ -1,11 +1,12 @@
 //! The step seams on real registers: [`StepPort`] drives every step, direction
 //! and enable pin of one GPIO port with single BSRR writes, [`Tim5`] is the
-//! 32-bit step timer, and [`StepDriver`] runs the motion core's [`Stepper`]
-//! on them from the TIM5 interrupt.
+//! 32-bit step timer, and [`StepTask`] runs the motion core's step driver
+//! (`burin::stepper::driver`) on them from the TIM5 interrupt. What happens
+//! when, and why, is decided there; this file only moves registers.
 use burin::realtime::Realtime;
 use burin::seams::{StepPins, StepTimer};
-use burin::stepper::{Segment, StepEvent, Stepper, Switches};
-use core::sync::atomic::{AtomicBool, Ordering};
+use burin::stepper::driver::StepDriver;
+use burin::stepper::{Segment, Stepper, Switches};
 use heapless::spsc::Consumer;
 use stm32f4xx_hal::{pac, rcc::Rcc, timer::Timer};
 
@@ -135,13 +136,13 @@ impl StepPort {
 }
 
 impl StepPins for StepPort {
+    /// Direction pins of every axis (a no-op unless they changed) plus the
+    /// step pins that rise, in ONE store.
     #[inline(always)]
-    fn set_dirs(&mut self, dir_mask: u8) {
-        self.write(self.dirs[usize::from(dir_mask & 0xF)]);
-    }
-    #[inline(always)]
-    fn step_high(&mut self, step_mask: u8) {
-        self.write(self.step_on[usize::from(step_mask & 0xF)]);
+    fn step_high(&mut self, dir_mask: u8, step_mask: u8) {
+        let word =
+            self.dirs[usize::from(dir_mask & 0xF)] | self.step_on[usize::from(step_mask & 0xF)];
+        self.write(word);
     }
     #[inline(always)]
     fn step_low(&mut self) {
@@ -150,60 +151,34 @@ impl StepPins for StepPort {
     fn set_enabled(&mut self, on: bool) {
         self.write(if on { self.enable_on } else { self.enable_off });
     }
-}
-
-impl StepPort {
-    /// One step event in ONE store: direction pins of every axis (a no-op
-    /// unless they changed, and the stepper gives a change its own event
-    /// `dir_setup` ahead of the first step) plus the step pins that rise.
     #[inline(always)]
-    pub fn fire(&mut self, dir_mask: u8, step_mask: u8) {
-        let word =
-            self.dirs[usize::from(dir_mask & 0xF)] | self.step_on[usize::from(step_mask & 0xF)];
-        self.write(word);
+    fn switches(&self) -> Switches {
+        crate::boards::board::switches()
     }
 }
 
-/// Shortest period the step timer accepts: below this the ISR could not
-/// finish before the next update (about 1 µs at 96 MHz).
-pub const MIN_TICKS: u32 = 96;
-
 /// QEMU 7.2's TIM2-5 model (`stm32f2xx_timer`) counts at a fixed 1 GHz,
-/// whatever RCC says, and has no ARR preload: an ARR write schedules the
-/// next update ARR ticks after the write. It also adds the counter's offset
-/// (set by a CNT or UG write, the time of that write) to every delay, so
-/// the QEMU variant never writes CNT or EGR: the offset then stays at its
-/// reset value, 0, and periods are what ARR says. Writing the period from
-/// the ISR moves each event by the ISR's latency and the pipeline applies
-/// each period one event early; QEMU runs jobs, it does not measure timing.
+/// whatever RCC says, raises only update interrupts and has no ARR preload:
+/// an ARR write schedules the next update ARR ticks after the write. It also
+/// adds the counter's offset (set by a CNT or UG write, the time of that
+/// write) to every delay, so the QEMU variant never writes CNT or EGR: the
+/// offset then stays at its reset value, 0, and CNT reads the virtual clock
+/// in ns. There the compare is an update `target - now` ticks after the
+/// write; it lands a little late (the write follows the read), which the
+/// driver treats like any late interrupt. QEMU runs jobs, it does not
+/// measure timing.
 #[cfg(feature = "board-qemu")]
 pub const QEMU_TICK_HZ: u32 = 1_000_000_000;
 
-/// True while TIM5 runs step events. The parse task reads it to know when
-/// the queue needs a kick (pend TIM5 while stopped, see [`StepDriver`]).
-pub static STEPPING: AtomicBool = AtomicBool::new(false);
-
 /// TIM5 as the step timer: prescaler 1, so one tick is one timer-clock cycle
-/// (96 MHz on the F411, 84 MHz on the F401), and a 32-bit auto-reload, so
-/// even a 1 step/min move is a single period.
-///
-/// Each step event is an update (overflow). The next period goes into ARR
-/// with ARPE set: the write lands in the preload register and takes effect
-/// at the next update, so it can never be "missed" by a counter that
-/// already passed it (which would wrap through 2^32 ticks, 45 s). The price
-/// is a pipeline of one, which [`StepDriver`] absorbs by computing each
-/// event one period ahead. Compare channel 1 ends the step pulse: the
-/// counter restarts at every update, so a fixed CCR1 = pulse width fires
-/// exactly that long after each event, with no busy-wait in the ISR.
+/// (96 MHz on the F411, 84 MHz on the F401), free-running over its full 32
+/// bits (a wrap every 44.7 s) from `new` on and never reset, so a tick
+/// value means the same instant to every handler. Compare channel 1 (no
+/// preload: a CCR1 write takes effect at once) raises the interrupt at the
+/// absolute target the driver asks for.
 pub struct Tim5 {
     tim: pac::TIM5,
     tick_hz: u32,
-}
-
-/// Which of the timer's events raised the interrupt.
-pub struct Flags {
-    pub update: bool,
-    pub pulse_end: bool,
 }
 
 impl Tim5 {
@@ -216,51 +191,18 @@ impl Tim5 {
         #[cfg(feature = "board-qemu")]
         let tick_hz = QEMU_TICK_HZ;
         tim.psc().write(|w| w.psc().set(0));
-        // URS: only a real overflow raises the update interrupt, not the UG
-        // used below to load the first period.
-        tim.cr1().write(|w| w.arpe().set_bit().urs().set_bit());
-        Tim5 { tim, tick_hz }
-    }
-
-    /// Pulse width in ticks (`$0`): CC1 fires this long after each update.
-    pub fn set_pulse(&mut self, ticks: u32) {
-        self.tim.ccr1().write(|w| w.ccr().set(ticks.max(1)));
-    }
-
-    /// Starts firing update events, the first after `first_ticks`.
-    pub fn start(&mut self, first_ticks: u32) {
-        self.schedule_in(first_ticks);
-        // UG copies the preloaded ARR into the shadow register now. Not on
-        // QEMU: see [`QEMU_TICK_HZ`].
+        tim.dier().reset();
         #[cfg(not(feature = "board-qemu"))]
         {
-            self.tim.cnt().reset();
-            self.tim.egr().write(|w| w.ug().set_bit());
+            tim.arr().write(|w| w.arr().set(u32::MAX));
+            // UG loads the prescaler; URS keeps it from raising an update.
+            tim.cr1().write(|w| w.urs().set_bit());
+            tim.egr().write(|w| w.ug().set_bit());
+            tim.cr1().modify(|_, w| w.cen().set_bit());
         }
-        self.tim
-            .sr()
-            .write(|w| w.uif().clear_bit().cc1if().clear_bit());
-        self.tim
-            .dier()
-            .write(|w| w.uie().set_bit().cc1ie().set_bit());
-        self.tim.cr1().modify(|_, w| w.cen().set_bit());
-    }
-
-    /// Reads and acknowledges the pending events (first thing in the ISR,
-    /// so that a late write cannot clear the next event's flag).
-    #[inline(always)]
-    pub fn take_flags(&mut self) -> Flags {
-        let sr = self.tim.sr().read();
-        let flags = Flags {
-            update: sr.uif().bit_is_set(),
-            pulse_end: sr.cc1if().bit_is_set(),
-        };
-        // rc_w0 bits: writing 1 leaves a flag alone, 0 clears it.
-        self.tim.sr().write(|w| {
-            w.uif().bit(!flags.update);
-            w.cc1if().bit(!flags.pulse_end)
-        });
-        flags
+        #[cfg(feature = "board-qemu")]
+        tim.cr1().write(|w| w.urs().set_bit());
+        Tim5 { tim, tick_hz }
     }
 }
 
@@ -269,115 +211,115 @@ impl StepTimer for Tim5 {
         self.tick_hz
     }
     #[inline(always)]
-    fn schedule_in(&mut self, ticks: u32) {
+    fn now(&self) -> u32 {
+        self.tim.cnt().read().bits()
+    }
+    #[inline(always)]
+    fn schedule_at(&mut self, at: u32) {
+        // Drop a match of the previous target first (rc_w0: 0 clears, 1
+        // leaves a flag alone), then arm the new one.
+        #[cfg(not(feature = "board-qemu"))]
+        {
+            self.tim.sr().write(|w| w.cc1if().clear_bit());
+            self.tim.ccr1().write(|w| w.ccr().set(at));
+        }
+        #[cfg(feature = "board-qemu")]
+        {
+            self.tim.sr().write(|w| w.uif().clear_bit());
+            let ahead = at.wrapping_sub(self.now()) as i32;
+            self.tim.arr().write(|w| w.arr().set(ahead.max(1) as u32));
+        }
+    }
+    fn start(&mut self) {
+        // A stale match from before the stop must not raise the interrupt.
         self.tim
-            .arr()
-            .write(|w| w.arr().set(ticks.max(MIN_TICKS) - 1));
+            .sr()
+            .write(|w| w.cc1if().clear_bit().uif().clear_bit());
+        #[cfg(not(feature = "board-qemu"))]
+        self.tim.dier().write(|w| w.cc1ie().set_bit());
+        #[cfg(feature = "board-qemu")]
+        {
+            self.tim.dier().write(|w| w.uie().set_bit());
+            self.tim.cr1().modify(|_, w| w.cen().set_bit());
+        }
     }
     fn stop(&mut self) {
+        self.tim.dier().reset();
+        #[cfg(feature = "board-qemu")]
         self.tim.cr1().modify(|_, w| w.cen().clear_bit());
-        // Stopping happens a whole period after the last event, so its
-        // pulse (ended by CC1 at `pulse_ticks`) is already over.
     }
 }
 
-/// The TIM5 task's state: the core's [`Stepper`] fed from the segment queue,
-/// its events on [`StepPort`] and [`Tim5`].
-///
-/// Pipeline: at update k the event computed at update k-1 is applied (one
-/// BSRR write) and event k+1 is computed, its period going into ARR's
-/// preload, which the hardware loads at update k+1: exactly when it is due.
-/// So switches are sampled one event ahead of the pulse they gate; a trip
-/// still stops pulses within one step event.
-pub struct StepDriver {
-    timer: Tim5,
-    port: StepPort,
-    stepper: Stepper,
-    queue: Consumer<'static, Segment>,
-    next: Option<StepEvent>,
+/// The pins and the timer as the one hardware object the driver drives.
+pub struct StepHw {
+    pub port: StepPort,
+    pub timer: Tim5,
 }
 
-impl StepDriver {
-    pub fn new(
-        mut timer: Tim5,
-        port: StepPort,
-        stepper: Stepper,
-        queue: Consumer<'static, Segment>,
-        pulse_ticks: u32,
-    ) -> Self {
-        timer.set_pulse(pulse_ticks);
-        StepDriver {
-            timer,
-            port,
-            stepper,
-            queue,
-            next: None,
-        }
-    }
-
-    /// The whole TIM5 interrupt. Returns true when the planner should run
-    /// (a segment was taken, so there is room, or the timer stopped).
-    pub fn on_interrupt(&mut self, rt: &Realtime, sw: Switches) -> bool {
-        let flags = self.timer.take_flags();
-        if flags.pulse_end {
-            self.port.step_low();
-        }
-        if flags.update {
-            return match self.next.take() {
-                Some(ev) if ev.ticks > 0 => {
-                    self.port.fire(ev.dir_mask, ev.step_mask);
-                    self.prepare(rt, sw)
-                }
-                // The last period has elapsed: go on if more was queued
-                // meanwhile, else stop.
-                _ => self.begin(rt, sw),
-            };
-        }
-        // A pend from the parse task (segments queued while stopped).
-        if !flags.pulse_end && !STEPPING.load(Ordering::Acquire) {
-            return self.begin(rt, sw);
-        }
-        false
-    }
-
-    /// Fires the first event now and primes the pipeline, or stops.
-    fn begin(&mut self, rt: &Realtime, sw: Switches) -> bool {
-        let (ev, took) = self.step(rt, sw);
-        if ev.ticks == 0 {
-            self.timer.stop();
-            STEPPING.store(false, Ordering::Release);
-            return true;
-        }
-        STEPPING.store(true, Ordering::Release);
-        self.port.set_enabled(true);
-        self.port.fire(ev.dir_mask, ev.step_mask);
-        self.timer.start(ev.ticks);
-        self.prepare(rt, sw) | took
-    }
-
-    /// Computes the next event and queues its period.
-    fn prepare(&mut self, rt: &Realtime, sw: Switches) -> bool {
-        let (ev, took) = self.step(rt, sw);
-        if ev.ticks > 0 {
-            self.timer.schedule_in(ev.ticks);
-        }
-        self.next = Some(ev);
-        took
-    }
-
+impl StepPins for StepHw {
     #[inline(always)]
-    fn step(&mut self, rt: &Realtime, sw: Switches) -> (StepEvent, bool) {
+    fn step_high(&mut self, dir_mask: u8, step_mask: u8) {
+        self.port.step_high(dir_mask, step_mask);
+    }
+    #[inline(always)]
+    fn step_low(&mut self) {
+        self.port.step_low();
+    }
+    fn set_enabled(&mut self, on: bool) {
+        self.port.set_enabled(on);
+    }
+    #[inline(always)]
+    fn switches(&self) -> Switches {
+        self.port.switches()
+    }
+}
+
+impl StepTimer for StepHw {
+    fn tick_hz(&self) -> u32 {
+        self.timer.tick_hz()
+    }
+    #[inline(always)]
+    fn now(&self) -> u32 {
+        self.timer.now()
+    }
+    #[inline(always)]
+    fn schedule_at(&mut self, at: u32) {
+        self.timer.schedule_at(at);
+    }
+    fn start(&mut self) {
+        self.timer.start();
+    }
+    fn stop(&mut self) {
+        self.timer.stop();
+    }
+}
+
+/// The TIM5 task's state: the core's [`StepDriver`] and [`Stepper`] fed from
+/// the segment queue, on [`StepHw`].
+pub struct StepTask {
+    driver: StepDriver,
+    stepper: Stepper,
+    hw: StepHw,
+    queue: Consumer<'static, Segment>,
+}
+
+impl StepTask {
+    pub fn new(hw: StepHw, stepper: Stepper, queue: Consumer<'static, Segment>) -> Self {
+        StepTask {
+            driver: StepDriver::new(),
+            stepper,
+            hw,
+            queue,
+        }
+    }
+
+    /// The whole TIM5 interrupt (a compare, or a kick from `parse` while
+    /// stopped); the switches are read by the driver after each rise. Returns true when the planner should run (a segment was
+    /// taken, so there is room, or the driver stopped).
+    #[inline(always)]
+    pub fn on_interrupt(&mut self, rt: &Realtime) -> bool {
         let queue = &mut self.queue;
-        let mut took = false;
-        let ev = self.stepper.on_event(
-            rt,
-            &mut || {
-                let s = queue.dequeue();
-                took |= s.is_some();
-                s
-            },
-            sw,
-        );
-        (ev, took)
+        self.driver
+            .on_interrupt(&mut self.stepper, &mut self.hw, rt, &mut || queue.dequeue())
     }
 }

@@ -1,0 +1,311 @@
+//! The step interrupt: what the board's TIM5 handler and host-sim's virtual
+//! timer both run, generic over the [`StepPins`] and [`StepTimer`] seams.
+//!
+//! One compare channel, one absolute target at a time, two alternating
+//! actions:
+//!
+//! - **rise**: one store puts the direction pins and the rising step edges
+//!   of the pending event, the counter is read right after it, the fall is
+//!   scheduled at that *actual* rise time + `$0`, and only then the next
+//!   event is computed ([`Stepper::on_event`]) while the pulse is high;
+//! - **fall**: the step pins go low, the counter is read, and the next rise
+//!   is scheduled at its planned time, but never before the fall + the
+//!   minimum low time ([`StepConfig::min_low_ticks`]) nor sooner than
+//!   `$201`'s period after the last rise ([`StepConfig::min_period`]).
+//!
+//! Why: with a fixed compare ending every pulse `$0` after each timer
+//! update, an interrupt delayed by longer than `$0` (the F411's USB stack
+//! masks interrupts for 3-4 µs) could leave a pin high into the next
+//! period, and that step had no rising edge: lost. Here a late handler only
+//! delays an edge, never skips one: every step gets high ≥ `$0` and low
+//! ≥ `min_low_ticks`, and planned times catch up afterwards at no more
+//! than `$201`. After each compare write the counter is re-read: a target
+//! already past (or within [`SPIN_TICKS`]) is done at once in the same
+//! handler instead of waiting 2^32 ticks for the counter to wrap.
+//!
+//! Events without steps (direction changes, smoothing events) have no
+//! fall: the next rise follows directly, `$200` after a direction change.
+//! Starting from rest (the task pends the interrupt while
+//! [`Realtime::stepping`] is false) enables the drivers and holds the first
+//! edge `$207` back; an idle event from the stepper (underrun, end of
+//! motion, halt) stops the timer at its slot, after the last fall.
+
+use super::{Segment, StepConfig, StepEvent, Stepper};
+use crate::realtime::Realtime;
+use crate::seams::{StepPins, StepTimer};
+
+/// A target this close (or past) is not left to the compare: the handler
+/// waits for it in a short loop. Covers the compare write's latency
+/// (a few timer clocks) so a just-missed match cannot cost a 2^32 wrap.
+pub const SPIN_TICKS: u32 = 8;
+
+/// The later of two counter values (wrapping: valid within 2^31 ticks).
+#[inline(always)]
+fn later(a: u32, b: u32) -> u32 {
+    if (b.wrapping_sub(a) as i32) > 0 {
+        b
+    } else {
+        a
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Phase {
+    /// Timer stopped; the next interrupt is a kick.
+    Stopped,
+    /// Step pins low; the target is the next rise.
+    Low,
+    /// A pulse is high; the target is its fall.
+    High,
+}
+
+/// The step interrupt's state. It holds no configuration: timing comes
+/// from the stepper's [`StepConfig`], so a settings change that rebuilds
+/// the stepper needs nothing else.
+#[derive(Clone, Debug)]
+pub struct StepDriver {
+    phase: Phase,
+    /// The event the next rise applies (computed during the last pulse).
+    pending: StepEvent,
+    /// Planned tick of the pending event.
+    planned: u32,
+    /// Tick the current action is due at (the armed compare).
+    target: u32,
+    /// Actual tick of the last rising step edge and of the last fall.
+    last_rise: u32,
+    last_fall: u32,
+    /// Direction pins as last written (logical).
+    dirs: u8,
+}
+
+impl Default for StepDriver {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// What one interrupt did, for the task: it should run when a segment was
+/// taken (room in the queue) or the driver stopped.
+pub type WakeTask = bool;
+
+impl StepDriver {
+    pub const fn new() -> Self {
+        const IDLE: StepEvent = StepEvent {
+            dir_mask: 0,
+            step_mask: 0,
+            dir_pins: 0,
+            step_pins: 0,
+            ticks: 0,
+        };
+        StepDriver {
+            phase: Phase::Stopped,
+            pending: IDLE,
+            planned: 0,
+            target: 0,
+            last_rise: 0,
+            last_fall: 0,
+            dirs: 0,
+        }
+    }
+
+    /// The timer is armed (a kick would do nothing).
+    pub fn is_running(&self) -> bool {
+        self.phase != Phase::Stopped
+    }
+
+    /// The event the next rise applies (its steps are already counted in
+    /// the stepper's position).
+    pub fn pending(&self) -> &StepEvent {
+        &self.pending
+    }
+
+    /// The whole step interrupt: a kick from rest, a due rise or fall (and
+    /// any that fell due meanwhile), or nothing if it came early. `pop`
+    /// takes the next segment.
+    ///
+    /// The common cases, a due fall or rise whose next action is not due
+    /// yet, run straight through inline in the caller's handler; kicks,
+    /// stops and late chains go through the general loop.
+    #[inline(always)]
+    pub fn on_interrupt<H: StepPins + StepTimer>(
+        &mut self,
+        stepper: &mut Stepper,
+        hw: &mut H,
+        rt: &Realtime,
+        pop: &mut impl FnMut() -> Option<Segment>,
+    ) -> WakeTask {
+        let due = (self.target.wrapping_sub(hw.now()) as i32) <= 0;
+        if due && self.phase == Phase::High {
+            self.fall(&stepper.cfg, hw);
+            if (self.target.wrapping_sub(hw.now()) as i32) > SPIN_TICKS as i32 {
+                return false;
+            }
+        } else if due && self.phase == Phase::Low && self.pending.ticks != 0 {
+            let mut took = false;
+            let mut pop = || {
+                let s = pop();
+                took |= s.is_some();
+                s
+            };
+            self.rise(stepper, hw, rt, &mut pop);
+            if (self.target.wrapping_sub(hw.now()) as i32) > SPIN_TICKS as i32 {
+                return took;
+            }
+            let more = self.run(stepper, hw, rt, &mut pop);
+            return more | took;
+        }
+        self.run(stepper, hw, rt, pop)
+    }
+
+    #[inline(never)]
+    fn run<H: StepPins + StepTimer>(
+        &mut self,
+        stepper: &mut Stepper,
+        hw: &mut H,
+        rt: &Realtime,
+        pop: &mut impl FnMut() -> Option<Segment>,
+    ) -> WakeTask {
+        let mut took = false;
+        let mut pop = || {
+            let s = pop();
+            took |= s.is_some();
+            s
+        };
+        if self.phase == Phase::Stopped && !self.start(stepper, hw, rt, &mut pop) {
+            return true;
+        }
+        loop {
+            let early = self.target.wrapping_sub(hw.now()) as i32;
+            if early > SPIN_TICKS as i32 {
+                // Armed, not due (a kick while running, or a stale match).
+                return took;
+            }
+            if early > 0 {
+                continue;
+            }
+            match self.phase {
+                Phase::High => self.fall(&stepper.cfg, hw),
+                _ => {
+                    if !self.rise(stepper, hw, rt, &mut pop) {
+                        self.phase = Phase::Stopped;
+                        hw.stop();
+                        rt.set_stepping(false);
+                        return true;
+                    }
+                }
+            }
+        }
+    }
+
+    /// [`Stepper::on_event`] off the hot path (start, the slot after the
+    /// last event): kept out of line so the rise's own call inlines alone.
+    #[inline(never)]
+    fn poll_cold(
+        stepper: &mut Stepper,
+        rt: &Realtime,
+        pop: &mut impl FnMut() -> Option<Segment>,
+        sw: crate::stepper::Switches,
+    ) -> StepEvent {
+        stepper.on_event(rt, pop, sw)
+    }
+
+    /// From rest: the first event, drivers on, its rise `$207` from now.
+    /// False when there is nothing to run (the queue held only flushed
+    /// segments, or a halt holds).
+    fn start<H: StepPins + StepTimer>(
+        &mut self,
+        stepper: &mut Stepper,
+        hw: &mut H,
+        rt: &Realtime,
+        pop: &mut impl FnMut() -> Option<Segment>,
+    ) -> bool {
+        let ev = Self::poll_cold(stepper, rt, pop, hw.switches());
+        if ev.ticks == 0 {
+            return false;
+        }
+        rt.set_stepping(true);
+        hw.set_enabled(true);
+        hw.start();
+        let now = hw.now();
+        let cfg = &stepper.cfg;
+        self.pending = ev;
+        self.planned = now.wrapping_add(cfg.enable_ticks);
+        // Long low and long since the last rise: no bound applies.
+        self.last_fall = now.wrapping_sub(cfg.min_low_ticks);
+        self.last_rise = now.wrapping_sub(cfg.min_period);
+        self.phase = Phase::Low;
+        self.target = self.planned;
+        hw.schedule_at(self.target);
+        true
+    }
+
+    /// Applies the pending event and computes the next one. False: the
+    /// stepper is idle at this slot, stop.
+    #[inline(always)]
+    fn rise<H: StepPins + StepTimer>(
+        &mut self,
+        stepper: &mut Stepper,
+        hw: &mut H,
+        rt: &Realtime,
+        pop: &mut impl FnMut() -> Option<Segment>,
+    ) -> bool {
+        let mut ev = self.pending;
+        if ev.ticks == 0 {
+            // The slot after the last event: go on if more was queued
+            // meanwhile, else stop.
+            ev = Self::poll_cold(stepper, rt, pop, hw.switches());
+            if ev.ticks == 0 {
+                return false;
+            }
+        }
+        hw.step_high(ev.dir_mask, ev.step_mask);
+        let now = hw.now();
+        let cfg = &stepper.cfg;
+        let mut next = self.planned.wrapping_add(ev.ticks);
+        if ev.dir_mask != self.dirs {
+            self.dirs = ev.dir_mask;
+            next = later(next, now.wrapping_add(cfg.dir_setup_ticks));
+        }
+        self.planned = next;
+        let steps = ev.step_mask != 0;
+        if steps {
+            self.last_rise = now;
+            self.phase = Phase::High;
+            self.target = now.wrapping_add(cfg.pulse_ticks);
+            hw.schedule_at(self.target);
+        }
+        // One call site, so the inlined stepper exists once here.
+        self.pending = stepper.on_event(rt, pop, hw.switches());
+        if !steps {
+            self.phase = Phase::Low;
+            self.target = self.rise_target(&stepper.cfg);
+            hw.schedule_at(self.target);
+        }
+        true
+    }
+
+    /// Ends the pulse and schedules the next rise.
+    #[inline(always)]
+    fn fall<H: StepPins + StepTimer>(&mut self, cfg: &StepConfig, hw: &mut H) {
+        hw.step_low();
+        self.last_fall = hw.now();
+        self.phase = Phase::Low;
+        self.target = self.rise_target(cfg);
+        hw.schedule_at(self.target);
+    }
+
+    /// The planned time of the pending event, held back by the minimum low
+    /// time and `$201` when it steps.
+    #[inline(always)]
+    fn rise_target(&self, cfg: &StepConfig) -> u32 {
+        if self.pending.step_mask == 0 {
+            return self.planned;
+        }
+        let low = self.last_fall.wrapping_add(cfg.min_low_ticks);
+        let rate = self.last_rise.wrapping_add(cfg.min_period);
+        later(later(self.planned, low), rate)
+    }
+}
+
+#[cfg(test)]
+mod tests;

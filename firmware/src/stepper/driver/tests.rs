@@ -1,0 +1,145 @@
+//! The driver on a toy timer: the interrupt enters at each target, late by
+//! a chosen amount, and every store is logged with its time.
+use super::*;
+use crate::planner::Watch;
+use crate::settings::Settings;
+use crate::stepper::Switches;
+
+/// The clock advances one tick per counter read, so the driver's short
+/// wait for a near target ends.
+struct Toy {
+    t: core::cell::Cell<u64>,
+    target: Option<u64>,
+    log: [(u64, u8, u8); 64],
+    n: usize,
+    enabled: bool,
+}
+
+impl Toy {
+    fn new() -> Self {
+        Toy {
+            t: core::cell::Cell::new(1000),
+            target: None,
+            log: [(0, 0, 0); 64],
+            n: 0,
+            enabled: false,
+        }
+    }
+    fn push(&mut self, step: u8, dir: u8) {
+        if self.n < self.log.len() {
+            self.log[self.n] = (self.t.get(), step, dir);
+            self.n += 1;
+        }
+    }
+}
+
+impl StepPins for Toy {
+    fn step_high(&mut self, dir_mask: u8, step_mask: u8) {
+        self.push(step_mask, dir_mask);
+    }
+    fn step_low(&mut self) {
+        self.push(0, 0xFF);
+    }
+    fn set_enabled(&mut self, on: bool) {
+        self.enabled = on;
+    }
+    fn switches(&self) -> Switches {
+        Switches::default()
+    }
+}
+
+impl StepTimer for Toy {
+    fn tick_hz(&self) -> u32 {
+        1_000_000 * US as u32
+    }
+    fn now(&self) -> u32 {
+        let t = self.t.get();
+        self.t.set(t + 1);
+        t as u32
+    }
+    fn schedule_at(&mut self, at: u32) {
+        let t = self.t.get();
+        let ahead = at.wrapping_sub(t as u32);
+        self.target = Some(t + u64::from(ahead));
+    }
+    fn start(&mut self) {}
+    fn stop(&mut self) {
+        self.target = None;
+    }
+}
+
+/// Ticks per µs of the toy timer.
+const US: u64 = 100;
+
+fn segment(steps: u32, dir: u8, new_block: bool) -> Segment {
+    let mut s = [0; crate::AXES];
+    s[0] = steps;
+    Segment {
+        events: steps,
+        period: 10 * US as u32,
+        amass: 0,
+        new_block,
+        steps: s,
+        count: steps,
+        dir_mask: dir,
+        watch: Watch::default(),
+        end_of_motion: true,
+        generation: 0,
+        speed_mm_min: 1.0,
+        line: 1,
+    }
+}
+
+/// Runs to a stop; every interrupt enters `late` ticks after its target.
+fn run(late: u64, segments: &[Segment]) -> Toy {
+    let rt = Realtime::new();
+    let s = Settings {
+        step_pulse_us: 2.0,
+        dir_setup_us: 3.0,
+        enable_delay_us: 5.0,
+        max_step_rate_hz: 200_000.0,
+        ..Settings::default()
+    };
+    let mut stepper = Stepper::new(StepConfig::new(&s, 1_000_000 * US as u32));
+    let mut d = StepDriver::new();
+    let mut hw = Toy::new();
+    let mut q = segments.iter().copied();
+    let mut pop = || q.next();
+    d.on_interrupt(&mut stepper, &mut hw, &rt, &mut pop);
+    assert!(rt.stepping() && hw.enabled);
+    for _ in 0..200 {
+        let Some(t) = hw.target else { break };
+        hw.t.set(hw.t.get().max(t + late));
+        d.on_interrupt(&mut stepper, &mut hw, &rt, &mut pop);
+    }
+    assert!(!rt.stepping() && !d.is_running());
+    assert_eq!(stepper.position()[0], -3);
+    hw
+}
+
+#[test]
+fn pulses_keep_their_widths_however_late() {
+    let segs = [segment(3, 1, true)];
+    for late in [0, 1, 3, 7, 15].map(|us| us * US) {
+        let hw = run(late, &segs);
+        let log = &hw.log[..hw.n];
+        // Direction first (no step), then rise/fall pairs.
+        assert_eq!((log[0].1, log[0].2), (0, 1), "late {late}: {log:?}");
+        // `$207` from start (t = 1000) to the direction store, `$200` after it.
+        assert!(log[0].0 >= 1000 + 5 * US);
+        let rises: [u64; 3] = core::array::from_fn(|i| log[1 + 2 * i].0);
+        let falls: [u64; 3] = core::array::from_fn(|i| log[2 + 2 * i].0);
+        assert!(rises[0] >= log[0].0 + 3 * US, "late {late}: {log:?}");
+        for i in 0..3 {
+            assert!(
+                falls[i] >= rises[i] + 2 * US,
+                "high time, late {late}: {log:?}"
+            );
+            if i > 0 {
+                assert!(rises[i] >= falls[i - 1] + 2 * US, "low time, late {late}");
+                assert!(rises[i] >= rises[i - 1] + 5 * US, "$201, late {late}");
+            }
+        }
+        assert_eq!(hw.n, 7, "late {late}: {log:?}");
+    }
+}

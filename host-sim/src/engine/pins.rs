@@ -1,0 +1,182 @@
+//! The step interrupt's hardware in virtual time: the pins and the timer
+//! the core's step driver (`burin::stepper::driver`) drives, as one object.
+//!
+//! Time inside a handler follows [`IrqTicks`]: the handler's first pin
+//! store comes `entry` ticks after it enters; the counter read right after
+//! a store sees the store's time, the next read sees the rest of that
+//! action done (a rise computes the next event: `rise - entry` ticks; a
+//! fall `fall - entry`), which is where the driver re-reads the counter to
+//! see whether its next target already passed. A read with nothing done
+//! since the previous read (the driver's short wait) costs one tick.
+//! Everything is integer ticks: runs are repeatable bit for bit.
+
+use std::cell::Cell;
+
+use burin::seams::{StepPins, StepTimer};
+use burin::stepper::Switches;
+
+use super::World;
+use crate::config::IrqTicks;
+
+/// One pin store as the driver made it: levels after it (logical: bit n is
+/// axis n, step high, direction negative), at `tick`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Edge {
+    pub tick: u64,
+    pub step: u8,
+    pub dir: u8,
+}
+
+/// The timer and the pin levels (see the module docs for its clock).
+pub struct VirtualHw {
+    t: Cell<u64>,
+    /// Counter reads since the last store (2: the store's work is charged).
+    reads: Cell<u8>,
+    /// Something happened since the last read (no wait-loop tick).
+    touched: Cell<bool>,
+    work: Cell<u64>,
+    /// The armed compare, absolute (None: interrupt disabled).
+    pub target: Option<u64>,
+    irq: IrqTicks,
+    tick_hz: u32,
+    step: u8,
+    dir: u8,
+    enabled: bool,
+    /// This handler's stores, for the engine to apply after it returns.
+    pub stores: Vec<Edge>,
+    /// Every store of the run, when a caller asked for them.
+    pub log: Option<Vec<Edge>>,
+}
+
+impl VirtualHw {
+    pub fn new(irq: IrqTicks, tick_hz: u32) -> Self {
+        VirtualHw {
+            t: Cell::new(0),
+            reads: Cell::new(2),
+            touched: Cell::new(true),
+            work: Cell::new(0),
+            target: None,
+            irq,
+            tick_hz,
+            step: 0,
+            dir: 0,
+            enabled: false,
+            stores: Vec::new(),
+            log: None,
+        }
+    }
+
+    /// The handler enters at `at` (its first store is `entry` later).
+    pub fn enter(&mut self, at: u64) {
+        self.t.set(at + self.irq.entry);
+        self.reads.set(2);
+        self.touched.set(true);
+        self.work.set(0);
+        self.stores.clear();
+    }
+
+    /// When the handler that ran since [`VirtualHw::enter`] returned.
+    pub fn done_at(&self) -> u64 {
+        self.t.get() + self.work.get()
+    }
+
+    pub fn enabled(&self) -> bool {
+        self.enabled
+    }
+
+    fn store(&mut self, step: u8, dir: u8, work: u64) {
+        self.step = step;
+        self.dir = dir;
+        let e = Edge {
+            tick: self.t.get(),
+            step,
+            dir,
+        };
+        self.stores.push(e);
+        if let Some(log) = &mut self.log {
+            log.push(e);
+        }
+        self.reads.set(0);
+        self.touched.set(true);
+        self.work.set(work);
+    }
+}
+
+/// The hardware and the machine it moves, for one handler: the carriage
+/// moves at each rising edge, so the switches the driver reads right after
+/// it already see that step.
+pub struct Wired<'a> {
+    pub hw: &'a mut VirtualHw,
+    pub world: &'a mut World,
+}
+
+impl StepPins for Wired<'_> {
+    fn step_high(&mut self, dir_mask: u8, step_mask: u8) {
+        let hw = &mut *self.hw;
+        let work = hw.irq.rise - hw.irq.entry;
+        hw.store(step_mask, dir_mask, work);
+        if step_mask != 0 {
+            self.world.step(step_mask, dir_mask);
+        }
+    }
+    fn step_low(&mut self) {
+        let hw = &mut *self.hw;
+        let work = hw.irq.fall - hw.irq.entry;
+        hw.store(0, hw.dir, work);
+    }
+    fn set_enabled(&mut self, on: bool) {
+        self.hw.enabled = on;
+    }
+    fn switches(&self) -> Switches {
+        self.world.switches()
+    }
+}
+
+impl StepTimer for Wired<'_> {
+    fn tick_hz(&self) -> u32 {
+        self.hw.tick_hz()
+    }
+    fn now(&self) -> u32 {
+        self.hw.now()
+    }
+    fn schedule_at(&mut self, at: u32) {
+        self.hw.schedule_at(at);
+    }
+    fn start(&mut self) {
+        self.hw.start();
+    }
+    fn stop(&mut self) {
+        self.hw.stop();
+    }
+}
+
+impl StepTimer for VirtualHw {
+    fn tick_hz(&self) -> u32 {
+        self.tick_hz
+    }
+    fn now(&self) -> u32 {
+        let mut t = self.t.get();
+        if self.reads.get() == 1 {
+            t += self.work.replace(0);
+        }
+        if !self.touched.replace(false) {
+            t += 1;
+        }
+        self.reads.set(self.reads.get().saturating_add(1));
+        self.t.set(t);
+        t as u32
+    }
+    fn schedule_at(&mut self, at: u32) {
+        // A target behind the counter waits for the wrap, as on TIM5.
+        let t = self.t.get();
+        let ahead = at.wrapping_sub(t as u32);
+        self.target = Some(t + u64::from(ahead));
+        self.touched.set(true);
+    }
+    fn start(&mut self) {
+        self.touched.set(true);
+    }
+    fn stop(&mut self) {
+        self.target = None;
+    }
+}

@@ -1,0 +1,121 @@
+//! The step interrupt (RTIC priority 3) in virtual time: the core's step
+//! driver on [`VirtualHw`], entered when its compare target comes due (late
+//! by the machine's [`Interrupts`](crate::config::Interrupts) model), and
+//! what its pin stores did to the world, the statistics and the recorder.
+
+use burin::stepper::StepEvent;
+use burin::AXES;
+
+use super::pins::Wired;
+use super::{Edge, Sim};
+use crate::record::PinEvent;
+
+impl Sim<'_> {
+    /// Prio 3: one step interrupt (a kick, a rise or a fall, see
+    /// `burin::stepper::driver`), then what its pin stores did.
+    pub(super) fn step_event(&mut self) {
+        let underruns = self.rt.underruns();
+        let was_running = self.driver.is_running();
+        self.hw.enter(self.now);
+        let queue = &mut self.queue;
+        let mut hw = Wired {
+            hw: &mut self.hw,
+            world: &mut self.world,
+        };
+        self.driver
+            .on_interrupt(&mut self.stepper, &mut hw, &self.rt, &mut || {
+                queue.dequeue()
+            });
+        if was_running && !self.driver.is_running() && self.rt.underruns() == underruns {
+            // Ran dry at a planned stop: a starved planner if the stop was
+            // only there because the next line had not arrived or been parsed.
+            let running = self.machine.prep.hold() == burin::stepper::prep::Hold::Running
+                && !self.rt.hold_requested();
+            let waiting = !self.lines.is_empty() || (self.device_mode && self.input_pending);
+            if running && self.machine.ready() && waiting {
+                self.stats.starved += 1;
+            }
+        }
+        self.apply_stores();
+        let v = self.stepper.speed_mm_min();
+        if v != self.stats.last_speed {
+            self.stats.last_speed = v;
+            self.stats.max_speed = self.stats.max_speed.max(v);
+            self.rec.velocity(self.now, v);
+        }
+        let done = self.hw.done_at();
+        self.next_step = self.hw.target.map(|t| self.masks.unmasked_at(t.max(done)));
+    }
+
+    /// The handler's pin stores (the world already moved at each rising
+    /// edge): statistics, and the recorder, which sees each rise with the
+    /// position the stepper had after that event.
+    fn apply_stores(&mut self) {
+        let stores = std::mem::take(&mut self.hw.stores);
+        // The stepper already counted the event after the last rise.
+        let mut pos = self.stepper.position();
+        unstep(&mut pos, self.driver.pending());
+        let rises = stores.iter().filter(|e| e.step != 0).count();
+        let mut after = vec![[0i64; AXES]; rises];
+        for (k, e) in stores.iter().rev().filter(|e| e.step != 0).enumerate() {
+            after[rises - 1 - k] = pos.map(i64::from);
+            unstep(
+                &mut pos,
+                &StepEvent {
+                    dir_mask: e.dir,
+                    step_mask: e.step,
+                    dir_pins: 0,
+                    step_pins: 0,
+                    ticks: 0,
+                },
+            );
+        }
+        let mut k = 0;
+        for e in &stores {
+            if e.dir != self.stats.dir {
+                self.stats.dir = e.dir;
+                self.stats.dir_changed = e.tick;
+            }
+            if e.step == 0 {
+                if self.stats.step_level != 0 {
+                    self.rec.step_fall(e.tick, self.stats.step_level);
+                }
+                self.stats.step_level = 0;
+                continue;
+            }
+            self.stats.step_level = e.step;
+            for i in 0..AXES {
+                self.stats.steps[i] += u64::from(e.step >> i & 1);
+            }
+            self.rec.step_event(&PinEvent {
+                tick: e.tick,
+                dir_mask: e.dir,
+                step_mask: e.step,
+                dir_changed_tick: self.stats.dir_changed,
+                pos: after.get(k).copied().unwrap_or_default(),
+            });
+            k += 1;
+        }
+        self.hw.stores = stores;
+    }
+
+    /// Keep every pin store of the run from now on (see [`Sim::edges`]).
+    pub fn record_edges(&mut self) {
+        self.hw.log.get_or_insert_with(Vec::new);
+    }
+
+    /// Every pin store since [`Sim::record_edges`]: step and direction
+    /// levels after it, at its tick.
+    pub fn edges(&self) -> &[Edge] {
+        self.hw.log.as_deref().unwrap_or(&[])
+    }
+}
+
+/// Takes an event's steps back out of `pos`.
+fn unstep(pos: &mut [i32; AXES], ev: &StepEvent) {
+    for (i, p) in pos.iter_mut().enumerate() {
+        if ev.step_mask & (1 << i) != 0 {
+            *p -= if ev.dir_mask & (1 << i) != 0 { -1 } else { 1 };
+        }
+    }
+}
