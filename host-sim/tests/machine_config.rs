@@ -185,3 +185,40 @@ fn run_info_matches_the_settings() {
     assert_eq!(info.axes[1].max_accel_mm_s2, 2500.0);
     assert_eq!(info.axes[2].travel_mm, 10.0);
 }
+
+#[test]
+fn interrupt_model_keys() {
+    use host_sim::config::{Interrupts, MaskPhase};
+    let cfg = MachineConfig::from_toml_str(
+        "[interrupts]\nstep_entry_ns = 250\nstep_handler_ns = 1600\nmask_window_us = 4.0\nmask_phase = 2.5\n[pulses]\nenable_delay_us = 5.0\n",
+    )
+    .unwrap();
+    assert_eq!(
+        cfg.interrupts,
+        Interrupts {
+            step_entry_ns: 250,
+            step_handler_ns: 1600,
+            mask_window_us: 4.0,
+            mask_phase: MaskPhase::Fixed(2.5),
+            ..Interrupts::default()
+        }
+    );
+    assert_eq!(cfg.settings.enable_delay_us, 5.0);
+    let seeded = MachineConfig::from_toml_str("[interrupts]\nmask_seed = 9\n").unwrap();
+    assert_eq!(seeded.interrupts.mask_phase, MaskPhase::Random(9));
+    for bad in [
+        "[interrupts]\nmask_phase = \"sometimes\"\n",
+        "[interrupts]\nmask_window_us = 2000.0\n",
+        "[interrupts]\nmask_period_us = 0.0\n",
+        "[pulses]\nenable_delay_us = -1.0\n",
+    ] {
+        assert!(MachineConfig::from_toml_str(bad).is_err(), "{bad}");
+    }
+    // A fixed window masks exactly its span, every period.
+    let m = cfg.interrupts.ticks(96_000_000).masks;
+    let (start, end) = (240, 240 + 384);
+    assert_eq!(m.unmasked_at(start - 1), start - 1);
+    assert_eq!(m.unmasked_at(start), end);
+    assert_eq!(m.unmasked_at(96_000 + start + 10), 96_000 + end);
+    assert_eq!(m.unmasked_at(end), end);
+}
