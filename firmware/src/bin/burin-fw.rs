@@ -243,17 +243,7 @@ mod app {
         // Motion core: executor on the default settings, stepper with the
         // same pin timing, the step port with the same inverts.
         let timer = Tim5::new(dp.TIM5, &mut rcc);
-        // Settings and offsets from flash, before the machine is built on
-        // them (flash sectors 1-2; RAM on QEMU, see storage.rs).
-        let mut persist = Persist::new(crate::storage::open(dp.FLASH), Settings::default());
-        let boot = persist.load();
-        if !boot.report.is_clean() {
-            defmt::warn!(
-                "settings: {} items defaulted, storage error: {}",
-                boot.report.defaulted,
-                boot.report.failed
-            );
-        }
+        let (persist, boot) = load_settings(dp.FLASH);
         let settings = boot.settings;
         let machine = Machine::new(settings, burin::seams::StepTimer::tick_hz(&timer));
         let cfg = machine.step_config();
@@ -285,13 +275,16 @@ mod app {
 
         // Heartbeat: SysTick at HEARTBEAT_HZ from the core clock.
         let sysclk = rcc.clocks.sysclk().raw();
-        core.SYST.set_clock_source(SystClkSource::Core);
-        // The reload register has 24 bits (16.7 M cycles, 0.17 s at 96 MHz).
-        core.SYST
-            .set_reload((sysclk / crate::HEARTBEAT_HZ - 1).min(0x00FF_FFFF));
-        core.SYST.clear_current();
-        core.SYST.enable_interrupt();
-        core.SYST.enable_counter();
+        start_heartbeat(&mut core.SYST, sysclk);
+
+        // The session on the loaded settings; it tells the boot report
+        // after the banner.
+        let identity = Identity {
+            board: board::NAME,
+            caps: 0,
+        };
+        let session = Device::with_storage(identity, persist, Some(&boot));
+        let controller = Controller::new(session, &settings, crate::outputs::WAKE_MS);
 
         // The parse task prints the banner, then waits for a wake-up.
         if parse::spawn().is_err() {
@@ -327,18 +320,7 @@ mod app {
                 tx_bytes,
                 segments,
                 machine,
-                controller: Controller::new(
-                    Device::with_storage(
-                        Identity {
-                            board: board::NAME,
-                            caps: 0,
-                        },
-                        persist,
-                        Some(&boot),
-                    ),
-                    &settings,
-                    crate::outputs::WAKE_MS,
-                ),
+                controller,
                 led: pins.led,
                 debounce,
                 io,
@@ -534,6 +516,33 @@ mod app {
             );
         }
         let _ = wake_beat.try_send(());
+    }
+
+    /// SysTick at [`crate::HEARTBEAT_HZ`] from the core clock `sysclk`.
+    fn start_heartbeat(syst: &mut cortex_m::peripheral::SYST, sysclk: u32) {
+        syst.set_clock_source(SystClkSource::Core);
+        // The reload register has 24 bits (16.7 M cycles, 0.17 s at 96 MHz).
+        syst.set_reload((sysclk / crate::HEARTBEAT_HZ - 1).min(0x00FF_FFFF));
+        syst.clear_current();
+        syst.enable_interrupt();
+        syst.enable_counter();
+    }
+
+    /// Settings and offsets from the store, before the machine is built on
+    /// them (flash sectors 1-2; RAM on QEMU, see storage.rs).
+    fn load_settings(
+        flash: pac::FLASH,
+    ) -> (Persist<crate::storage::Store>, burin::persist::Loaded) {
+        let mut persist = Persist::new(crate::storage::open(flash), Settings::default());
+        let boot = persist.load();
+        if !boot.report.is_clean() {
+            defmt::warn!(
+                "settings: {} items defaulted, storage error: {}",
+                boot.report.defaulted,
+                boot.report.failed
+            );
+        }
+        (persist, boot)
     }
 
     /// The chip's 96-bit unique ID, lowest address first.
