@@ -50,6 +50,7 @@ pub fn run_file(config: &MachineConfig, source: &str, recorder: &mut dyn Recorde
     let mut alarm = false;
     let mut link = Link::new(config);
     let mut idle_rounds = 0u32;
+    let mut buf = [0u8; 4096];
     while errors.len() < 1_000_000 {
         while !alarm && sent < lines.len() && client.can_send() {
             match client.send_line(lines[sent].as_bytes()) {
@@ -58,7 +59,6 @@ pub fn run_file(config: &MachineConfig, source: &str, recorder: &mut dyn Recorde
             }
             sent += 1;
         }
-        let mut buf = [0u8; 4096];
         while let Ok(n @ 1..) = pipe.read(&mut buf) {
             link.send(&buf[..n], dev.sim.now());
         }

@@ -117,14 +117,32 @@ impl Rt {
     }
 
     /// The commands whose bits are set in `flags`, highest priority first.
+    /// Visits only the set bits (lowest first, which is `ALL`'s order: the
+    /// bit of each command is its index there), so an empty set costs
+    /// nothing: the parse task asks at every pass.
     pub fn iter_bits(flags: u32) -> impl Iterator<Item = Rt> {
-        Rt::ALL.into_iter().filter(move |rt| flags & rt.bit() != 0)
+        let mut left = flags & ((1u32 << Rt::ALL.len()) - 1);
+        core::iter::from_fn(move || {
+            let i = left.trailing_zeros() as usize;
+            left &= left.wrapping_sub(1);
+            Rt::ALL.get(i).copied()
+        })
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn iter_bits_visits_the_set_commands_in_priority_order() {
+        let all: u32 = Rt::ALL.iter().fold(0, |a, r| a | r.bit());
+        assert!(Rt::iter_bits(all).eq(Rt::ALL));
+        assert_eq!(Rt::iter_bits(0).count(), 0);
+        let some = Rt::FeedHold.bit() | Rt::SoftReset.bit() | Rt::MistToggle.bit();
+        let want = [Rt::SoftReset, Rt::FeedHold, Rt::MistToggle];
+        assert!(Rt::iter_bits(some | 1 << 31).eq(want));
+    }
 
     #[test]
     fn table_is_in_discriminant_order_and_bytes_round_trip() {

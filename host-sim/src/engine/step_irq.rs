@@ -52,25 +52,14 @@ impl Sim<'_> {
     /// position the stepper had after that event.
     fn apply_stores(&mut self) {
         let stores = std::mem::take(&mut self.hw.stores);
-        // The stepper already counted the event after the last rise.
+        // The stepper already counted the event after the last rise: walk
+        // back over it and this handler's rises to where the first rise
+        // started, then forward again rise by rise (no allocation per event).
         let mut pos = self.stepper.position();
         unstep(&mut pos, self.driver.pending());
-        let rises = stores.iter().filter(|e| e.step != 0).count();
-        let mut after = vec![[0i64; AXES]; rises];
-        for (k, e) in stores.iter().rev().filter(|e| e.step != 0).enumerate() {
-            after[rises - 1 - k] = pos.map(i64::from);
-            unstep(
-                &mut pos,
-                &StepEvent {
-                    dir_mask: e.dir,
-                    step_mask: e.step,
-                    dir_pins: 0,
-                    step_pins: 0,
-                    ticks: 0,
-                },
-            );
+        for e in stores.iter().rev().filter(|e| e.step != 0) {
+            move_by(&mut pos, e.dir, e.step, -1);
         }
-        let mut k = 0;
         for e in &stores {
             if e.dir != self.stats.dir {
                 self.stats.dir = e.dir;
@@ -84,6 +73,7 @@ impl Sim<'_> {
                 continue;
             }
             self.stats.step_level = e.step;
+            move_by(&mut pos, e.dir, e.step, 1);
             for i in 0..AXES {
                 self.stats.steps[i] += u64::from(e.step >> i & 1);
             }
@@ -92,9 +82,8 @@ impl Sim<'_> {
                 dir_mask: e.dir,
                 step_mask: e.step,
                 dir_changed_tick: self.stats.dir_changed,
-                pos: after.get(k).copied().unwrap_or_default(),
+                pos: pos.map(i64::from),
             });
-            k += 1;
         }
         self.hw.stores = stores;
     }
@@ -113,9 +102,15 @@ impl Sim<'_> {
 
 /// Takes an event's steps back out of `pos`.
 fn unstep(pos: &mut [i32; AXES], ev: &StepEvent) {
+    move_by(pos, ev.dir_mask, ev.step_mask, -1);
+}
+
+/// Applies the steps of `step` in directions `dir` to `pos`, `sign` times
+/// (1: forward, -1: taken back).
+fn move_by(pos: &mut [i32; AXES], dir: u8, step: u8, sign: i32) {
     for (i, p) in pos.iter_mut().enumerate() {
-        if ev.step_mask & (1 << i) != 0 {
-            *p -= if ev.dir_mask & (1 << i) != 0 { -1 } else { 1 };
+        if step & (1 << i) != 0 {
+            *p += sign * if dir & (1 << i) != 0 { -1 } else { 1 };
         }
     }
 }
