@@ -21,8 +21,8 @@ use crate::config::MachineConfig;
 use crate::device_sim::VirtualDevice;
 use crate::record::{Recorder, RunError, Summary};
 
-/// Rounds without progress before the run is declared stuck (each round
-/// is at least [`IDLE_STEP_S`] of virtual time or one reply).
+/// Rounds without progress (no reply, step timer stopped) before the run
+/// is declared stuck: 1000 s of virtual time at [`IDLE_STEP_S`].
 const STUCK_ROUNDS: u32 = 100_000;
 /// Virtual time one round covers when the device has nothing to say.
 const IDLE_STEP_S: f64 = 0.01;
@@ -51,7 +51,7 @@ pub fn run_file(config: &MachineConfig, source: &str, recorder: &mut dyn Recorde
     let mut link = Link::new(config);
     let mut idle_rounds = 0u32;
     let mut buf = [0u8; 4096];
-    while errors.len() < 1_000_000 {
+    loop {
         while !alarm && sent < lines.len() && client.can_send() {
             match client.send_line(lines[sent].as_bytes()) {
                 Ok(seq) => seq_lines.push((seq, sent as u32 + 1)),
@@ -93,7 +93,7 @@ pub fn run_file(config: &MachineConfig, source: &str, recorder: &mut dyn Recorde
                     alarm = true;
                     let text = std::mem::take(&mut msg);
                     errors.push(RunError {
-                        line: dev.sim.stepper.line(),
+                        line: file_line(&seq_lines, dev.sim.stepper.line()),
                         code,
                         message: format!("ALARM:{code} {}", clean(&text, code)),
                     });
@@ -109,7 +109,13 @@ pub fn run_file(config: &MachineConfig, source: &str, recorder: &mut dyn Recorde
         if done {
             break;
         }
-        idle_rounds = if spoke { 0 } else { idle_rounds + 1 };
+        // Progress: a reply, or the step timer running (moves and dwells
+        // of any length); a board that does neither for this long is stuck.
+        idle_rounds = if spoke || dev.sim.rt.stepping() {
+            0
+        } else {
+            idle_rounds + 1
+        };
         if idle_rounds > STUCK_ROUNDS {
             errors.push(stream_error(
                 sent as u32,

@@ -119,3 +119,31 @@ fn pty_ends_where_the_offline_run_ends() {
     };
     assert_eq!(got, want, "pty vs offline (steps)");
 }
+
+/// A dwell longer than the stuck guard is progress (the step timer runs),
+/// not a stuck board.
+#[test]
+fn offline_waits_out_a_long_dwell() {
+    let s = run_file(&origin(), "G4 P1500\nG1 X1 F600\n", &mut Discard);
+    assert!(s.errors.is_empty(), "{:?}", s.errors);
+    assert!(s.job_time_s > 1500.0, "{}", s.job_time_s);
+    assert_eq!(s.final_position_steps[0], 80);
+}
+
+/// An alarm stops the run and names the file line whose move raised it.
+#[test]
+fn offline_alarm_names_its_line() {
+    let cfg = MachineConfig::default();
+    let job = "G21\n$21=1\nG1 X5 F1000\nG1 Y-5\n";
+    let s = run_file(&cfg, job, &mut Discard);
+    assert_eq!(s.errors.len(), 1, "{:?}", s.errors);
+    assert_eq!(
+        (s.errors[0].line, s.errors[0].code),
+        (3, 1),
+        "{:?}",
+        s.errors
+    );
+    assert!(s.errors[0].message.starts_with("ALARM:1"), "{:?}", s.errors);
+    // Y never moved: the line after the alarm did not run.
+    assert_eq!(s.final_position_steps[1], -80);
+}
