@@ -53,8 +53,8 @@ mod inputs;
 #[path = "burin-fw/outputs.rs"]
 mod outputs;
 #[cfg(target_os = "none")]
-#[path = "burin-fw/session.rs"]
-mod session;
+#[path = "burin-fw/rings.rs"]
+mod rings;
 #[cfg(target_os = "none")]
 #[path = "burin-fw/step.rs"]
 mod step;
@@ -94,7 +94,7 @@ static FLAGS: burin::link::RtFlags = burin::link::RtFlags::new();
 mod app {
     use crate::boards::board;
     use crate::outputs::Io;
-    use crate::session::{TxRing, PLANNER_BLOCKS, SEGMENT_SLOTS, TX_RING};
+    use crate::rings::{TxRing, PLANNER_BLOCKS, SEGMENT_SLOTS, TX_RING};
     use crate::step::{StepHw, StepTask, Tim5};
     #[cfg(feature = "board-qemu")]
     use crate::usart::UsartLink as Link;

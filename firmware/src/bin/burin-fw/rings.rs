@@ -1,6 +1,6 @@
-//! The parse task's byte sink and the sizes of the queues between the
-//! tasks. Everything the task decides lives in `burin::controller`; this
-//! file only hands reply bytes to the link interrupt.
+//! The queues between the tasks: their sizes, and the parse task's byte
+//! sink into the TX ring. Everything the task decides lives in
+//! `burin::controller`; this only hands reply bytes to the link interrupt.
 use burin::session::Tx;
 use heapless::spsc::Producer;
 
