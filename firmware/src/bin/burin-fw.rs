@@ -185,7 +185,9 @@ mod app {
         let dp = cx.device;
         let mut core = cx.core;
 
-        // Clocks: HSE + PLL as the board file says (96 MHz on the F411).
+        // Clocks: HSE + PLL as the board file says (96 MHz on the F411),
+        // after the regulator scale they need (set while the PLL is off).
+        board::regulator(&dp.PWR, &dp.RCC);
         let mut rcc = dp.RCC.freeze(board::clocks());
         #[cfg(not(feature = "board-qemu"))]
         if !rcc.clocks.is_pll48clk_valid() {

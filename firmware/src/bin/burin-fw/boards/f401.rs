@@ -13,3 +13,6 @@ pub const NAME: &str = "WeAct Black Pill STM32F401CCU6";
 pub fn clocks() -> Config {
     Config::hse(25.MHz()).sysclk(84.MHz()).require_pll48clk()
 }
+
+/// The regulator as the clocks need it: nothing to do (84 MHz is within scale 2, the reset value of `PWR_CR.VOS` (RM0368)).
+pub fn regulator(_pwr: &stm32f4xx_hal::pac::PWR, _rcc: &stm32f4xx_hal::pac::RCC) {}

@@ -1,5 +1,5 @@
 //! WeAct Black Pill V3 with an STM32F411CEU6 (the default board).
-use stm32f4xx_hal::{prelude::*, rcc::Config};
+use stm32f4xx_hal::{pac, prelude::*, rcc::Config};
 
 pub use super::blackpill::{closed_now, enable_exti, enable_pin, kill_aux, split, switches, Aux};
 
@@ -11,4 +11,15 @@ pub const NAME: &str = "WeAct Black Pill STM32F411CEU6";
 /// 48 MHz from the same VCO. APB1 runs at 48 MHz, so TIM5 ticks at 96 MHz.
 pub fn clocks() -> Config {
     Config::hse(25.MHz()).sysclk(96.MHz()).require_pll48clk()
+}
+
+/// The regulator for 96 MHz: voltage scale 1. Scale 2, the reset value of
+/// `PWR_CR.VOS`, is rated to 84 MHz only (RM0383, PWR_CR), and the HAL's
+/// clock setup never writes it. VOS may change only while the PLL is off,
+/// so this runs before `freeze`; it takes effect when the PLL starts.
+pub fn regulator(pwr: &pac::PWR, rcc: &pac::RCC) {
+    rcc.apb1enr().modify(|_, w| w.pwren().set_bit());
+    // The enable needs two APB1 cycles before PWR answers: read it back.
+    let _ = rcc.apb1enr().read();
+    pwr.cr().modify(|_, w| w.vos().scale1());
 }

@@ -116,3 +116,6 @@ pub fn split(
         usart_pins: (gpioa.pa9, gpioa.pa10),
     }
 }
+
+/// The regulator as the clocks need it: nothing to do (QEMU models no regulator).
+pub fn regulator(_pwr: &stm32f4xx_hal::pac::PWR, _rcc: &stm32f4xx_hal::pac::RCC) {}
