@@ -75,11 +75,13 @@ use {defmt_rtt as _, panic_probe as _};
 /// SysTick rate; the watchdog timeout must be several of these periods.
 #[cfg(target_os = "none")]
 const HEARTBEAT_HZ: u32 = 100;
-/// Watchdog timeout. Idle feeds it at least every heartbeat (10 ms), but
-/// not while a settings write erases a 16 KiB flash sector (up to 0.8 s,
-/// the CPU stalled); the LSI it counts may run 1.5x fast.
+/// Watchdog timeout, counted on the nominal 32 kHz LSI. Idle feeds it at
+/// least every heartbeat (10 ms), but not while a settings write erases
+/// flash with the CPU stalled: a migration erases both 16 KiB sectors back
+/// to back, up to 0.8 s each (1.6 s). The LSI may run at 47 kHz (datasheet
+/// maximum), which makes 4 s nominal at least 2.7 s real.
 #[cfg(target_os = "none")]
-const WATCHDOG_MS: u32 = 2000;
+const WATCHDOG_MS: u32 = 4000;
 
 /// Realtime state shared by every priority (atomics only).
 #[cfg(target_os = "none")]

@@ -71,6 +71,19 @@ mod board_flash {
     }
 
     impl SectorFlash {
+        /// Clear the controller's error flags (write 1 to clear). The HAL
+        /// reads them after an operation but never clears them, so one
+        /// stale error would fail every later erase and write until reset.
+        fn clear_errors(&mut self) {
+            self.flash.sr().write(|w| {
+                w.operr().clear();
+                w.wrperr().clear();
+                w.pgaerr().clear();
+                w.pgperr().clear();
+                w.pgserr().clear()
+            });
+        }
+
         /// The ART data cache may hold lines of what was just erased or
         /// programmed; reset it (RM0383 3.4.2: only while it is disabled).
         fn flush_data_cache(&mut self) {
@@ -114,6 +127,7 @@ mod board_flash {
         fn erase(&mut self, from: u32, to: u32) -> Result<(), Error> {
             check_erase(self, from, to).map_err(|_| Error::Bounds)?;
             let pages = from as usize / SECTOR..to as usize / SECTOR;
+            self.clear_errors();
             let result = pages.into_iter().try_for_each(|page| {
                 // page < SECTORS (2): the sector number stays 1 or 2.
                 self.flash.unlocked().erase(FIRST_SECTOR + page as u8)
@@ -124,6 +138,7 @@ mod board_flash {
 
         fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Error> {
             check_write(self, offset, bytes.len()).map_err(|_| Error::Bounds)?;
+            self.clear_errors();
             let result = self
                 .flash
                 .unlocked()
