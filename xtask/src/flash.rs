@@ -39,7 +39,7 @@ pub fn run(a: &FlashArgs) -> Result<i32> {
     );
 
     let (tool, install, cmds) = if a.dfu {
-        let pieces = image::flash_pieces(&elf, a.board)?;
+        let pieces = leave_last(image::flash_pieces(&elf, a.board)?);
         let last = pieces.len().saturating_sub(1);
         let mut cmds = Vec::new();
         for (i, p) in pieces.iter().enumerate() {
@@ -89,4 +89,31 @@ pub fn run(a: &FlashArgs) -> Result<i32> {
         }
     }
     Ok(0)
+}
+
+/// DfuSe's `:leave` starts the firmware at the address of the last
+/// download, which the bootloader takes for a vector table (initial SP,
+/// reset handler): the vector table at FLASH_BASE goes last, never the code
+/// after the settings sectors.
+fn leave_last(mut pieces: Vec<image::Piece>) -> Vec<image::Piece> {
+    pieces.sort_by_key(|p| p.addr == FLASH_BASE);
+    pieces
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dfu_leaves_at_the_vector_table() {
+        let piece = |addr| image::Piece {
+            addr,
+            data: vec![0; 4],
+        };
+        let order: Vec<u32> = leave_last(vec![piece(FLASH_BASE), piece(0x0800_C000)])
+            .iter()
+            .map(|p| p.addr)
+            .collect();
+        assert_eq!(order, [0x0800_C000, FLASH_BASE]);
+    }
 }

@@ -188,7 +188,11 @@ mod app {
         let mut core = cx.core;
 
         // Clocks: HSE + PLL as the board file says (96 MHz on the F411),
-        // after the regulator scale they need (set while the PLL is off).
+        // from the reset state (a DFU `:leave` jumps here with the ROM
+        // bootloader's PLL still running), after the regulator scale they
+        // need (set while the PLL is off).
+        #[cfg(not(feature = "board-qemu"))]
+        clocks_to_reset_state(&dp.RCC);
         board::regulator(&dp.PWR, &dp.RCC);
         let mut rcc = dp.RCC.freeze(board::clocks());
         #[cfg(not(feature = "board-qemu"))]
@@ -520,6 +524,22 @@ mod app {
             );
         }
         let _ = wake_beat.try_send(());
+    }
+
+    /// HSI as the system clock and the PLL off, as after a reset (where
+    /// this changes nothing). The HAL's clock setup writes PLLCFGR, which
+    /// the chip ignores while the PLL runs, and the ROM bootloader that a
+    /// DFU `:leave` comes from leaves its PLL on. HSI is the reset clock, so
+    /// the waits end within its start-up time. (Not on QEMU: its RCC model
+    /// never reports a clock ready, and nothing runs before the app there.)
+    #[cfg(not(feature = "board-qemu"))]
+    fn clocks_to_reset_state(rcc: &pac::RCC) {
+        rcc.cr().modify(|_, w| w.hsion().set_bit());
+        while rcc.cr().read().hsirdy().bit_is_clear() {}
+        rcc.cfgr().modify(|_, w| w.sw().hsi());
+        while !rcc.cfgr().read().sws().is_hsi() {}
+        rcc.cr().modify(|_, w| w.pllon().clear_bit());
+        while rcc.cr().read().pllrdy().bit_is_set() {}
     }
 
     /// SysTick at [`crate::HEARTBEAT_HZ`] from the core clock `sysclk`.
