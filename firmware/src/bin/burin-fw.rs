@@ -194,6 +194,11 @@ mod app {
         #[cfg(not(feature = "board-qemu"))]
         clocks_to_reset_state(&dp.RCC);
         board::regulator(&dp.PWR, &dp.RCC);
+        #[cfg(not(feature = "board-qemu"))]
+        if !board::start_hse(&dp.RCC) {
+            defmt::error!("the 25 MHz crystal did not start: blinking the LED on HSI");
+            board::blink_no_crystal(dp.RCC, dp.GPIOC);
+        }
         let mut rcc = dp.RCC.freeze(board::clocks());
         #[cfg(not(feature = "board-qemu"))]
         if !rcc.clocks.is_pll48clk_valid() {

@@ -234,3 +234,28 @@ pub fn split(
         usb_pins: (gpioa.pa11, gpioa.pa12),
     }
 }
+
+/// Polls of `HSERDY` before the crystal counts as dead: about 100 ms on
+/// the 16 MHz HSI (a poll is a few cycles), 50 times the 2 ms start-up
+/// the datasheets give for a 25 MHz crystal.
+const HSE_POLLS: u32 = 400_000;
+
+/// Starts the 25 MHz crystal with a time limit (the HAL's clock setup
+/// waits for it forever); false if it never became ready.
+pub fn start_hse(rcc: &pac::RCC) -> bool {
+    rcc.cr().modify(|_, w| w.hseon().set_bit());
+    (0..HSE_POLLS).any(|_| rcc.cr().read().hserdy().bit_is_set())
+}
+
+/// No crystal: run on the internal HSI and blink the LED (PC13) at 4 Hz
+/// for good, instead of hanging dark. The watchdog is not started yet, so
+/// this is what the board shows until it is power-cycled or reflashed.
+pub fn blink_no_crystal(rcc: pac::RCC, gpioc: pac::GPIOC) -> ! {
+    let mut rcc = rcc.freeze(stm32f4xx_hal::rcc::Config::hsi());
+    let mut led = gpioc.split(&mut rcc).pc13.into_push_pull_output();
+    let eighth_s = rcc.clocks.sysclk().raw() / 8;
+    loop {
+        led.toggle();
+        cortex_m::asm::delay(eighth_s);
+    }
+}

@@ -3,7 +3,10 @@
 //! tree and the memory sizes differ.
 use stm32f4xx_hal::{prelude::*, rcc::Config};
 
-pub use super::blackpill::{closed_now, enable_exti, enable_pin, kill_aux, split, switches, Aux};
+pub use super::blackpill::{
+    blink_no_crystal, closed_now, enable_exti, enable_pin, kill_aux, split, start_hse, switches,
+    Aux,
+};
 
 /// Human-readable board name for the startup log and `$I`.
 pub const NAME: &str = "WeAct Black Pill STM32F401CCU6";

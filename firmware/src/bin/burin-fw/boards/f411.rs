@@ -1,7 +1,10 @@
 //! WeAct Black Pill V3 with an STM32F411CEU6 (the default board).
 use stm32f4xx_hal::{pac, prelude::*, rcc::Config};
 
-pub use super::blackpill::{closed_now, enable_exti, enable_pin, kill_aux, split, switches, Aux};
+pub use super::blackpill::{
+    blink_no_crystal, closed_now, enable_exti, enable_pin, kill_aux, split, start_hse, switches,
+    Aux,
+};
 
 /// Human-readable board name for the startup log and `$I`.
 pub const NAME: &str = "WeAct Black Pill STM32F411CEU6";
