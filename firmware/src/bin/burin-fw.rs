@@ -211,12 +211,22 @@ mod app {
         let watchdog = IndependentWatchdog::new(dp.IWDG);
         watchdog.stop_on_debug(&dp.DBGMCU, true);
 
+        // Settings and offsets first: the pins' idle levels depend on them.
+        let (persist, boot) = load_settings(dp.FLASH);
+        let settings = boot.settings;
+
         // Pins: the board's map, everything in its safe state (outputs off,
-        // drivers disabled).
+        // drivers disabled), then at once the step/dir/enable idle levels
+        // under the stored `$2`/`$3`/`$4` inverts.
         let gpioa = dp.GPIOA.split(&mut rcc);
         let gpiob = dp.GPIOB.split(&mut rcc);
         let gpioc = dp.GPIOC.split(&mut rcc);
         let mut pins = board::split(gpioa, gpiob, gpioc, dp.TIM1, &mut rcc);
+        pins.steppers.set_invert(
+            settings.step_invert,
+            settings.dir_invert,
+            settings.enable_invert,
+        );
         pins.aux.all_off();
 
         // Rings between the tasks, split once: producer and consumer each
@@ -256,12 +266,9 @@ mod app {
         // Motion core: executor on the default settings, stepper with the
         // same pin timing, the step port with the same inverts.
         let timer = Tim5::new(dp.TIM5, &mut rcc);
-        let (persist, boot) = load_settings(dp.FLASH);
-        let settings = boot.settings;
         let machine = Machine::new(settings, burin::seams::StepTimer::tick_hz(&timer));
         let cfg = machine.step_config();
-        let mut steppers = pins.steppers;
-        steppers.set_invert(cfg.step_invert, cfg.dir_invert, settings.enable_invert);
+        let steppers = pins.steppers;
         // Outputs: spindle, coolant, and the enable pin for the idle timer
         // (same `$4` polarity as the step port, fixed until reset like it).
         let io = Io::new(pins.aux, board::enable_pin(settings.enable_invert));

@@ -123,6 +123,11 @@ impl StepPort {
         } else {
             (low, high)
         };
+        // The idle levels under these inverts, at once and in one store:
+        // step pins at rest (so the first pulse has an edge with `$2`),
+        // directions for "positive" (so `$3` never changes DIR in the same
+        // store as a first STEP), drivers off (`$4`).
+        self.write(self.step_off | self.dirs[0] | self.enable_off);
     }
 
     #[inline(always)]
