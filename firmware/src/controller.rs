@@ -40,8 +40,6 @@ pub struct Inputs {
     pub now_ms: u32,
     /// Limit and probe levels as read now.
     pub switches: Switches,
-    /// The step timer is running.
-    pub stepping: bool,
     /// Debounced inputs for the status report (`protocol::msg::pins` bits).
     pub pins: u16,
     /// The port was closed or reopened since the last pass (the receive
@@ -63,8 +61,10 @@ pub struct Pins {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Pass {
     pub pins: Pins,
-    /// Segments wait, the drivers are awake and the step timer is stopped:
-    /// start it (the board pends its timer interrupt).
+    /// Enter the step interrupt now (the board pends it): segments wait,
+    /// the drivers are awake and the step timer is stopped (start it), or
+    /// motion was flushed while it runs (stop it without waiting for its
+    /// next slot).
     pub kick: bool,
 }
 
@@ -100,6 +100,10 @@ pub struct Controller<S: Storage> {
     outputs: Outputs,
     enable: Enable,
     resets: u32,
+    /// The segment generation the last pass saw, and whether a flush since
+    /// then still has the step timer running (see [`Pass::kick`]).
+    generation: u32,
+    halting: bool,
 }
 
 impl<S: Storage> Controller<S> {
@@ -112,6 +116,8 @@ impl<S: Storage> Controller<S> {
             outputs: Outputs::new(settings),
             enable: Enable::new(settings.idle_delay_ms, wake_ms),
             resets,
+            generation: 0,
+            halting: false,
         }
     }
 
@@ -182,7 +188,15 @@ impl<S: Storage> Controller<S> {
         let queued = !core.segments.is_empty();
         let state = core.machine.state(rt);
         let settings = core.machine.settings();
-        let busy = queued || input.stepping || !rt.stepper_idle();
+        let stepping = rt.stepping();
+        let busy = queued || stepping || !rt.stepper_idle();
+        // A flush (reset, alarm, e-stop, hard limit) while the timer runs:
+        // the step interrupt stops at its next entry, which a slow move may
+        // not reach for many seconds, so it gets one now, every pass until
+        // it has stopped.
+        let generation = rt.generation();
+        self.halting = stepping && (self.halting || generation != self.generation);
+        self.generation = generation;
         core.outputs.configure(settings);
         self.enable.set_idle_ms(settings.idle_delay_ms);
         let alarm = state == State::Alarm;
@@ -206,7 +220,7 @@ impl<S: Storage> Controller<S> {
                 flood: self.outputs.flood,
                 mist: self.outputs.mist,
             },
-            kick: queued && !input.stepping && self.enable.may_step(),
+            kick: (queued && !stepping && self.enable.may_step()) || self.halting,
         }
     }
 }

@@ -462,7 +462,6 @@ mod app {
             let input = Inputs {
                 now_ms: crate::inputs::now_ms(),
                 switches: board::switches(),
-                stepping: crate::RT.stepping(),
                 pins: crate::inputs::report_pins(),
                 port_closed,
             };

@@ -177,6 +177,25 @@ impl StepDriver {
         loop {
             let early = self.target.wrapping_sub(hw.now()) as i32;
             if early > SPIN_TICKS as i32 {
+                if self.phase == Phase::Low && stepper.is_flushed(rt) {
+                    // A kick after a flush: the pending event is the last
+                    // of flushed motion (the stepper already counted its
+                    // steps into the position the executor took), so it
+                    // runs as soon as the pin timing allows instead of at
+                    // its slot, seconds away in a slow move; the stepper's
+                    // next event is idle and the timer stops.
+                    let cfg = &stepper.cfg;
+                    let soonest = later(
+                        self.last_fall.wrapping_add(cfg.min_low_ticks),
+                        self.last_rise.wrapping_add(cfg.min_period),
+                    );
+                    let soonest = later(soonest, hw.now());
+                    if (soonest.wrapping_sub(self.target) as i32) < 0 {
+                        self.target = soonest;
+                        hw.schedule_at(soonest);
+                        continue;
+                    }
+                }
                 // Armed, not due (a kick while running, or a stale match).
                 return took;
             }

@@ -195,6 +195,11 @@ impl Stepper {
     pub fn is_idle(&self) -> bool {
         self.left == 0
     }
+    /// The motion it runs was flushed (a reset, alarm or halt made a new
+    /// segment generation): what it computed last is the end of it.
+    pub fn is_flushed(&self, rt: &Realtime) -> bool {
+        self.run.generation != rt.generation()
+    }
 
     fn event(&self, step_mask: u8, ticks: u32) -> StepEvent {
         StepEvent {

@@ -179,7 +179,6 @@ impl Sim<'_> {
         let input = Inputs {
             now_ms: (self.now * 1000 / tick_hz) as u32,
             switches: self.world.switches(),
-            stepping: self.rt.stepping(),
             pins: t.pins,
             port_closed: t.port_closed,
         };
@@ -218,9 +217,11 @@ impl Sim<'_> {
         if cost > 0 {
             self.task.busy_until = self.now + cost;
         }
-        // The board pends the step interrupt; it enters once unmasked.
-        if pass.kick && self.next_step.is_none() {
-            self.next_step = Some(self.masks.unmasked_at(self.now));
+        // The board pends the step interrupt; it enters once unmasked,
+        // also ahead of an armed compare.
+        if pass.kick {
+            let now = self.masks.unmasked_at(self.now);
+            self.next_step = Some(self.next_step.map_or(now, |t| t.min(now)));
         }
         Some(pass)
     }
