@@ -167,6 +167,9 @@ impl<S: Storage> Controller<S> {
         };
         if input.port_closed {
             self.session.port_reset(&mut link, &core);
+            // What the departed client sent and the task did not read is
+            // void (the splitter counted the port reset as a discard point).
+            link.asm.flush_reset(link.rx, link.flags);
         }
         for _ in 0..2 {
             if tx.room() >= TX_HEADROOM {

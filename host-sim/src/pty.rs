@@ -142,8 +142,9 @@ pub fn run(cfg: &MachineConfig, speed: f64, announce: impl FnOnce(&str)) -> io::
                 banner_due = true;
             } else {
                 // What the client wrote before it left (a last soft reset,
-                // its `Bye`) still counts: read it, let the device take it,
-                // then close the session (below).
+                // its `Bye`) still counts: the device takes what it has
+                // room for (realtime bytes act), then the session closes
+                // (below) and the rest is void.
                 closing = true;
                 banner_due = false;
                 while let Ok(n @ 1..) = pty.master.read(&mut buf) {
@@ -151,15 +152,23 @@ pub fn run(cfg: &MachineConfig, speed: f64, announce: impl FnOnce(&str)) -> io::
                 }
             }
         }
-        if closing && inbox.is_empty() {
+        if closing {
+            let n = dev.receive(&inbox);
+            inbox.drain(..n);
+            dev.advance_to(dev.sim.now());
+            inbox.clear();
             closing = false;
             // Replies the departed client never read must not reach the next.
             pty.flush_stale();
             dev.port_closed();
             outbox.clear();
         }
-        if connected {
-            match pty.master.read(&mut buf) {
+        // Flow control: read only what the device can take now (its ring
+        // and backlog); the rest waits in the kernel and the writer blocks,
+        // as the board NAKs. Realtime bytes among what is read act at once.
+        let want = dev.room().min(buf.len());
+        if connected && inbox.is_empty() && want > 0 {
+            match pty.master.read(&mut buf[..want]) {
                 Ok(n) => {
                     if debug && n > 0 {
                         eprintln!("pty: rx {:?}", String::from_utf8_lossy(&buf[..n.min(40)]));

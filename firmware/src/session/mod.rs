@@ -101,8 +101,6 @@ pub struct Device<S: Storage = NoStorage> {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum LinkLost {
     No,
-    /// Port closed; its mode-reset marker is still ahead in the ring.
-    Closed,
     /// Tell whoever sends the next message.
     Report,
 }
@@ -140,14 +138,19 @@ impl<S: Storage> Device<S> {
     /// not expect a hold they did not ask for.
     ///
     /// The receive side (the USB interrupt, host-sim's port) has already
-    /// reset its splitter; its marker resets the assembler in order.
+    /// reset its splitter; the controller then discards the old client's
+    /// unread input up to the splitter's marker, so a new client never
+    /// gets an `ok` for a line it did not send.
     pub fn port_reset(&mut self, link: &mut impl LinkPort, m: &impl MotionPort) {
         let busy = !m.motion_idle() || !self.cmds.is_empty() || !self.slots.is_empty();
         // The splitter is back in text mode already; the assembler switches
         // only at the marker, so it still tells what the old client spoke.
         if (link.framed() || link.events_framed()) && busy {
             m.rt().feed_hold();
-            self.link_lost = LinkLost::Closed;
+            // The old client's unread input is discarded right after this
+            // (the shell's pass flushes the link), so the next message is
+            // the new client's.
+            self.link_lost = LinkLost::Report;
         }
     }
 
@@ -204,11 +207,9 @@ impl<S: Storage> Device<S> {
                 tx,
                 matches!(ev, LinkEvent::Frame(_) | LinkEvent::BadFrame(_)),
             );
-            // Events from before the reset still belong to the old client:
-            // the report waits for the mode switch, then the next message.
+            // The report goes to whoever sends the next message.
             match (self.link_lost, &ev) {
-                (LinkLost::Closed, LinkEvent::Mode(_)) => self.link_lost = LinkLost::Report,
-                (LinkLost::Report, LinkEvent::Mode(_)) | (LinkLost::No | LinkLost::Closed, _) => {}
+                (LinkLost::Report, LinkEvent::Mode(_)) | (LinkLost::No, _) => {}
                 (LinkLost::Report, _) => {
                     self.link_lost = LinkLost::No;
                     let _ = crate::link::reply::msg(&mut o, "Link lost: feed hold, '~' resumes");

@@ -90,7 +90,9 @@ impl<S: crate::seams::Storage> Device<S> {
         let (feed, line) = m.feed_and_line();
         Status {
             state,
-            substate: u8::from(m.rt().stepper_idle()),
+            // GRBL 1.1: `Hold:0` complete, ready to resume; `Hold:1` still
+            // decelerating (a reset then alarms).
+            substate: u8::from(!m.rt().stepper_idle()),
             mpos,
             wco,
             feed,

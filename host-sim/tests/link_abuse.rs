@@ -1,0 +1,125 @@
+//! Issue 15 through the virtual board: a soft reset behind a flood voids
+//! it, realtime bytes never wait behind text, and the port keeps answering
+//! after a hold and a flood.
+
+use host_sim::record::Discard;
+
+mod rig;
+
+use rig::{origin, Rig};
+
+fn job(lines: usize, line: &str) -> Vec<u8> {
+    let mut v = Vec::new();
+    for _ in 0..lines {
+        v.extend_from_slice(line.as_bytes());
+        v.push(b'\n');
+    }
+    v
+}
+
+/// Wait (in 2 ms rounds) for a held machine to stop.
+fn until_held(r: &mut Rig) {
+    for _ in 0..5000 {
+        r.run(5);
+        if r.status().state == "Hold:0" {
+            return;
+        }
+    }
+    panic!("never held");
+}
+
+/// Issue 15 item 4: `G1 X-50 F100`, `!`, 150 lines, 0x18 in one go, as the
+/// board's USB interrupt receives them: banner, no `ok` for the flood, and
+/// the machine never moves along Y.
+#[test]
+fn reset_after_a_flood_voids_the_flood() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    assert_eq!(r.cmd("G1 X-50 F100"), ["ok"]);
+    r.send(b"!");
+    until_held(&mut r);
+    r.lines();
+    let mut bytes = job(150, "G91 G1 Y-1 F1000");
+    bytes.push(0x18);
+    r.send(&bytes);
+    r.run(20);
+    let out = r.lines();
+    assert!(out.iter().any(|l| l.starts_with("Grbl 1.1h")), "{out:?}");
+    assert!(
+        !out.iter().any(|l| l == "ok" || l.starts_with("ALARM")),
+        "{out:?}"
+    );
+    r.run(500);
+    let st = r.status();
+    assert_eq!(st.state, "Idle", "{st:?}");
+    let y = st.mpos.as_ref().map(|p| p[1]);
+    assert_eq!(y, Some(0.0), "{st:?}");
+    assert!(!r.lines().iter().any(|l| l == "ok"));
+}
+
+/// Issue 15 item 7: `!` behind 400 queued lines holds within one pass.
+#[test]
+fn hold_behind_queued_text_acts_at_once() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    let mut bytes = b"G1 X-50 F300\n".to_vec();
+    bytes.extend(job(400, "G91 G1 Y-0.01 F300"));
+    r.send(&bytes);
+    r.run(50);
+    let before = r.dev.sim.now();
+    r.send(b"!");
+    r.run(1);
+    let st = r.status();
+    assert!(st.state.starts_with("Hold"), "{st:?}");
+    // Acted in the same 2 ms round it arrived in.
+    assert!(r.dev.sim.now() - before <= 2 * u64::from(cfg.tick_hz) / 500);
+}
+
+/// Issue 15 item 7: after a hold and a 3.6 KB flood the device still
+/// answers `?`, resumes on `~`, resets on 0x18, and a closed port takes
+/// the unread flood with it.
+#[test]
+fn hold_and_flood_keep_the_port_alive() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    assert_eq!(r.cmd("G1 X-20 F300"), ["ok"]);
+    r.send(b"!");
+    until_held(&mut r);
+    let flood = job(200, "G91 G1 Y-0.1 F300");
+    assert!(flood.len() >= 3600);
+    r.send(&flood);
+    r.run(10);
+    assert!(r.status().state.starts_with("Hold"));
+    r.send(b"~");
+    r.run(5);
+    assert_eq!(r.status().state, "Run");
+    r.send(b"\x18");
+    r.run(5);
+    assert!(r.lines().iter().any(|l| l.starts_with("Grbl 1.1h")));
+    // The flood again, then the port closes: what was not read is void.
+    assert_eq!(r.cmd("$X"), ["[MSG:Caution: Unlocked]", "ok"]);
+    r.send(b"!");
+    r.send(&flood);
+    r.run(5);
+    let mut out = r.lines();
+    r.dev.port_closed();
+    r.run(5);
+    r.send(b"~");
+    for _ in 0..2000 {
+        r.run(10);
+        out.extend(r.lines());
+    }
+    let st = r.status();
+    assert_eq!(st.state, "Idle");
+    // Every acknowledged line ran; what the device had not read when the
+    // port closed did not, and was never acknowledged.
+    let oks = out.iter().filter(|l| *l == "ok").count();
+    let ran = (-st.mpos.map(|p| p[1]).unwrap_or(0.0) / 0.1).round() as usize;
+    assert!(oks > 0 && oks == ran, "{ran} {oks}");
+}
