@@ -123,3 +123,105 @@ fn hold_and_flood_keep_the_port_alive() {
     let ran = (-st.mpos.map(|p| p[1]).unwrap_or(0.0) / 0.1).round() as usize;
     assert!(oks > 0 && oks == ran, "{ran} {oks}");
 }
+
+/// Issue 15 item 5: a line right behind a soft reset, in the same write,
+/// to an idle machine: banner, no alarm, and the move runs.
+#[test]
+fn line_right_behind_a_reset_runs() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    r.send(b"\x18G21 G90 G53 G0 X-8 Y-2\n");
+    r.run(5);
+    let out = r.lines();
+    assert!(
+        !out.iter()
+            .any(|l| l.starts_with("ALARM") || l.starts_with("[MSG")),
+        "{out:?}"
+    );
+    let banner = out.iter().position(|l| l.starts_with("Grbl 1.1h"));
+    let ok = out.iter().position(|l| l == "ok");
+    assert!(banner.is_some() && banner < ok, "{out:?}");
+    let st = r.until_idle();
+    assert_eq!(st.mpos, Some(vec![-8.0, -2.0, 0.0, 0.0]));
+}
+
+/// Issue 15 item 3: `Hold:1` while decelerating, `Hold:0` once stopped,
+/// and `!` at rest is a finished hold at once.
+#[test]
+fn hold_substates_follow_grbl() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    r.send(b"!");
+    r.run(1);
+    assert_eq!(r.status().state, "Hold:0");
+    r.send(b"~");
+    r.run(1);
+    assert_eq!(r.cmd("G1 X-50 F3000"), ["ok"]);
+    r.run(100);
+    r.send(b"!");
+    r.run(1);
+    assert_eq!(r.status().state, "Hold:1");
+    until_held(&mut r);
+}
+
+fn frame(msg: &protocol::HostMsg) -> Vec<u8> {
+    let mut out = [0u8; protocol::frame::MAX_WIRE];
+    let n = protocol::frame::encode(msg, &mut out).expect("encode");
+    out[..n].to_vec()
+}
+
+fn device_msgs(bytes: &[u8]) -> Vec<protocol::DeviceMsg> {
+    bytes
+        .split(|b| *b == 0)
+        .filter(|f| !f.is_empty())
+        .filter_map(|f| protocol::frame::decode(&mut f.to_vec()).ok())
+        .collect()
+}
+
+/// Issue 15 item 5, framed: a `SoftReset` frame and a `Line` frame in one
+/// write: the line is acknowledged, runs once, and no alarm is raised.
+#[test]
+fn framed_line_right_behind_a_reset_is_never_lost() {
+    use protocol::{DeviceMsg, HostMsg, Rt};
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.dev.log = Some(Vec::new());
+    let _ = r.dev.take_output();
+    r.lines();
+    let mut hello = vec![0u8];
+    hello.extend(frame(&HostMsg::Hello {
+        version: protocol::PROTOCOL_VERSION,
+    }));
+    r.send(&hello);
+    r.run(2);
+    let _ = r.dev.take_output();
+    let text = protocol::LineText::from_slice(b"G21 G90 G53 G0 X-8 Y-2").expect("text");
+    let mut bytes = frame(&HostMsg::Realtime(Rt::SoftReset));
+    bytes.extend(frame(&HostMsg::Line { seq: 1, text }));
+    r.send(&bytes);
+    let mut out = Vec::new();
+    for _ in 0..3000 {
+        let t = r.dev.sim.now() + u64::from(cfg.tick_hz) / 500;
+        r.dev.advance_to(t);
+        out.extend(r.dev.take_output());
+    }
+    let msgs = device_msgs(&out);
+    let acks = msgs
+        .iter()
+        .filter(|m| matches!(m, DeviceMsg::Ack { seq: 1, .. }))
+        .count();
+    // (A second `Ack` for the same line is the credit refresh.)
+    assert!(acks >= 1, "{msgs:?}");
+    assert!(
+        !msgs.iter().any(|m| matches!(m, DeviceMsg::Alarm { .. })),
+        "{msgs:?}"
+    );
+    assert_eq!(r.dev.log.as_deref(), Some(&[1u32][..]));
+    let steps = r.dev.position_steps();
+    assert!(steps[0] < 0 && steps[1] < 0, "{steps:?}");
+}

@@ -257,7 +257,10 @@ impl<S: Storage> Device<S> {
                 self.jog_cancel = false;
                 self.sync = true;
             }
-            if self.sync && m.ready() {
+            // After a soft reset, wait until the executor has done it: a
+            // line taken before would be flushed by it (acknowledged, then
+            // lost, and an alarm for a reset "during motion").
+            if self.sync && m.ready() && !m.rt().reset_requested() {
                 self.flush_storage(m, o);
                 self.sync = false;
                 // Any alarm of our own flush has come and gone by now.
