@@ -225,3 +225,34 @@ fn framed_line_right_behind_a_reset_is_never_lost() {
     let steps = r.dev.position_steps();
     assert!(steps[0] < 0 && steps[1] < 0, "{steps:?}");
 }
+
+fn reprap(line: &str) -> String {
+    let x = line.bytes().fold(0u8, |x, b| x ^ b);
+    format!("{line}*{x}")
+}
+
+/// Issue 15 item 2: a printcore session. `M110` sets the number, a lost
+/// line is asked for again with `Resend:` (and `ok`), a bad checksum too,
+/// and a line sent twice runs once.
+#[test]
+fn reprap_numbering_and_resend() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    assert_eq!(r.cmd("N-1 M110 N-1*125"), ["ok"]);
+    assert_eq!(r.cmd(&reprap("N0 G91 G1 X-1 F2000")), ["ok"]);
+    let lost = r.cmd(&reprap("N2 G1 X-4"));
+    assert_eq!(lost.len(), 3, "{lost:?}");
+    assert!(lost[0].starts_with("Error:") && lost[1] == "Resend: 1" && lost[2] == "ok");
+    let bad = r.cmd("N1 G1 X-2*1");
+    assert!(
+        bad[0].contains("checksum") && bad[1] == "Resend: 1",
+        "{bad:?}"
+    );
+    assert_eq!(r.cmd(&reprap("N1 G1 X-2")), ["ok"]);
+    assert_eq!(r.cmd(&reprap("N1 G1 X-2"))[1], "Resend: 2");
+    assert_eq!(r.cmd(&reprap("N2 G1 X-4")), ["ok"]);
+    let st = r.until_idle();
+    assert_eq!(st.mpos, Some(vec![-7.0, 0.0, 0.0, 0.0]));
+}

@@ -40,6 +40,7 @@
 mod out;
 mod persist;
 mod ports;
+mod reprap;
 mod sys;
 
 pub use out::{Out, Tx};
@@ -86,6 +87,8 @@ pub struct Device<S: Storage = NoStorage> {
     seen_alarm: Option<MachineError>,
     quiet_alarm: bool,
     text_lines: u32,
+    /// RepRap `N…*cs` numbering (`M110`, `Resend:`), text mode.
+    numbers: reprap::LineNumbers,
     spindle_ov: u8,
     /// The port closed during a framed job; tell the next client.
     link_lost: LinkLost,
@@ -310,6 +313,15 @@ impl<S: Storage> Device<S> {
     ) {
         match ev {
             LinkEvent::Line(text) => {
+                let text = match self.numbers.check(text) {
+                    reprap::Numbered::Plain => text,
+                    reprap::Numbered::Run(body) => body,
+                    reprap::Numbered::Set => return self.reply_line(Ok(()), None, o),
+                    reprap::Numbered::Resend { checksum } => {
+                        self.stats.lines_err += 1;
+                        return self.numbers.resend(checksum, o);
+                    }
+                };
                 self.text_lines = self.text_lines.wrapping_add(1);
                 let n = self.text_lines;
                 self.line(text, n, m, o);
