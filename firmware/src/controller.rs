@@ -188,7 +188,8 @@ impl<S: Storage> Controller<S> {
         let busy = queued || input.stepping || !rt.stepper_idle();
         core.outputs.configure(settings);
         self.enable.set_idle_ms(settings.idle_delay_ms);
-        let alarm = state == State::Alarm;
+        // `$SLP` powers everything down as an alarm does.
+        let alarm = state == State::Alarm || self.session.sleeping();
         if alarm {
             core.outputs.all_off();
         }

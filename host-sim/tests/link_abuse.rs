@@ -256,3 +256,57 @@ fn reprap_numbering_and_resend() {
     let st = r.until_idle();
     assert_eq!(st.mpos, Some(vec![-7.0, 0.0, 0.0, 0.0]));
 }
+
+/// Issue 15 item 3: a reset in motion prints `ALARM:3` once.
+#[test]
+fn reset_in_motion_alarms_once() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    assert_eq!(r.cmd("G1 X-100 F1000"), ["ok"]);
+    r.run(50);
+    r.send(&[0x18]);
+    let mut out = Vec::new();
+    for _ in 0..50 {
+        r.run(2);
+        out.extend(r.lines());
+    }
+    r.send(b"?");
+    r.run(2);
+    out.extend(r.lines());
+    assert_eq!(
+        out.iter().filter(|l| l.starts_with("ALARM")).count(),
+        1,
+        "{out:?}"
+    );
+}
+
+/// Issue 15 item 3: `$SLP` sleeps (drivers off, state `Sleep`, motion and
+/// `~` refused) until a soft reset.
+#[test]
+fn sleep_until_reset() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    assert_eq!(r.cmd("$1=255"), ["ok"]);
+    r.run(5);
+    assert_eq!(r.dev.pins().map(|p| p.enable), Some(true));
+    assert_eq!(r.cmd("$SLP"), ["[MSG:Sleeping]", "ok"]);
+    r.run(5);
+    assert_eq!(r.status().state, "Sleep");
+    assert_eq!(r.dev.pins().map(|p| p.enable), Some(false));
+    assert_eq!(r.cmd("G0 X-1"), ["error:9"]);
+    assert_eq!(r.cmd("$X"), ["error:9"]);
+    r.send(b"~");
+    r.run(5);
+    assert_eq!(r.status().state, "Sleep");
+    r.send(b"\x18");
+    r.run(5);
+    assert!(r.lines().iter().any(|l| l.starts_with("Grbl 1.1h")));
+    assert_eq!(r.status().state, "Idle");
+    assert_eq!(r.cmd("G0 X-1"), ["ok"]);
+    assert_eq!(r.until_idle().mpos, Some(vec![-1.0, 0.0, 0.0, 0.0]));
+    assert_eq!(r.dev.pins().map(|p| p.enable), Some(true));
+}

@@ -78,6 +78,8 @@ pub struct Device<S: Storage = NoStorage> {
     slots: Deque<(u32, LineText), LINE_SLOTS>,
     cadence: crate::link::reply::Cadence,
     check: bool,
+    /// `$SLP`: outputs and drivers off, only a soft reset wakes it.
+    sleep: bool,
     jogging: bool,
     jog_cancel: bool,
     /// Wait for motion to stop, then take the machine's position.
@@ -162,6 +164,11 @@ impl<S: Storage> Device<S> {
         (LINE_SLOTS - self.slots.len()) as u16
     }
 
+    /// `$SLP` put the machine to sleep (drivers, spindle, coolant off).
+    pub fn sleeping(&self) -> bool {
+        self.sleep
+    }
+
     /// True when nothing is queued in the device.
     pub fn drained(&self) -> bool {
         self.cmds.is_empty() && self.slots.is_empty() && !self.sync
@@ -234,7 +241,9 @@ impl<S: Storage> Device<S> {
     /// Alarms and the end of jogs and syncs.
     fn watch(&mut self, m: &mut impl MotionPort, o: &mut Out<'_, impl Tx>) {
         let alarm = m.alarm();
-        if alarm != self.seen_alarm {
+        // Until the executor has done a requested reset its alarm state is
+        // stale (the reset's own alarm is already reported, once).
+        if alarm != self.seen_alarm && !m.rt().reset_requested() {
             self.seen_alarm = alarm;
             if let Some(e) = alarm {
                 self.cmds.clear();
@@ -399,7 +408,8 @@ impl<S: Storage> Device<S> {
             let r = cmd.map_err(|c| c.code()).and_then(|c| self.system(c, m, o));
             return self.reply_line(r, seq, o);
         }
-        if self.seen_alarm.is_some() && !self.check && !text.iter().all(u8::is_ascii_whitespace) {
+        let blank = text.iter().all(u8::is_ascii_whitespace);
+        if (self.sleep || self.seen_alarm.is_some() && !self.check) && !blank {
             return self.reply_line(Err(protocol::Code::Locked.code()), seq, o);
         }
         if !self.check && !self.can_take() {

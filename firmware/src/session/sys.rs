@@ -77,6 +77,7 @@ impl<S: crate::seams::Storage> Device<S> {
         }
         let ms = m.state();
         let state = match ms {
+            _ if self.sleep => MachineState::Sleep,
             _ if self.check => MachineState::Check,
             executor::State::Alarm => MachineState::Alarm,
             executor::State::Homing => MachineState::Home,
@@ -131,6 +132,7 @@ impl<S: crate::seams::Storage> Device<S> {
                 self.slots.clear();
                 self.interp.reset();
                 self.check = false;
+                self.sleep = false;
                 self.jogging = false;
                 self.jog_cancel = false;
                 self.sync = true;
@@ -170,6 +172,8 @@ impl<S: crate::seams::Storage> Device<S> {
                 }
             }
             Rt::FeedHold | Rt::SafetyDoor => rt.feed_hold(),
+            // Asleep, nothing resumes (the drivers are off): reset first.
+            Rt::CycleStart if self.sleep => {}
             Rt::CycleStart => rt.cycle_start(),
             Rt::JogCancel => {
                 if self.jogging {
@@ -202,6 +206,13 @@ impl<S: crate::seams::Storage> Device<S> {
         o: &mut Out<'_, impl Tx>,
     ) -> Result<(), u16> {
         let s = *m.settings();
+        let acts = matches!(
+            cmd,
+            SysCmd::Home(_) | SysCmd::Unlock | SysCmd::Jog(_) | SysCmd::CheckMode | SysCmd::Sleep
+        );
+        if self.sleep && acts {
+            return Err(Code::Locked.code());
+        }
         match cmd {
             SysCmd::Help => {
                 let _ = reply::help(o);
@@ -273,7 +284,16 @@ impl<S: crate::seams::Storage> Device<S> {
             }
             SysCmd::Jog(body) => self.jog(body, m)?,
             SysCmd::Restore(what) => self.restore(what, m, o)?,
-            SysCmd::Sleep => return Err(Code::Unsupported.code()),
+            SysCmd::Sleep => {
+                // GRBL's sleep: from rest (idle, a finished hold, alarm);
+                // spindle, coolant and drivers go off, a reset wakes it.
+                let held = m.state() == executor::State::Hold && m.rt().stepper_idle();
+                if self.check || !(m.motion_idle() || held) {
+                    return Err(Code::NotIdle.code());
+                }
+                self.sleep = true;
+                let _ = reply::msg(o, "Sleeping");
+            }
         }
         Ok(())
     }
