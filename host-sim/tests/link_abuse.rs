@@ -310,3 +310,31 @@ fn sleep_until_reset() {
     assert_eq!(r.until_idle().mpos, Some(vec![-1.0, 0.0, 0.0, 0.0]));
     assert_eq!(r.dev.pins().map(|p| p.enable), Some(true));
 }
+
+/// Issue 15 item 3: `$208=3` reports three axes everywhere GRBL senders
+/// read positions; 4 (the default) all four.
+#[test]
+fn reported_axes_follow_208() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    assert_eq!(r.cmd("$208"), ["$208=4", "ok"]);
+    assert!(r.cmd("$I").iter().any(|l| l == "[AXS:4:XYZA]"));
+    assert_eq!(r.cmd("$208=2"), ["error:110"]);
+    assert_eq!(r.cmd("$208=3"), ["ok"]);
+    let st = r.status();
+    assert_eq!(st.mpos.map(|p| p.len()), Some(3));
+    let params = r.cmd("$#");
+    assert!(
+        params.iter().any(|l| l == "[G54:0.000,0.000,0.000]"),
+        "{params:?}"
+    );
+    assert!(
+        params.iter().any(|l| l == "[PRB:0.000,0.000,0.000:0]"),
+        "{params:?}"
+    );
+    assert!(r.cmd("$I").iter().any(|l| l == "[AXS:3:XYZ]"));
+    assert_eq!(r.cmd("$10=0"), ["ok"]);
+    assert_eq!(r.status().wpos.map(|p| p.len()), Some(3));
+}

@@ -183,7 +183,7 @@ impl<S: Storage> Device<S> {
             protocol: protocol::PROTOCOL_VERSION,
             firmware: s,
             board: b,
-            axes: crate::AXES as u8,
+            axes: m.settings().report_axes,
             line_slots: LINE_SLOTS as u16,
             planner_blocks: m.planner_blocks(),
             rx_bytes: protocol::RX_WINDOW as u16,

@@ -226,7 +226,8 @@ impl<S: crate::seams::Storage> Device<S> {
             }
             SysCmd::SetSetting { n, value } => self.set_setting(n, value, m, o)?,
             SysCmd::Params => {
-                let _ = self.interp.write_offsets(o, "\r\n");
+                let axes = usize::from(s.report_axes);
+                let _ = self.interp.write_offsets(o, "\r\n", axes);
             }
             SysCmd::ParserState => {
                 let _ = o.write_str("[GC:");
@@ -239,6 +240,7 @@ impl<S: crate::seams::Storage> Device<S> {
                     board: self.ident.board,
                     options: "VNHM",
                     planner_blocks: m.planner_blocks(),
+                    axes: usize::from(s.report_axes).clamp(1, crate::AXES),
                 };
                 let _ = reply::build_info(o, &info);
             }

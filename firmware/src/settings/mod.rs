@@ -108,6 +108,10 @@ pub struct Settings {
     /// `$206` homing order: up to four cycles, a nibble of axes each, first
     /// cycle in the low nibble. Default: Z alone, then X and Y together.
     pub homing_order: u16,
+    /// `$208` axes in reports (status positions, `$#`, `$I`'s `AXS`, the
+    /// framed handshake): 3 for an XYZ machine, up to the 4 burin drives.
+    /// GRBL senders size their position displays from it.
+    pub report_axes: u8,
 }
 
 impl Default for Settings {
@@ -155,6 +159,7 @@ impl Default for Settings {
             rapid_mode: RapidMode::Coordinated,
             verify_home_tolerance: 0.05,
             homing_order: 0x34,
+            report_axes: AXES as u8,
         }
     }
 }

@@ -131,8 +131,9 @@ const AXIS_GROUPS: [(u16, Kind); 4] = [
     (130, Kind::Real { min: 0.0, max: BIG }),
 ];
 
-/// burin's own, `$200`–`$206` (documented on the [`Settings`] fields).
-const BURIN: [(u16, Kind); 7] = [
+/// burin's own, `$200`–`$206` and `$208` (documented on the [`Settings`]
+/// fields; `$207` and `$210` are used by other GRBL forks).
+const BURIN: [(u16, Kind); 8] = [
     (
         200,
         Kind::Real {
@@ -168,6 +169,13 @@ const BURIN: [(u16, Kind); 7] = [
         Kind::Int {
             min: 0,
             max: 0xFFFF,
+        },
+    ),
+    (
+        208,
+        Kind::Int {
+            min: 3,
+            max: AXES as u32,
         },
     ),
 ];
@@ -286,6 +294,7 @@ impl Settings {
             204 => b(self.rapid_mode == RapidMode::Independent),
             205 => self.verify_home_tolerance,
             206 => f32::from(self.homing_order),
+            208 => f32::from(self.report_axes),
             _ => return None,
         })
     }
@@ -350,6 +359,7 @@ impl Settings {
             }
             205 => self.verify_home_tolerance = v,
             206 => self.homing_order = u16v,
+            208 => self.report_axes = u8v,
             _ => return Err(SettingError::Unknown),
         }
         Ok(())
