@@ -338,3 +338,48 @@ fn reported_axes_follow_208() {
     assert_eq!(r.cmd("$10=0"), ["ok"]);
     assert_eq!(r.status().wpos.map(|p| p.len()), Some(3));
 }
+
+/// Issue 15 item 3: every port open gives the banner before the `ok` of a
+/// line the client wrote at once; the old client's unread input gives the
+/// new one nothing.
+#[test]
+fn pty_banner_on_every_open_before_any_ok() {
+    use std::io::{Read, Write};
+    use std::sync::mpsc;
+    use std::time::{Duration, Instant};
+    let cfg = origin();
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = host_sim::pty::run(&cfg, 20.0, |path| {
+            let _ = tx.send(path.to_string());
+        });
+    });
+    let path = rx.recv_timeout(Duration::from_secs(10)).expect("pty path");
+    for round in 0..3 {
+        let mut port = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .open(&path)
+            .expect("open pty");
+        port.write_all(b"G91 G0 X-1\n").expect("write");
+        let mut text = String::new();
+        let end = Instant::now() + Duration::from_secs(10);
+        let mut buf = [0u8; 256];
+        while !text.contains("ok\r\n") && Instant::now() < end {
+            if let Ok(n @ 1..) = port.read(&mut buf) {
+                text.push_str(&String::from_utf8_lossy(&buf[..n]));
+            }
+        }
+        let banner = text.find("Grbl 1.1h");
+        let ok = text.find("ok\r\n");
+        assert!(
+            banner.is_some() && ok.is_some() && banner < ok,
+            "round {round}: {text:?}"
+        );
+        assert_eq!(text.matches("ok\r\n").count(), 1, "round {round}: {text:?}");
+        // Leave unread input behind: it must not answer the next client.
+        port.write_all(b"G4 P0.5\nG4 P0.5\n").expect("write");
+        drop(port);
+        std::thread::sleep(Duration::from_millis(100));
+    }
+}

@@ -340,6 +340,10 @@ impl<S: Storage> Device<S> {
                 sys::reply(r, None, o);
             }
             LinkEvent::Error(code) => sys::reply(Err(code.code()), None, o),
+            // Ends whatever text the host's decoder holds (the banner of a
+            // port open) as a frame of its own: a framed client sees its
+            // `Welcome` intact.
+            LinkEvent::Mode(crate::link::LinkMode::Framed) => o.raw(&[0]),
             LinkEvent::Mode(_) => {}
             LinkEvent::BadFrame(e) => self.port.on_bad_frame(e, &mut |msg| o.frame(msg)),
             LinkEvent::Frame(msg) => self.frame(msg, free, info, m, o),

@@ -14,6 +14,10 @@ use usbd_serial::SerialPort;
 /// the parse task tells the device session (`Device::port_reset`).
 pub static PORT_CLOSED: AtomicBool = AtomicBool::new(false);
 
+/// Set when the host opened the port (DTR raised): the parse task prints
+/// the banner before it handles anything the new client sent.
+pub static PORT_OPENED: AtomicBool = AtomicBool::new(false);
+
 /// Received tokens held while the ring is full (8 KiB of RAM): realtime
 /// bytes behind that much text still act on arrival. Beyond it the OUT
 /// endpoint NAKs and the host holds the rest.
@@ -95,6 +99,10 @@ impl UsbLink {
             while self.tx.dequeue().is_some() {}
             (self.len, self.sent) = (0, 0);
             PORT_CLOSED.store(true, Ordering::Release);
+            news = true;
+        }
+        if open && !self.open {
+            PORT_OPENED.store(true, Ordering::Release);
             news = true;
         }
         self.open = open;
