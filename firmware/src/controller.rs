@@ -173,6 +173,9 @@ impl<S: Storage> Controller<S> {
         };
         if input.port_closed {
             self.session.port_reset(&mut link, &core);
+            // What the departed client sent and the task did not read is
+            // void (the splitter counted the port reset as a discard point).
+            link.asm.flush_reset(link.rx, link.flags);
         }
         for _ in 0..2 {
             if tx.room() >= TX_HEADROOM {
@@ -199,7 +202,8 @@ impl<S: Storage> Controller<S> {
         self.generation = generation;
         core.outputs.configure(settings);
         self.enable.set_idle_ms(settings.idle_delay_ms);
-        let alarm = state == State::Alarm;
+        // `$SLP` powers everything down as an alarm does.
+        let alarm = state == State::Alarm || self.session.sleeping();
         if alarm {
             core.outputs.all_off();
         }

@@ -130,6 +130,10 @@ impl Realtime {
     pub(crate) fn clear_hold(&self) {
         self.hold.store(false, Relaxed);
     }
+    /// A soft reset was requested and the executor has not done it yet.
+    pub fn reset_requested(&self) -> bool {
+        self.reset.load(Relaxed)
+    }
     pub(crate) fn take_reset(&self) -> bool {
         self.reset.swap(false, Relaxed)
     }

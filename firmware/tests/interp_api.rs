@@ -39,7 +39,7 @@ fn offsets_report_and_wco() {
     run(&mut it, "G55 G92 X0");
     assert_eq!(it.wco(), [0.0, 2.0, 3.0, 0.0]);
     let mut s = String::new();
-    it.write_offsets(&mut s, "\n").unwrap();
+    it.write_offsets(&mut s, "\n", 4).unwrap();
     assert!(
         s.starts_with("[G54:0.000,0.000,0.000,0.000]\n[G55:1.000,2.000,3.000,0.000]\n"),
         "{s}"

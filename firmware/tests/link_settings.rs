@@ -11,14 +11,14 @@ fn numbers_are_ascending_unique_and_all_readable() {
     let s = Settings::default();
     let nums: Vec<u16> = table::numbers().collect();
     assert!(nums.windows(2).all(|w| w[0] < w[1]));
-    assert_eq!(nums.len(), 23 + 16 + 8);
+    assert_eq!(nums.len(), 23 + 16 + 9);
     for n in &nums {
         let v = s.get(*n).unwrap_or_else(|| panic!("${n} unreadable"));
         let mut t = s;
         assert_eq!(t.set(*n, v), Ok(()), "${n}={v} default must be valid");
         assert_eq!(t, s);
     }
-    for n in [7, 15, 99, 104, 114, 140, 199, 208, 65535] {
+    for n in [7, 15, 99, 104, 114, 140, 199, 209, 65535] {
         assert_eq!(s.get(n), None, "${n}");
     }
 }
@@ -87,10 +87,11 @@ fn simple_replies() {
         board: "blackpill-f411",
         options: "VNMH",
         planner_blocks: 32,
+        axes: 3,
     };
     assert_eq!(
         text(|w| reply::build_info(w, &info)),
-        "[VER:1.1h.burin-0.1.0:blackpill-f411]\r\n[OPT:VNMH,32,128]\r\n"
+        "[VER:1.1h.burin-0.1.0:blackpill-f411]\r\n[OPT:VNMH,32,128]\r\n[AXS:3:XYZ]\r\n"
     );
     let f = Format {
         axes: 3,
@@ -122,7 +123,7 @@ fn settings_listing() {
     );
     let mut all = String::new();
     reply::settings(&mut all, &Settings::default()).expect("string sink");
-    assert_eq!(all.lines().count(), 47);
+    assert_eq!(all.lines().count(), 48);
     assert!(all.starts_with("$0=2.000\r\n$1=25\r\n$2=0\r\n"));
 }
 

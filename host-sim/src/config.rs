@@ -284,6 +284,9 @@ impl MachineConfig {
         for &v in &self.start_position_mm {
             finite("start_position_mm", v)?;
         }
+        if !(3..=AXES as u8).contains(&s.report_axes) {
+            return Err(ConfigError::invalid("report.axes", "must be 3 or 4"));
+        }
         Ok(())
     }
 }

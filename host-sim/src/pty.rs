@@ -17,10 +17,12 @@
 //! held and the next client is told; a text-mode job keeps running, as
 //! GRBL does when its sender goes away.
 //!
-//! When a client connects and after 50 ms the link is still in text mode,
-//! the device prints the `Grbl` banner (an Arduino GRBL resets when the
-//! port opens); a framed client sends 0x00 at once and gets no banner to
-//! trip over. `BURIN_PTY_DEBUG=1` logs connections and received bytes to
+//! When a client connects the device prints the `Grbl` banner at once,
+//! before it reads anything the client wrote (an Arduino GRBL resets when
+//! the port opens; a sender that writes at once never sees an `ok` before
+//! the banner). A framed client's 0x00 makes the device send a 0x00 too,
+//! so the banner ends as one frame the client ignores before its
+//! `Welcome`. `BURIN_PTY_DEBUG=1` logs connections and received bytes to
 //! stderr.
 
 use std::fs::File;
@@ -122,8 +124,6 @@ pub fn run(cfg: &MachineConfig, speed: f64, announce: impl FnOnce(&str)) -> io::
     let hz = f64::from(cfg.tick_hz);
     let chunk = ((CHUNK_S * hz) as u64).max(1);
     let mut connected = false;
-    let mut connected_at = Instant::now();
-    let mut banner_due = false;
     let mut closing = false;
     let mut inbox: Vec<u8> = Vec::new();
     let mut outbox: Vec<u8> = Vec::new();
@@ -138,28 +138,39 @@ pub fn run(cfg: &MachineConfig, speed: f64, announce: impl FnOnce(&str)) -> io::
                 eprintln!("pty: {}", if up { "client connected" } else { "hangup" });
             }
             if up {
-                connected_at = Instant::now();
-                banner_due = true;
+                // The banner at once, before anything the client writes is
+                // read: its first `ok` then always follows the banner.
+                if !dev.framed() && dev.link_mode() == burin::link::LinkMode::Text {
+                    dev.hello();
+                }
             } else {
                 // What the client wrote before it left (a last soft reset,
-                // its `Bye`) still counts: read it, let the device take it,
-                // then close the session (below).
+                // its `Bye`) still counts: the device takes what it has
+                // room for (realtime bytes act), then the session closes
+                // (below) and the rest is void.
                 closing = true;
-                banner_due = false;
                 while let Ok(n @ 1..) = pty.master.read(&mut buf) {
                     inbox.extend_from_slice(&buf[..n]);
                 }
             }
         }
-        if closing && inbox.is_empty() {
+        if closing {
+            let n = dev.receive(&inbox);
+            inbox.drain(..n);
+            dev.advance_to(dev.sim.now());
+            inbox.clear();
             closing = false;
             // Replies the departed client never read must not reach the next.
             pty.flush_stale();
             dev.port_closed();
             outbox.clear();
         }
-        if connected {
-            match pty.master.read(&mut buf) {
+        // Flow control: read only what the device can take now (its ring
+        // and backlog); the rest waits in the kernel and the writer blocks,
+        // as the board NAKs. Realtime bytes among what is read act at once.
+        let want = dev.room().min(buf.len());
+        if connected && inbox.is_empty() && want > 0 {
+            match pty.master.read(&mut buf[..want]) {
                 Ok(n) => {
                     if debug && n > 0 {
                         eprintln!("pty: rx {:?}", String::from_utf8_lossy(&buf[..n.min(40)]));
@@ -173,12 +184,6 @@ pub fn run(cfg: &MachineConfig, speed: f64, announce: impl FnOnce(&str)) -> io::
                         eprintln!("pty: read: {e}");
                     }
                 }
-            }
-        }
-        if banner_due && connected_at.elapsed() > Duration::from_millis(50) {
-            banner_due = false;
-            if !dev.framed() && dev.link_mode() == burin::link::LinkMode::Text {
-                dev.hello();
             }
         }
         // Virtual time follows the wall clock; while idle it waits.

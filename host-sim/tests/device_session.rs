@@ -214,7 +214,7 @@ fn reset_in_a_finished_hold_keeps_the_position_without_alarm() {
     r.send(b"!");
     r.run(200);
     let st = r.status();
-    assert_eq!(st.state, "Hold:1");
+    assert_eq!(st.state, "Hold:0");
     r.send(&[0x18]);
     r.run(5);
     let out = r.lines();
@@ -267,7 +267,7 @@ fn realtime_bytes_act_while_the_line_buffer_is_full() {
     r.send(&[0x91]);
     r.run(200);
     let st = r.status();
-    assert_eq!(st.state, "Hold:1", "{st:?}");
+    assert_eq!(st.state, "Hold:0", "{st:?}");
     assert_eq!(st.ov.map(|o| o.0), Some(120));
     r.send(b"~");
     r.run(5);

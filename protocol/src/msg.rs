@@ -193,7 +193,7 @@ pub mod pins {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Status {
     pub state: MachineState,
-    /// `Hold:0` (stopping) / `Hold:1` (stopped), `Door:n`.
+    /// `Hold:0` (stopped, ready to resume) / `Hold:1` (still stopping), `Door:n`.
     pub substate: u8,
     /// Machine position, mm (A in degrees).
     pub mpos: [f32; WIRE_AXES],

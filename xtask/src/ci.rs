@@ -61,6 +61,13 @@ pub fn run_all() -> Result<i32> {
             code => anyhow::bail!("qemu test exited {code}"),
         },
     )?;
+    step(
+        "third-party senders on sim --pty: cargo xtask senders",
+        || match crate::senders::run()? {
+            0 => Ok(()),
+            code => anyhow::bail!("senders check exited {code}"),
+        },
+    )?;
     eprintln!(
         "\n== ci: all checks passed in {:.0} s ==",
         started.elapsed().as_secs_f64()

@@ -6,6 +6,7 @@ mod ci;
 mod flash;
 mod image;
 mod qemu;
+mod senders;
 mod sim;
 mod stream;
 mod util;
@@ -38,6 +39,8 @@ enum Cmd {
     Qemu,
     /// Count the hot paths' Cortex-M4 instructions under QEMU (-icount shift=0).
     BenchTarget,
+    /// Real third-party senders (PyPI: grbl-streamer, printcore) against `sim --pty`.
+    Senders,
 }
 
 fn main() {
@@ -50,6 +53,7 @@ fn main() {
         Cmd::Stream(a) => stream::run(a),
         Cmd::Qemu => qemu::run(),
         Cmd::BenchTarget => bench_target::run(),
+        Cmd::Senders => senders::run(),
     };
     match result {
         Ok(code) => std::process::exit(code),

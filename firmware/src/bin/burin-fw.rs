@@ -459,6 +459,12 @@ mod app {
             let port_closed = crate::usb::PORT_CLOSED.swap(false, Ordering::AcqRel);
             #[cfg(feature = "board-qemu")]
             let port_closed = false;
+            // A port open prints the banner before this pass answers any
+            // line of the new client (unless it already switched to frames).
+            #[cfg(not(feature = "board-qemu"))]
+            if crate::usb::PORT_OPENED.swap(false, Ordering::AcqRel) && !crate::FLAGS.is_framed() {
+                controller.hello(&mut tx);
+            }
             let input = Inputs {
                 now_ms: crate::inputs::now_ms(),
                 switches: board::switches(),

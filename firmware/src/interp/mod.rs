@@ -354,10 +354,10 @@ impl Interpreter {
 
     /// GRBL's `$#` report lines (G54..G59.3, G28, G30, G92, TLO, PRB), all
     /// axes, machine mm with three decimals, each followed by `eol`.
-    pub fn write_offsets(&self, w: &mut dyn Write, eol: &str) -> fmt::Result {
+    pub fn write_offsets(&self, w: &mut dyn Write, eol: &str, axes: usize) -> fmt::Result {
         let s = &self.state;
         let pos = |w: &mut dyn Write, p: &Pos| -> fmt::Result {
-            for (i, v) in p.iter().enumerate() {
+            for (i, v) in p.iter().take(axes.max(1)).enumerate() {
                 if i > 0 {
                     w.write_char(',')?;
                 }

@@ -51,6 +51,10 @@ pub struct LineAssembler {
     frames: FrameDecoder,
     /// Soft-reset markers taken from the ring (compare `RtFlags::reset_marks`).
     marks_seen: u32,
+    /// Markers up to which input is void: everything before the marker of
+    /// the last reset the task acted on is discarded, also what is still
+    /// on its way (held back by a full ring) when the task acts.
+    flush_to: u32,
 }
 
 impl Default for LineAssembler {
@@ -69,6 +73,7 @@ impl LineAssembler {
             after_cr: false,
             frames: FrameDecoder::new(),
             marks_seen: 0,
+            flush_to: 0,
         }
     }
 
@@ -76,7 +81,20 @@ impl LineAssembler {
     /// received before the reset (up to its marker in the ring), keeping
     /// mode switches in step, and forgets any partial line or frame.
     pub fn flush_reset(&mut self, rx: &mut impl TokenSource, flags: &RtFlags) {
-        while self.marks_seen != flags.reset_marks() {
+        self.flush_to = flags.reset_marks();
+        self.discard(rx);
+        self.clear_partial();
+    }
+
+    /// Markers of resets already acted on are still to come.
+    fn flushing(&self) -> bool {
+        (self.flush_to.wrapping_sub(self.marks_seen) as i32) > 0
+    }
+
+    /// Drop tokens up to the marker of the last reset acted on (if it is
+    /// not in the ring yet, [`Self::poll`] goes on dropping until it is).
+    fn discard(&mut self, rx: &mut impl TokenSource) {
+        while self.flushing() {
             let Some(t) = rx.pop() else { break };
             // Run the state machine so 0x00 / `Bye` still switch modes,
             // but drop what it produces.
@@ -84,7 +102,6 @@ impl LineAssembler {
                 self.len = 0;
             }
         }
-        self.clear_partial();
     }
 
     fn clear_partial(&mut self) {
@@ -106,6 +123,13 @@ impl LineAssembler {
 
     /// Pull tokens until something happens; `None` when the ring is empty.
     pub fn poll(&mut self, rx: &mut impl TokenSource) -> Option<LinkEvent<'_>> {
+        if self.flushing() {
+            self.discard(rx);
+            if self.flushing() {
+                return None;
+            }
+            self.clear_partial();
+        }
         loop {
             let t = rx.pop()?;
             match self.token(t) {

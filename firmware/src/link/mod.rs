@@ -26,6 +26,7 @@
 //! [`Link`] bundles both halves with a plain ring for host-sim and tests.
 
 mod assembler;
+mod backlog;
 pub mod framed;
 pub mod reply;
 pub mod rt;
@@ -33,6 +34,7 @@ mod splitter;
 pub mod syscmd;
 
 pub use assembler::{LineAssembler, LinkEvent};
+pub use backlog::RxBacklog;
 pub use framed::{encode_reply, FramedAction, FramedPort};
 pub use rt::{RtFlags, RtSet};
 pub use splitter::{RxSplitter, PACKET_ROOM, SNIFF};

@@ -60,6 +60,8 @@ pub struct BuildInfo<'a> {
     /// mist, `H` single-axis homing, …).
     pub options: &'a str,
     pub planner_blocks: u16,
+    /// Axes reported (`$208`), named from X.
+    pub axes: usize,
 }
 
 /// `$I`: `[VER:1.1h.burin-<version>:<board>]` and
@@ -68,8 +70,13 @@ pub struct BuildInfo<'a> {
 pub fn build_info(w: &mut impl Write, info: &BuildInfo<'_>) -> fmt::Result {
     write!(
         w,
-        "[VER:{GRBL_VERSION}.burin-{}:{}]\r\n[OPT:{},{},{RX_WINDOW}]\r\n",
-        info.firmware, info.board, info.options, info.planner_blocks
+        "[VER:{GRBL_VERSION}.burin-{}:{}]\r\n[OPT:{},{},{RX_WINDOW}]\r\n[AXS:{}:{}]\r\n",
+        info.firmware,
+        info.board,
+        info.options,
+        info.planner_blocks,
+        info.axes,
+        "XYZA".get(..info.axes).unwrap_or("XYZA")
     )
 }
 
@@ -106,7 +113,7 @@ pub struct Format {
 impl Format {
     pub fn from_settings(s: &Settings) -> Self {
         Format {
-            axes: crate::AXES,
+            axes: usize::from(s.report_axes).clamp(1, crate::AXES),
             inches: s.report_inches,
         }
     }

@@ -41,7 +41,13 @@ pub struct RxSplitter {
     /// A mode reset is waiting for room in the ring.
     reset_pending: bool,
     /// Soft-reset markers waiting for room in the ring.
-    marks_pending: u8,
+    marks_pending: u32,
+    /// Text mode: the last byte was 0xC2, the UTF-8 lead of the realtime
+    /// bytes 0x80..=0xBF (bCNC and cncjs send 0x92 as `C2 92`).
+    utf8_c2: bool,
+    /// Text mode: continuation bytes of another UTF-8 character still to
+    /// drop (they are never realtime commands).
+    utf8_rest: u8,
 }
 
 impl Default for RxSplitter {
@@ -59,6 +65,8 @@ impl RxSplitter {
             dropped: false,
             reset_pending: false,
             marks_pending: 0,
+            utf8_c2: false,
+            utf8_rest: 0,
         }
     }
 
@@ -73,8 +81,21 @@ impl RxSplitter {
         self.mode = Mode::Text;
         flags.set_framed(false);
         self.hold_len = 0;
+        self.utf8_c2 = false;
+        self.utf8_rest = 0;
         self.reset_pending = true;
-        self.put_pending(ring, flags);
+        // Unread input before this point is void, like before a soft reset
+        // (the task flushes up to this marker when it hears of the close).
+        self.dropped = false;
+        flags.note_reset_mark();
+        self.marks_pending = self.marks_pending.saturating_add(1);
+        self.put_pending(ring);
+    }
+
+    /// Soft-reset markers that were dropped with unread input (see
+    /// [`super::RxBacklog::port_reset`]) are still owed to the ring.
+    pub fn owe_reset_marks(&mut self, n: u32) {
+        self.marks_pending = self.marks_pending.saturating_add(n);
     }
 
     /// Handle one received chunk (any size; the USB packet is at most 64).
@@ -87,7 +108,37 @@ impl RxSplitter {
         }
     }
 
+    /// Text mode: realtime bytes, single or UTF-8 encoded, act at once;
+    /// every other byte above 0x7F is dropped (as GRBL 1.1 does), so it
+    /// never reaches a line.
     fn text_byte(&mut self, b: u8, ring: &mut impl TokenSink, flags: &RtFlags) {
+        if b >= 0x80 {
+            if core::mem::take(&mut self.utf8_c2) {
+                if let Some(rt) = Rt::from_byte(b) {
+                    self.realtime(rt, ring, flags);
+                }
+                return;
+            }
+            if self.utf8_rest > 0 && b & 0xC0 == 0x80 {
+                self.utf8_rest -= 1;
+                return;
+            }
+            self.utf8_rest = 0;
+            if let Some(rt) = Rt::from_byte(b) {
+                self.realtime(rt, ring, flags);
+                return;
+            }
+            match b {
+                0xC2 => self.utf8_c2 = true,
+                0xC3..=0xDF => self.utf8_rest = 1,
+                0xE0..=0xEF => self.utf8_rest = 2,
+                0xF0..=0xF7 => self.utf8_rest = 3,
+                _ => {}
+            }
+            return;
+        }
+        self.utf8_c2 = false;
+        self.utf8_rest = 0;
         if let Some(rt) = Rt::from_byte(b) {
             self.realtime(rt, ring, flags);
             return;
@@ -148,10 +199,15 @@ impl RxSplitter {
     /// raised: the task then throws away exactly the input that came before
     /// the reset (GRBL empties its receive buffer on reset, and senders
     /// count on it), keeping what the sender sent after it.
+    ///
+    /// The reset is counted at once, before its marker is in the ring (the
+    /// ring may be full): the assembler then discards everything up to
+    /// that marker, whenever it arrives.
     fn realtime(&mut self, rt: Rt, ring: &mut impl TokenSink, flags: &RtFlags) {
         if rt == Rt::SoftReset {
+            flags.note_reset_mark();
             self.marks_pending = self.marks_pending.saturating_add(1);
-            self.put_pending(ring, flags);
+            self.put_pending(ring);
         }
         flags.raise(rt);
     }
@@ -167,7 +223,7 @@ impl RxSplitter {
     /// Queue a token; on a full ring drop it and leave an overflow marker at
     /// the first chance, so the assembler knows which line was damaged.
     fn put(&mut self, t: RxToken, ring: &mut impl TokenSink, flags: &RtFlags) {
-        if self.put_pending(ring, flags) && ring.push(t) {
+        if self.put_pending(ring) && ring.push(t) {
             return;
         }
         self.dropped = true;
@@ -175,7 +231,7 @@ impl RxSplitter {
     }
 
     /// Deliver owed markers (mode reset first); false if the ring is full.
-    fn put_pending(&mut self, ring: &mut impl TokenSink, flags: &RtFlags) -> bool {
+    fn put_pending(&mut self, ring: &mut impl TokenSink) -> bool {
         if self.reset_pending {
             if !ring.push(TOKEN_TEXT_MODE) {
                 return false;
@@ -193,7 +249,6 @@ impl RxSplitter {
                 return false;
             }
             self.marks_pending -= 1;
-            flags.note_reset_mark();
         }
         true
     }

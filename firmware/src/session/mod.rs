@@ -40,6 +40,7 @@
 mod out;
 mod persist;
 mod ports;
+mod reprap;
 mod sys;
 
 pub use out::{Out, Tx};
@@ -77,6 +78,8 @@ pub struct Device<S: Storage = NoStorage> {
     slots: Deque<(u32, LineText), LINE_SLOTS>,
     cadence: crate::link::reply::Cadence,
     check: bool,
+    /// `$SLP`: outputs and drivers off, only a soft reset wakes it.
+    sleep: bool,
     jogging: bool,
     jog_cancel: bool,
     /// Wait for motion to stop, then take the machine's position.
@@ -86,6 +89,8 @@ pub struct Device<S: Storage = NoStorage> {
     seen_alarm: Option<MachineError>,
     quiet_alarm: bool,
     text_lines: u32,
+    /// RepRap `N…*cs` numbering (`M110`, `Resend:`), text mode.
+    numbers: reprap::LineNumbers,
     spindle_ov: u8,
     /// The port closed during a framed job; tell the next client.
     link_lost: LinkLost,
@@ -101,8 +106,6 @@ pub struct Device<S: Storage = NoStorage> {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum LinkLost {
     No,
-    /// Port closed; its mode-reset marker is still ahead in the ring.
-    Closed,
     /// Tell whoever sends the next message.
     Report,
 }
@@ -140,20 +143,30 @@ impl<S: Storage> Device<S> {
     /// not expect a hold they did not ask for.
     ///
     /// The receive side (the USB interrupt, host-sim's port) has already
-    /// reset its splitter; its marker resets the assembler in order.
+    /// reset its splitter; the controller then discards the old client's
+    /// unread input up to the splitter's marker, so a new client never
+    /// gets an `ok` for a line it did not send.
     pub fn port_reset(&mut self, link: &mut impl LinkPort, m: &impl MotionPort) {
         let busy = !m.motion_idle() || !self.cmds.is_empty() || !self.slots.is_empty();
         // The splitter is back in text mode already; the assembler switches
         // only at the marker, so it still tells what the old client spoke.
         if (link.framed() || link.events_framed()) && busy {
             m.rt().feed_hold();
-            self.link_lost = LinkLost::Closed;
+            // The old client's unread input is discarded right after this
+            // (the shell's pass flushes the link), so the next message is
+            // the new client's.
+            self.link_lost = LinkLost::Report;
         }
     }
 
     /// Free framed line slots (the credits).
     pub fn free_slots(&self) -> u16 {
         (LINE_SLOTS - self.slots.len()) as u16
+    }
+
+    /// `$SLP` put the machine to sleep (drivers, spindle, coolant off).
+    pub fn sleeping(&self) -> bool {
+        self.sleep
     }
 
     /// True when nothing is queued in the device.
@@ -170,7 +183,7 @@ impl<S: Storage> Device<S> {
             protocol: protocol::PROTOCOL_VERSION,
             firmware: s,
             board: b,
-            axes: crate::AXES as u8,
+            axes: m.settings().report_axes,
             line_slots: LINE_SLOTS as u16,
             planner_blocks: m.planner_blocks(),
             rx_bytes: protocol::RX_WINDOW as u16,
@@ -204,11 +217,9 @@ impl<S: Storage> Device<S> {
                 tx,
                 matches!(ev, LinkEvent::Frame(_) | LinkEvent::BadFrame(_)),
             );
-            // Events from before the reset still belong to the old client:
-            // the report waits for the mode switch, then the next message.
+            // The report goes to whoever sends the next message.
             match (self.link_lost, &ev) {
-                (LinkLost::Closed, LinkEvent::Mode(_)) => self.link_lost = LinkLost::Report,
-                (LinkLost::Report, LinkEvent::Mode(_)) | (LinkLost::No | LinkLost::Closed, _) => {}
+                (LinkLost::Report, LinkEvent::Mode(_)) | (LinkLost::No, _) => {}
                 (LinkLost::Report, _) => {
                     self.link_lost = LinkLost::No;
                     let _ = crate::link::reply::msg(&mut o, "Link lost: feed hold, '~' resumes");
@@ -230,7 +241,9 @@ impl<S: Storage> Device<S> {
     /// Alarms and the end of jogs and syncs.
     fn watch(&mut self, m: &mut impl MotionPort, o: &mut Out<'_, impl Tx>) {
         let alarm = m.alarm();
-        if alarm != self.seen_alarm {
+        // Until the executor has done a requested reset its alarm state is
+        // stale (the reset's own alarm is already reported, once).
+        if alarm != self.seen_alarm && !m.rt().reset_requested() {
             self.seen_alarm = alarm;
             if let Some(e) = alarm {
                 self.cmds.clear();
@@ -256,7 +269,10 @@ impl<S: Storage> Device<S> {
                 self.jog_cancel = false;
                 self.sync = true;
             }
-            if self.sync && m.ready() {
+            // After a soft reset, wait until the executor has done it: a
+            // line taken before would be flushed by it (acknowledged, then
+            // lost, and an alarm for a reset "during motion").
+            if self.sync && m.ready() && !m.rt().reset_requested() {
                 self.flush_storage(m, o);
                 self.sync = false;
                 // Any alarm of our own flush has come and gone by now.
@@ -306,6 +322,15 @@ impl<S: Storage> Device<S> {
     ) {
         match ev {
             LinkEvent::Line(text) => {
+                let text = match self.numbers.check(text) {
+                    reprap::Numbered::Plain => text,
+                    reprap::Numbered::Run(body) => body,
+                    reprap::Numbered::Set => return self.reply_line(Ok(()), None, o),
+                    reprap::Numbered::Resend { checksum } => {
+                        self.stats.lines_err += 1;
+                        return self.numbers.resend(checksum, o);
+                    }
+                };
                 self.text_lines = self.text_lines.wrapping_add(1);
                 let n = self.text_lines;
                 self.line(text, n, m, o);
@@ -315,6 +340,10 @@ impl<S: Storage> Device<S> {
                 sys::reply(r, None, o);
             }
             LinkEvent::Error(code) => sys::reply(Err(code.code()), None, o),
+            // Ends whatever text the host's decoder holds (the banner of a
+            // port open) as a frame of its own: a framed client sees its
+            // `Welcome` intact.
+            LinkEvent::Mode(crate::link::LinkMode::Framed) => o.raw(&[0]),
             LinkEvent::Mode(_) => {}
             LinkEvent::BadFrame(e) => self.port.on_bad_frame(e, &mut |msg| o.frame(msg)),
             LinkEvent::Frame(msg) => self.frame(msg, free, info, m, o),
@@ -383,7 +412,8 @@ impl<S: Storage> Device<S> {
             let r = cmd.map_err(|c| c.code()).and_then(|c| self.system(c, m, o));
             return self.reply_line(r, seq, o);
         }
-        if self.seen_alarm.is_some() && !self.check && !text.iter().all(u8::is_ascii_whitespace) {
+        let blank = text.iter().all(u8::is_ascii_whitespace);
+        if (self.sleep || self.seen_alarm.is_some() && !self.check) && !blank {
             return self.reply_line(Err(protocol::Code::Locked.code()), seq, o);
         }
         if !self.check && !self.can_take() {

@@ -48,6 +48,11 @@ impl<'a, T: Tx> Out<'a, T> {
         }
     }
 
+    /// Bytes as they are, in either mode (a frame delimiter).
+    pub fn raw(&mut self, bytes: &[u8]) {
+        self.tx.send(bytes);
+    }
+
     /// Text mode: write `s` as it is. Framed mode: nothing.
     pub fn text(&mut self, s: &str) {
         if !self.framed {

@@ -95,6 +95,8 @@ impl<S: Storage> Device<S> {
             seen_alarm: None,
             quiet_alarm: false,
             text_lines: 0,
+            sleep: false,
+            numbers: Default::default(),
             spindle_ov: 100,
             link_lost: LinkLost::No,
             stats: Stats::default(),

@@ -77,6 +77,7 @@ impl<S: crate::seams::Storage> Device<S> {
         }
         let ms = m.state();
         let state = match ms {
+            _ if self.sleep => MachineState::Sleep,
             _ if self.check => MachineState::Check,
             executor::State::Alarm => MachineState::Alarm,
             executor::State::Homing => MachineState::Home,
@@ -90,7 +91,9 @@ impl<S: crate::seams::Storage> Device<S> {
         let (feed, line) = m.feed_and_line();
         Status {
             state,
-            substate: u8::from(m.rt().stepper_idle()),
+            // GRBL 1.1: `Hold:0` complete, ready to resume; `Hold:1` still
+            // decelerating (a reset then alarms).
+            substate: u8::from(!m.rt().stepper_idle()),
             mpos,
             wco,
             feed,
@@ -129,6 +132,7 @@ impl<S: crate::seams::Storage> Device<S> {
                 self.slots.clear();
                 self.interp.reset();
                 self.check = false;
+                self.sleep = false;
                 self.jogging = false;
                 self.jog_cancel = false;
                 self.sync = true;
@@ -168,6 +172,8 @@ impl<S: crate::seams::Storage> Device<S> {
                 }
             }
             Rt::FeedHold | Rt::SafetyDoor => rt.feed_hold(),
+            // Asleep, nothing resumes (the drivers are off): reset first.
+            Rt::CycleStart if self.sleep => {}
             Rt::CycleStart => rt.cycle_start(),
             Rt::JogCancel => {
                 if self.jogging {
@@ -200,6 +206,13 @@ impl<S: crate::seams::Storage> Device<S> {
         o: &mut Out<'_, impl Tx>,
     ) -> Result<(), u16> {
         let s = *m.settings();
+        let acts = matches!(
+            cmd,
+            SysCmd::Home(_) | SysCmd::Unlock | SysCmd::Jog(_) | SysCmd::CheckMode | SysCmd::Sleep
+        );
+        if self.sleep && acts {
+            return Err(Code::Locked.code());
+        }
         match cmd {
             SysCmd::Help => {
                 let _ = reply::help(o);
@@ -213,7 +226,8 @@ impl<S: crate::seams::Storage> Device<S> {
             }
             SysCmd::SetSetting { n, value } => self.set_setting(n, value, m, o)?,
             SysCmd::Params => {
-                let _ = self.interp.write_offsets(o, "\r\n");
+                let axes = usize::from(s.report_axes);
+                let _ = self.interp.write_offsets(o, "\r\n", axes);
             }
             SysCmd::ParserState => {
                 let _ = o.write_str("[GC:");
@@ -226,6 +240,7 @@ impl<S: crate::seams::Storage> Device<S> {
                     board: self.ident.board,
                     options: "VNHM",
                     planner_blocks: m.planner_blocks(),
+                    axes: usize::from(s.report_axes).clamp(1, crate::AXES),
                 };
                 let _ = reply::build_info(o, &info);
             }
@@ -271,7 +286,16 @@ impl<S: crate::seams::Storage> Device<S> {
             }
             SysCmd::Jog(body) => self.jog(body, m)?,
             SysCmd::Restore(what) => self.restore(what, m, o)?,
-            SysCmd::Sleep => return Err(Code::Unsupported.code()),
+            SysCmd::Sleep => {
+                // GRBL's sleep: from rest (idle, a finished hold, alarm);
+                // spindle, coolant and drivers go off, a reset wakes it.
+                let held = m.state() == executor::State::Hold && m.rt().stepper_idle();
+                if self.check || !(m.motion_idle() || held) {
+                    return Err(Code::NotIdle.code());
+                }
+                self.sleep = true;
+                let _ = reply::msg(o, "Sleeping");
+            }
         }
         Ok(())
     }

@@ -115,6 +115,10 @@ pub struct Settings {
     /// default) suits A4988/DRV8825/TMC drivers. Costs this much once per
     /// start from rest, never while stepping.
     pub enable_delay_us: f32,
+    /// `$208` axes in reports (status positions, `$#`, `$I`'s `AXS`, the
+    /// framed handshake): 3 for an XYZ machine, up to the 4 burin drives.
+    /// GRBL senders size their position displays from it.
+    pub report_axes: u8,
 }
 
 impl Default for Settings {
@@ -163,6 +167,7 @@ impl Default for Settings {
             verify_home_tolerance: 0.05,
             homing_order: 0x34,
             enable_delay_us: 0.0,
+            report_axes: AXES as u8,
         }
     }
 }

@@ -131,8 +131,9 @@ const AXIS_GROUPS: [(u16, Kind); 4] = [
     (130, Kind::Real { min: 0.0, max: BIG }),
 ];
 
-/// burin's own, `$200`–`$207` (documented on the [`Settings`] fields).
-const BURIN: [(u16, Kind); 8] = [
+/// burin's own, `$200`–`$208` (documented on the [`Settings`] fields;
+/// `$210` is used by other GRBL forks).
+const BURIN: [(u16, Kind); 9] = [
     (
         200,
         Kind::Real {
@@ -177,6 +178,13 @@ const BURIN: [(u16, Kind); 8] = [
         Kind::Real {
             min: 0.0,
             max: 10_000.0,
+        },
+    ),
+    (
+        208,
+        Kind::Int {
+            min: 3,
+            max: AXES as u32,
         },
     ),
 ];
@@ -296,6 +304,7 @@ impl Settings {
             205 => self.verify_home_tolerance,
             206 => f32::from(self.homing_order),
             207 => self.enable_delay_us,
+            208 => f32::from(self.report_axes),
             _ => return None,
         })
     }
@@ -361,6 +370,7 @@ impl Settings {
             205 => self.verify_home_tolerance = v,
             206 => self.homing_order = u16v,
             207 => self.enable_delay_us = v,
+            208 => self.report_axes = u8v,
             _ => return Err(SettingError::Unknown),
         }
         Ok(())

@@ -204,6 +204,7 @@ struct Report {
     machine_position: Option<bool>,
     buffer_state: Option<bool>,
     inches: Option<bool>,
+    axes: Option<u8>,
 }
 
 fn set<T>(slot: &mut T, v: Option<T>) {
@@ -320,6 +321,7 @@ pub(super) fn apply(text: &str, cfg: &mut MachineConfig) -> Result<(), ConfigErr
     bit(&mut s.status_mask, 1, r.machine_position);
     bit(&mut s.status_mask, 2, r.buffer_state);
     set(&mut s.report_inches, r.inches);
+    set(&mut s.report_axes, r.axes);
     Ok(())
 }
 

@@ -18,7 +18,7 @@
 //! to [`VirtualDevice::with_flash`] to "reboot" with what was saved.
 
 use burin::controller::{Controller, Pins};
-use burin::link::{LinkMode, RtFlags, RxSplitter, RxToken, TokenSink, RX_RING, SNIFF};
+use burin::link::{LinkMode, RtFlags, RxBacklog, RxSplitter, RxToken, RX_RING};
 use burin::persist::{FlashMap, Persist, RamFlash};
 use burin::session::{Device, Identity, Tx};
 use burin::stepper::Stepper;
@@ -33,6 +33,11 @@ pub const BOARD: &str = "host-sim";
 
 /// The virtual board's settings flash: two 16 KiB sectors, as on the F411.
 pub type SimFlash = RamFlash<{ 2 * 16384 }, 16384>;
+
+/// Received tokens the virtual board holds while its ring is full (the
+/// pty keeps whatever does not fit in the kernel's buffer, as the host's
+/// USB stack does while the board NAKs).
+pub const BACKLOG: usize = 16384;
 
 /// Driver wake-up between enable and the first step, ms (the board's
 /// `WAKE_MS`).
@@ -54,6 +59,7 @@ pub struct VirtualDevice<'r> {
     /// The receive interrupt's half of the link and the ring it fills.
     splitter: RxSplitter,
     ring: Deque<RxToken, RX_RING>,
+    backlog: Box<RxBacklog<BACKLOG>>,
     flags: RtFlags,
     pub controller: Controller<FlashMap<SimFlash>>,
     pub tx: TxBuf,
@@ -99,6 +105,7 @@ impl<'r> VirtualDevice<'r> {
             sim,
             splitter: RxSplitter::new(),
             ring: Deque::new(),
+            backlog: Box::default(),
             flags: RtFlags::new(),
             controller,
             tx,
@@ -120,25 +127,30 @@ impl<'r> VirtualDevice<'r> {
             .unwrap_or_default()
     }
 
-    /// Bytes the device can take now (like the USB endpoint, hold the rest).
+    /// Bytes the device can take now (like the USB endpoint, hold the
+    /// rest): the ring's room plus the backlog's.
     pub fn room(&self) -> usize {
-        self.ring.free().saturating_sub(2 + SNIFF)
+        self.backlog.room(&self.ring)
     }
 
-    /// Receive bytes; returns how many were taken (at most [`Self::room`]).
+    /// Receive bytes, as the board's USB interrupt does; returns how many
+    /// were taken (at most [`Self::room`]). Realtime commands among them
+    /// act at once, however much text waits in the backlog.
     pub fn receive(&mut self, bytes: &[u8]) -> usize {
         let n = bytes.len().min(self.room());
         if let Some(b) = bytes.get(..n) {
-            self.splitter.feed(b, &mut self.ring, &self.flags);
+            self.backlog
+                .feed(&mut self.splitter, b, &mut self.ring, &self.flags);
         }
         n
     }
 
-    /// The host closed the port: the receive side goes back to text mode
-    /// at once, the session hears of it at its next pass (see
-    /// `burin::session::Device::port_reset` for a running job).
+    /// The host closed the port: unread input is void, the receive side
+    /// goes back to text mode at once, the session hears of it at its next
+    /// pass (see `burin::session::Device::port_reset` for a running job).
     pub fn port_closed(&mut self) {
-        self.splitter.reset(&mut self.ring, &self.flags);
+        self.backlog
+            .port_reset(&mut self.splitter, &mut self.ring, &self.flags);
         self.port_closed = true;
     }
 
@@ -158,6 +170,7 @@ impl<'r> VirtualDevice<'r> {
 
     /// One pass of the parse/plan task (skipped while it is still busy).
     pub fn poll(&mut self) {
+        self.backlog.pump(&mut self.ring);
         let VirtualDevice {
             sim,
             ring,
@@ -214,7 +227,7 @@ impl<'r> VirtualDevice<'r> {
     /// Received bytes not yet turned into events (the `Bf:` figure's
     /// complement).
     pub fn rx_pending(&self) -> usize {
-        self.ring.len() + self.controller.rx_partial()
+        self.backlog.len() + self.ring.len() + self.controller.rx_partial()
     }
 
     /// Nothing queued anywhere and the machine stopped.

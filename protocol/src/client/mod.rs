@@ -306,6 +306,9 @@ impl<T: Read + Write> Client<T> {
                     self.apply(&msg)?;
                     self.inbox.push_back(ClientEvent::Device(msg));
                 }
+                // Text before the handshake (a `Grbl` banner printed as the
+                // port opened) ends as one bad frame: not an error.
+                Some(Err(_)) if self.info.is_none() => {}
                 Some(Err(e)) => {
                     self.stats.bad_frames += 1;
                     self.inbox.push_back(ClientEvent::BadFrame(e));

@@ -2,7 +2,7 @@
 //! OTG_FS interrupt. Received packets go through the link's [`RxSplitter`]
 //! into the token ring (realtime bytes become flags at once); replies come
 //! from the TX byte ring and are fed to the port whenever it can take them.
-use burin::link::{RtFlags, RxSplitter, RxToken};
+use burin::link::{RtFlags, RxBacklog, RxSplitter, RxToken};
 use burin::usb_ids::{USB_MANUFACTURER, USB_PID, USB_PRODUCT, USB_VID};
 use core::sync::atomic::{AtomicBool, Ordering};
 use heapless::spsc::{Consumer, Producer};
@@ -14,10 +14,23 @@ use usbd_serial::SerialPort;
 /// the parse task tells the device session (`Device::port_reset`).
 pub static PORT_CLOSED: AtomicBool = AtomicBool::new(false);
 
+/// Set when the host opened the port (DTR raised): the parse task prints
+/// the banner before it handles anything the new client sent.
+pub static PORT_OPENED: AtomicBool = AtomicBool::new(false);
+
+/// Received tokens held while the ring is full (8 KiB of RAM): realtime
+/// bytes behind that much text still act on arrival. Beyond it the OUT
+/// endpoint NAKs and the host holds the rest.
+const BACKLOG: usize = 4096;
+
+/// One full-speed OUT packet.
+const PACKET: usize = 64;
+
 pub struct UsbLink {
     dev: UsbDevice<'static, UsbBusType>,
     serial: SerialPort<'static, UsbBusType>,
     splitter: RxSplitter,
+    backlog: RxBacklog<BACKLOG>,
     rx: Producer<'static, RxToken>,
     tx: Consumer<'static, u8>,
     /// Reply bytes taken from the ring and how many the port has taken.
@@ -52,6 +65,7 @@ impl UsbLink {
             dev,
             serial,
             splitter: RxSplitter::new(),
+            backlog: RxBacklog::new(),
             rx,
             tx,
             pending: [0; 64],
@@ -61,25 +75,34 @@ impl UsbLink {
         }
     }
 
-    /// Everything the OTG_FS interrupt does. Reads are never deferred: an
-    /// unread OUT packet keeps the core's RX-level interrupt asserted, which
-    /// would starve the lower-priority parse task that is meant to free room.
-    /// (A character-counting or credit-paced sender never overfills the
-    /// ring; if one does, the splitter marks the overflow in the stream.)
+    /// Everything the OTG_FS interrupt does (also pended by the parse task
+    /// after each pass). A packet is read only while the ring and the
+    /// backlog have room for it; otherwise it stays in the core's FIFO, the
+    /// endpoint NAKs and the host holds further input (flow control: text
+    /// is never dropped). An unread packet keeps the RX-level interrupt
+    /// asserted, which would starve the parse task that frees the room, so
+    /// that interrupt is masked until the task's next pass pends us.
     /// Returns true when the parse task has something new to do.
     pub fn service(&mut self, flags: &RtFlags) -> bool {
-        let mut news = false;
-        if self.dev.poll(&mut [&mut self.serial]) {
-            news |= self.receive(flags);
-        }
+        let mut news = self.backlog.pump(&mut self.rx);
+        // Also without a poll event: a packet may wait for room since a
+        // pass (its interrupt masked).
+        let _ = self.dev.poll(&mut [&mut self.serial]);
+        news |= self.receive(flags);
         let open = self.dev.state() == UsbDeviceState::Configured && self.serial.dtr();
         if self.open && !open {
             // Port closed or bus reset: back to text mode at this point of
-            // the stream; replies still queued have no reader.
-            self.splitter.reset(&mut self.rx, flags);
+            // the stream, unread input void; replies still queued have no
+            // reader.
+            self.backlog
+                .port_reset(&mut self.splitter, &mut self.rx, flags);
             while self.tx.dequeue().is_some() {}
             (self.len, self.sent) = (0, 0);
             PORT_CLOSED.store(true, Ordering::Release);
+            news = true;
+        }
+        if open && !self.open {
+            PORT_OPENED.store(true, Ordering::Release);
             news = true;
         }
         self.open = open;
@@ -87,14 +110,24 @@ impl UsbLink {
     }
 
     fn receive(&mut self, flags: &RtFlags) -> bool {
-        let mut buf = [0u8; 64];
+        let mut buf = [0u8; PACKET];
         let mut any = false;
-        while let Ok(n @ 1..) = self.serial.read(&mut buf) {
-            self.splitter
-                .feed(buf.get(..n).unwrap_or(&[]), &mut self.rx, flags);
+        loop {
+            if self.backlog.room(&self.rx) < PACKET {
+                // Full: the next packet stays in the FIFO (NAK) until a
+                // pass frees room and pends this interrupt.
+                rx_level_irq(false);
+                return any;
+            }
+            let Ok(n @ 1..) = self.serial.read(&mut buf) else {
+                rx_level_irq(true);
+                return any;
+            };
+            let bytes = buf.get(..n).unwrap_or(&[]);
+            self.backlog
+                .feed(&mut self.splitter, bytes, &mut self.rx, flags);
             any = true;
         }
-        any
     }
 
     /// Returns true when reply bytes left the ring (room for the parse task).
@@ -121,4 +154,14 @@ impl UsbLink {
             }
         }
     }
+}
+
+/// Unmask or mask the OTG core's RX-FIFO-level interrupt (GINTMSK.RXFLVLM).
+fn rx_level_irq(on: bool) {
+    // SAFETY: a single read-modify-write of one mask bit of the OTG core,
+    // done only from the OTG_FS interrupt (the USB driver touches GINTMSK
+    // only from the same interrupt: poll and bus reset).
+    #[allow(unsafe_code)]
+    let otg = unsafe { &*stm32f4xx_hal::pac::OTG_FS_GLOBAL::ptr() };
+    otg.gintmsk().modify(|_, w| w.rxflvlm().bit(on));
 }

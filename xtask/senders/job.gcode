@@ -1,0 +1,11 @@
+(burin senders check: lines and arcs, ends at X-40 Y-30 Z-1)
+G21 G90 G94 G17
+G0 X-20 Y-20 Z-1
+G1 X-40 Y-20 F1500
+G2 X-60 Y-20 I-10 J0
+G3 X-40 Y-20 I10 J0
+G1 X-40 Y-40
+G2 X-40 Y-40 I-5 J0
+G3 X-30 Y-30 R10
+G1 X-35 Y-25
+G1 X-40 Y-30
