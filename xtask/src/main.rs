@@ -4,6 +4,8 @@
 mod bench_target;
 mod ci;
 mod flash;
+mod fuzz;
+mod fuzz_seeds;
 mod image;
 mod qemu;
 mod sim;
@@ -38,6 +40,8 @@ enum Cmd {
     Qemu,
     /// Count the hot paths' Cortex-M4 instructions under QEMU (-icount shift=0).
     BenchTarget,
+    /// Coverage-guided fuzzing (cargo-fuzz, nightly): all targets or one.
+    Fuzz(fuzz::FuzzArgs),
 }
 
 fn main() {
@@ -50,6 +54,7 @@ fn main() {
         Cmd::Stream(a) => stream::run(a),
         Cmd::Qemu => qemu::run(),
         Cmd::BenchTarget => bench_target::run(),
+        Cmd::Fuzz(a) => fuzz::run(&a),
     };
     match result {
         Ok(code) => std::process::exit(code),

@@ -1,0 +1,331 @@
+//! `device`: arbitrary byte streams into the virtual board (the board's own
+//! link, session and controller; `receive` takes at most `room()` bytes, as
+//! the USB endpoint does). The stream mixes text, realtime bytes (single
+//! and, gated, their UTF-8 forms), the switch to framed mode, frames, port
+//! closes, and time passing.
+//!
+//! Invariants:
+//! * `?` taken in text mode is answered with a `<…>` report within
+//!   [`STATUS_BOUND_MS`] of virtual time;
+//! * after 0x18 in text mode the device answers `$I` within
+//!   [`RESET_BOUND_MS`] and makes no step meanwhile (only `$I` was sent);
+//! * nothing runs twice: the executor's log of line numbers never goes
+//!   back within one session of the link;
+//! * nothing acknowledged is lost: a framed line that was acked, of a kind
+//!   that always queues a command, is in the executor's log at the end,
+//!   unless a reset, port close, error or alarm came after its ack.
+
+use burin::link::LinkMode;
+use protocol::frame::{self, FrameDecoder, MAX_WIRE};
+use protocol::msg::{DeviceMsg, HostMsg, LineText};
+use protocol::Rt;
+
+use super::{Bytes, CHECK_RESET_WITH_FULL_RING, CHECK_UTF8_REALTIME};
+use crate::config::HostModel;
+use crate::device_sim::VirtualDevice;
+use crate::record::Discard;
+
+/// A `?` is answered within this much virtual time.
+pub const STATUS_BOUND_MS: u64 = 10;
+/// `$I` after a soft reset is answered within this much virtual time.
+pub const RESET_BOUND_MS: u64 = 50;
+/// At the end, time given to queued work before the lost-line check.
+const DRAIN_MS: u64 = 3_000;
+
+/// Lines the stream may use, and whether each always queues a command.
+const LINES: &[(&str, bool)] = &[
+    ("G1 X-9 Y-9.5 F1200", true),
+    ("G0 X-11 Y-10", true),
+    ("G4 P0.01", true),
+    ("G2 X-10 Y-10 I0.5 J0 F600", true),
+    ("G91 G1 X0.4 F900", true),
+    ("G90", false),
+    ("$X", false),
+    ("$I", false),
+    ("$G", false),
+    ("M3 S100", false),
+    ("(comment) G1 X-10", true),
+];
+
+const RT: &[u8] = &[
+    b'?', b'!', b'~', 0x18, 0x85, 0x90, 0x91, 0x92, 0x93, 0x94, 0x95, 0x96, 0x97, 0x99, 0x9A, 0x9B,
+    0x9C, 0x9D,
+];
+
+const RT_FRAMES: &[Rt] = &[
+    Rt::StatusQuery,
+    Rt::FeedHold,
+    Rt::CycleStart,
+    Rt::SoftReset,
+    Rt::JogCancel,
+    Rt::FeedOvPlus10,
+];
+
+struct Harness<'d, 'r> {
+    dev: &'d mut VirtualDevice<'r>,
+    ms: u64,
+    dec: FrameDecoder,
+    /// Next sequence number the device asked for (from its acks).
+    next_seq: u32,
+    /// Acks of counting lines: (seq, op index when seen).
+    acked: Vec<(u32, usize)>,
+    /// Counting line frames sent, by sequence number.
+    counting: Vec<u32>,
+    /// Op index of the last event that may void acked lines.
+    voided_at: usize,
+    /// Something not from the dictionary went in: no lost-line check.
+    wild: bool,
+    op: usize,
+    /// Index into the executor log where this link session began.
+    log_mark: usize,
+}
+
+impl Harness<'_, '_> {
+    fn text_mode(&self) -> bool {
+        !self.dev.framed() && self.dev.link_mode() == LinkMode::Text
+    }
+
+    /// Offer bytes; returns how many the device took.
+    fn send(&mut self, bytes: &[u8]) -> usize {
+        self.dev.receive(bytes)
+    }
+
+    fn advance_ms(&mut self, ms: u64) {
+        let t = self.dev.sim.now() + ms * self.ms;
+        self.dev.advance_to(t);
+        self.read_output();
+    }
+
+    /// Read frames out of the output (text in between fails its CRC).
+    fn read_output(&mut self) {
+        let out = std::mem::take(&mut self.dev.tx.0);
+        for &x in &out {
+            match self.dec.push::<DeviceMsg>(x) {
+                Some(Ok(DeviceMsg::Ack { seq, next, .. })) => {
+                    self.next_seq = next;
+                    if self.counting.contains(&seq) {
+                        self.acked.push((seq, self.op));
+                    }
+                }
+                Some(Ok(DeviceMsg::Welcome(i))) => self.next_seq = i.next_seq,
+                Some(Ok(DeviceMsg::Error { .. } | DeviceMsg::Alarm { .. })) => {
+                    self.voided_at = self.op
+                }
+                _ => {}
+            }
+        }
+        // Give the buffer back: no allocation on the next round.
+        let mut out = out;
+        out.clear();
+        if self.dev.tx.0.is_empty() {
+            self.dev.tx.0 = out;
+        }
+        self.check_log_order();
+    }
+
+    /// Within one link session the log's line numbers never go back.
+    fn check_log_order(&mut self) {
+        let log = self.dev.log.as_deref().unwrap_or(&[]);
+        let part = log.get(self.log_mark..).unwrap_or(&[]);
+        if let Some(w) = part.windows(2).find(|w| w[1] < w[0]) {
+            panic!(
+                "line {} ran after line {}: run twice or out of order",
+                w[1], w[0]
+            );
+        }
+    }
+
+    /// New link session (mode switch, port close): numbering may restart.
+    fn new_session(&mut self) {
+        self.log_mark = self.dev.log.as_ref().map_or(0, Vec::len);
+        self.voided_at = self.op;
+    }
+
+    fn frame(&mut self, msg: &HostMsg) {
+        let mut w = [0u8; MAX_WIRE];
+        if let Ok(n) = frame::encode(msg, &mut w) {
+            self.send(&w[..n]);
+        }
+    }
+
+    /// Send `buf` and wait for `want` in the text output, at most `bound` ms.
+    fn answered(&mut self, bound: u64, want: &[u8], what: &str) {
+        let mut seen = Vec::new();
+        for _ in 0..bound {
+            let t = self.dev.sim.now() + self.ms;
+            self.dev.advance_to(t);
+            seen.extend_from_slice(&self.dev.tx.0);
+            self.read_output();
+            if seen.windows(want.len()).any(|w| w == want) {
+                return;
+            }
+        }
+        panic!(
+            "{what}: no {:?} within {bound} ms; got {:?}",
+            String::from_utf8_lossy(want),
+            String::from_utf8_lossy(&seen)
+        );
+    }
+
+    fn status_check(&mut self) {
+        if !self.text_mode() || self.send(b"?") != 1 {
+            return;
+        }
+        self.answered(STATUS_BOUND_MS, b"<", "status query");
+    }
+
+    fn reset_check(&mut self) {
+        if !self.text_mode() {
+            return;
+        }
+        let full = self.dev.room() < 64;
+        if self.send(&[0x18]) != 1 {
+            return;
+        }
+        self.voided_at = self.op;
+        self.dev.poll();
+        let pos = self.dev.position_steps();
+        let gated = full && !CHECK_RESET_WITH_FULL_RING;
+        if self.send(b"$I\n") == 3 && !gated {
+            self.answered(RESET_BOUND_MS, b"[VER:", "$I after reset");
+            assert_eq!(self.dev.position_steps(), pos, "moved after a reset");
+        }
+    }
+
+    fn line(&mut self, b: &mut Bytes) {
+        let (text, counts) = b.pick(LINES);
+        if self.text_mode() {
+            self.send(text.as_bytes());
+            self.send(b"\n");
+            return;
+        }
+        let seq = match b.u8() % 4 {
+            0 => b.u32(),
+            1 => self.next_seq.wrapping_sub(1),
+            _ => self.next_seq,
+        };
+        if counts {
+            self.counting.push(seq);
+        } else {
+            self.voided_at = self.op;
+        }
+        let text = LineText::from_slice(text.as_bytes()).unwrap_or_default();
+        self.frame(&HostMsg::Line { seq, text });
+    }
+
+    fn step(&mut self, b: &mut Bytes) {
+        self.op += 1;
+        match b.u8() % 12 {
+            0 => {
+                self.wild = true;
+                let t = b.take(48);
+                self.send(t);
+            }
+            1 | 2 => self.line(b),
+            3 => {
+                let r = b.pick(RT);
+                if r == 0x18 || r == 0x85 {
+                    self.voided_at = self.op;
+                }
+                self.send(&[r]);
+            }
+            4 => {
+                // UTF-8 form of a realtime byte (0x80..=0xBF after C2).
+                let r = 0x80 | b.u8() & 0x3F;
+                if CHECK_UTF8_REALTIME || r < 0x80 {
+                    self.voided_at = self.op;
+                    self.send(&[0xC2, r]);
+                }
+            }
+            5 => {
+                self.send(&[0]);
+                self.new_session();
+            }
+            6 => {
+                let rt = b.pick(RT_FRAMES);
+                if matches!(rt, Rt::SoftReset | Rt::JogCancel) {
+                    self.voided_at = self.op;
+                }
+                self.frame(&HostMsg::Realtime(rt));
+            }
+            7 => {
+                let m = match b.u8() % 3 {
+                    0 => HostMsg::Hello { version: 1 },
+                    1 => HostMsg::Bye,
+                    _ => HostMsg::ListSettings,
+                };
+                self.frame(&m);
+                self.new_session();
+            }
+            8 => {
+                self.dev.port_closed();
+                self.new_session();
+                if b.u8() & 1 == 0 {
+                    self.dev.hello();
+                }
+            }
+            9 => self.status_check(),
+            10 => self.reset_check(),
+            _ => {
+                let ms = u64::from(b.u8() % 40);
+                self.advance_ms(ms);
+            }
+        }
+        self.read_output();
+    }
+
+    /// Let queued work finish, then check no acked counting line was lost.
+    fn finish(&mut self) {
+        self.op += 1;
+        if self.text_mode() {
+            self.send(b"~");
+        } else {
+            self.frame(&HostMsg::Realtime(Rt::CycleStart));
+        }
+        for _ in 0..DRAIN_MS / 10 {
+            self.advance_ms(10);
+            if self.dev.idle() {
+                break;
+            }
+        }
+        if self.wild || !self.dev.idle() {
+            return;
+        }
+        let log = self.dev.log.as_deref().unwrap_or(&[]);
+        for &(seq, at) in &self.acked {
+            if at > self.voided_at {
+                assert!(
+                    log.contains(&seq),
+                    "line {seq} was acked (op {at}) but never ran"
+                );
+            }
+        }
+    }
+}
+
+pub fn device(data: &[u8]) {
+    let mut cfg = super::executor::small_machine(false, false);
+    cfg.host = HostModel::INSTANT;
+    cfg.start_position_mm = [-10.0, -10.0, -1.0, 0.0];
+    let mut rec = Discard;
+    let mut dev = VirtualDevice::new(&cfg, &mut rec);
+    dev.log = Some(Vec::new());
+    dev.tx.0.clear();
+    let mut h = Harness {
+        dev: &mut dev,
+        ms: u64::from(cfg.tick_hz) / 1000,
+        dec: FrameDecoder::new(),
+        next_seq: 1,
+        acked: Vec::new(),
+        counting: Vec::new(),
+        voided_at: 0,
+        wild: false,
+        op: 0,
+        log_mark: 0,
+    };
+    let mut b = Bytes::new(data);
+    while !b.is_empty() {
+        h.step(&mut b);
+    }
+    h.finish();
+}
