@@ -204,12 +204,18 @@ fn fuzz_one(target: &str, seeds: &Path, secs: u64, runs: Option<u64>) -> Result<
             .lines()
             .find_map(|l| l.split("Test unit written to ").nth(1))
             .map(str::to_string);
+        let lines: Vec<&str> = log.lines().collect();
+        let why = lines
+            .iter()
+            .position(|l| l.contains("panicked at"))
+            .and_then(|i| lines.get(i + 1))
+            .map_or(String::new(), |l| format!("{l}; "));
         Some(match art {
             Some(a) => format!(
-                "{a} (minimise: cargo +nightly fuzz tmin {target} {a}; keep it in \
+                "{why}{a} (minimise: cargo +nightly fuzz tmin {target} {a}; keep it in \
                  firmware/fuzz/regressions/{target}/)"
             ),
-            None => format!("cargo fuzz exited {}", out.status),
+            None => format!("{why}cargo fuzz exited {}", out.status),
         })
     };
     Ok(Outcome {

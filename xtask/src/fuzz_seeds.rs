@@ -85,7 +85,7 @@ fn first_lines(d: &[u8], n: usize) -> Vec<u8> {
 fn device_ops(d: &[u8]) -> Vec<u8> {
     let mut out = Vec::new();
     for l in d.split(|&b| b == b'\n').take(12) {
-        let l = &l[..l.len().min(200)];
+        let l = &l[..l.len().min(63)];
         out.extend_from_slice(&[0, (l.len() + 1) as u8]);
         out.extend_from_slice(l);
         out.extend_from_slice(&[b'\n', 11, 20, 9]);

@@ -36,6 +36,20 @@ pub const CHECK_RESET_WITH_FULL_RING: bool = false;
 /// A target's check: panics on a broken invariant.
 pub type Target = fn(&[u8]);
 
+/// Issue 15: a line sent right behind 0x18 (in the same USB packet or
+/// before the task took the reset) may be acked and then dropped, or not
+/// answered at all: `$I` sent at once after a reset during motion got no
+/// reply (regression `device/reset-then-info`). When false, the device
+/// target waits for the reset's banner before it sends `$I`.
+pub const CHECK_LINE_RIGHT_AFTER_RESET: bool = false;
+
+/// Issue 15: after a soft reset during motion (ALARM:3) the session waits
+/// for the executor to settle before it reads input again; `$I` sent
+/// after the reset's banner went unanswered for 200-1000 ms of virtual
+/// time (regression `device/reset-then-info`). When false, the device
+/// target allows `RESET_BOUND_SLOW_MS` instead of `RESET_BOUND_MS`.
+pub const CHECK_PROMPT_AFTER_RESET: bool = false;
+
 /// Every target, by name (the fuzz crate's binaries, the regression test
 /// and `cargo xtask fuzz` use this list).
 pub const TARGETS: &[(&str, Target)] = &[
