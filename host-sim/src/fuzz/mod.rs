@@ -43,11 +43,12 @@ pub type Target = fn(&[u8]);
 /// target waits for the reset's banner before it sends `$I`.
 pub const CHECK_LINE_RIGHT_AFTER_RESET: bool = false;
 
-/// Issue 15: after a soft reset during motion (ALARM:3) the session waits
-/// for the executor to settle before it reads input again; `$I` sent
-/// after the reset's banner went unanswered for 200-1000 ms of virtual
-/// time (regression `device/reset-then-info`). When false, the device
-/// target allows `RESET_BOUND_SLOW_MS` instead of `RESET_BOUND_MS`.
+/// Issue 15: after a soft reset during motion (ALARM:3) the session reads
+/// input again only once the stepper has taken its next event; in a slow
+/// move that is seconds away (a wait segment; F1 on 5 steps/mm: 8-20 s of
+/// virtual time before `$I` was answered; regressions
+/// `device/reset-then-info*`). When false, the device target allows
+/// `RESET_BOUND_SLOW_MS` (46 s) instead of `RESET_BOUND_MS` (50 ms).
 pub const CHECK_PROMPT_AFTER_RESET: bool = false;
 
 /// Every target, by name (the fuzz crate's binaries, the regression test
