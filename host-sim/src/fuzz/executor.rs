@@ -19,8 +19,8 @@ use crate::engine::Sim;
 use crate::record::{PinEvent, Recorder};
 
 /// Virtual time run per check round, and the most a job may take.
-const ROUND_S: f64 = 0.005;
-const MAX_VIRTUAL_S: f64 = 20.0;
+const ROUND_S: f64 = 0.02;
+const MAX_VIRTUAL_S: f64 = 10.0;
 /// Lines and bytes of G-code one input may hold.
 const MAX_LINES: usize = 24;
 /// Host time: fixed part and per step / per line.

@@ -16,7 +16,7 @@ mod protocol;
 mod settings;
 
 pub use device::device;
-pub use executor::executor;
+pub use executor::{executor, small_machine};
 pub use gcode::{gcode_line, gcode_program};
 pub use protocol::protocol_frames;
 pub use settings::settings;
