@@ -1,12 +1,14 @@
 //! `device`: arbitrary byte streams into the virtual board (the board's own
 //! link, session and controller; `receive` takes at most `room()` bytes, as
 //! the USB endpoint does). The stream mixes text, realtime bytes (single
-//! and, gated, their UTF-8 forms), the switch to framed mode, frames, port
+//! and their UTF-8 forms `C2 xx`), the switch to framed mode, frames, port
 //! closes, and time passing.
 //!
 //! Invariants:
 //! * `?` taken in text mode is answered with a `<…>` report within
 //!   [`STATUS_BOUND_MS`] of virtual time;
+//! * (gated, issue 15) an override byte in its UTF-8 form leaves nothing
+//!   behind: a `$I` right after it is answered within [`STATUS_BOUND_MS`];
 //! * after 0x18 in text mode the device answers `$I` within
 //!   [`RESET_BOUND_MS`] and makes no step meanwhile (only `$I` was sent);
 //! * nothing runs twice: the executor's log of line numbers never goes
@@ -268,6 +270,20 @@ impl Harness<'_, '_> {
         }
     }
 
+    /// A realtime byte in its UTF-8 form, as some senders send it. Checked
+    /// (gated, issue 15): it acts and leaves nothing in the line buffer, so
+    /// a `$I` right behind it is answered.
+    fn utf8_realtime(&mut self, r: u8) {
+        let text = self.text_mode() && self.dev.rx_pending() == 0;
+        if self.send(&[0xC2, r]) != 2 || !CHECK_UTF8_REALTIME || !text {
+            return;
+        }
+        // Jog cancel and reset answer in their own time; overrides at once.
+        if matches!(r, 0x90..=0x9D) && self.send(b"$I\n") == 3 {
+            self.answered(STATUS_BOUND_MS, b"[VER:", "$I after a UTF-8 realtime byte");
+        }
+    }
+
     fn line(&mut self, b: &mut Bytes) {
         let (text, counts) = b.pick(LINES);
         if self.text_mode() {
@@ -323,12 +339,10 @@ impl Harness<'_, '_> {
                 }
             }
             4 => {
-                // UTF-8 form of a realtime byte (0x80..=0xBF after C2).
+                // UTF-8 form of a realtime byte (C2 80..=C2 BF).
                 let r = 0x80 | b.u8() & 0x3F;
-                if CHECK_UTF8_REALTIME || r < 0x80 {
-                    self.voided_at = self.op;
-                    self.send(&[0xC2, r]);
-                }
+                self.voided_at = self.op;
+                self.utf8_realtime(r);
             }
             5 => {
                 self.send(&[0]);

@@ -22,8 +22,9 @@ pub use protocol::protocol_frames;
 pub use settings::settings;
 
 /// Issue 15: realtime bytes in their UTF-8 two-byte form (`C2 xx`) are
-/// not yet recognised by the link. When true, the device target also sends
-/// `?` as `C2 3F`-style pairs... (see `device.rs`) and expects an answer.
+/// not yet recognised by the link. The device target always sends them;
+/// when true it also checks that an override in that form leaves nothing
+/// in the line buffer (a `$I` right behind it is answered).
 pub const CHECK_UTF8_REALTIME: bool = false;
 
 /// Issue 15: after a soft reset with a full receive ring, old input may
