@@ -2,7 +2,8 @@
 //! preparer and stepper (the engine's own task, no link) on a small
 //! machine. Invariants: once idle without an alarm the step position equals
 //! the commanded position; no step while the executor is in alarm; no axis
-//! steps faster than `$201` allows or its pulses overlap; and (fuzz builds
+//! steps faster than `$201` allows, nor (over 8 steps, 10 % slack) faster
+//! than its max rate, nor do its pulses overlap; and (fuzz builds
 //! only, as wall time is noisy) the job's host time stays within a bound
 //! proportional to its steps.
 
@@ -23,6 +24,10 @@ const ROUND_S: f64 = 0.02;
 const MAX_VIRTUAL_S: f64 = 10.0;
 /// Lines and bytes of G-code one input may hold.
 const MAX_LINES: usize = 24;
+/// Steps over which an axis's rate is measured, and the slack for the
+/// timer's rounding and the preparer's segment quantisation.
+const RATE_WINDOW: usize = 8;
+const RATE_SLACK: f64 = 1.10;
 /// Host time: fixed part and per step / per line.
 const HOST_BASE_S: f64 = 0.25;
 const HOST_PER_STEP_S: f64 = 20e-6;
@@ -59,6 +64,11 @@ struct Steps<'a> {
     /// Shortest legal interval between two steps of one axis, ticks.
     min_interval: u64,
     last: [Option<u64>; AXES],
+    /// The last `RATE_WINDOW + 1` step ticks per axis (a ring), and the
+    /// shortest time `RATE_WINDOW` steps may take at the axis's max rate.
+    recent: [[u64; RATE_WINDOW + 1]; AXES],
+    seen: [usize; AXES],
+    window_ticks: [u64; AXES],
     /// Steps so far (read between rounds).
     count: &'a Cell<u64>,
 }
@@ -86,6 +96,20 @@ impl Recorder for Steps<'_> {
                 );
             }
             self.last[i] = Some(ev.tick);
+            let k = self.seen[i];
+            self.recent[i][k % (RATE_WINDOW + 1)] = ev.tick;
+            self.seen[i] += 1;
+            if k >= RATE_WINDOW {
+                let first = self.recent[i][(k + 1) % (RATE_WINDOW + 1)];
+                assert!(
+                    ev.tick - first >= self.window_ticks[i],
+                    "axis {i}: {RATE_WINDOW} steps in {} ticks up to tick {}, faster than \
+                     its max rate allows ({} ticks)",
+                    ev.tick - first,
+                    ev.tick,
+                    self.window_ticks[i]
+                );
+            }
         }
     }
 }
@@ -105,6 +129,13 @@ pub fn executor(data: &[u8]) {
         // 1 % for the timer's rounding of each period.
         min_interval: (tick_hz / f64::from(s.max_step_rate_hz) * 0.99) as u64,
         last: [None; AXES],
+        recent: [[0; RATE_WINDOW + 1]; AXES],
+        seen: [0; AXES],
+        window_ticks: std::array::from_fn(|i| {
+            let a = &s.axes[i];
+            let sps = f64::from(a.max_rate) / 60.0 * f64::from(a.steps_per_mm);
+            (RATE_WINDOW as f64 / sps / RATE_SLACK * tick_hz) as u64
+        }),
         count: &count,
     };
     let mut it = Interpreter::new();
