@@ -213,7 +213,7 @@ fn fuzz_one(target: &str, seeds: &Path, secs: u64, runs: Option<u64>) -> Result<
             .map_or(String::new(), |l| format!("{l}; "));
         Some(match art {
             Some(a) => format!(
-                "{why}{a} (minimise: cargo +nightly fuzz tmin {target} {a}; keep it in \
+                "{why}{a} (minimise, in firmware/: cargo +nightly fuzz tmin -s none {target} {a}; keep it in \
                  firmware/fuzz/regressions/{target}/)"
             ),
             None => format!("{why}cargo fuzz exited {}", out.status),
