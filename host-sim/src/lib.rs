@@ -8,6 +8,7 @@ pub mod check;
 pub mod config;
 pub mod device_sim;
 pub mod engine;
+pub mod fuzz;
 pub mod offline;
 pub mod outputs;
 pub mod plot;

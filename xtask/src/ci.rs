@@ -5,6 +5,9 @@ use crate::util::{cargo, ensure_target, run, TARGET};
 use anyhow::Result;
 use std::time::Instant;
 
+/// Seconds each fuzz target runs in CI (6 targets; the budget is tight).
+const FUZZ_CI_SECS: u64 = 15;
+
 pub fn run_all() -> Result<i32> {
     let started = Instant::now();
     step("toolchain: thumb target", ensure_target)?;
@@ -54,6 +57,11 @@ pub fn run_all() -> Result<i32> {
         })?;
     }
     step("corpus conformance (../shared/corpus)", corpus)?;
+    // Skipped (not failed) without nightly or cargo-fuzz; fails on a finding.
+    step(
+        &format!("fuzz: every target {FUZZ_CI_SECS} s (cargo xtask fuzz)"),
+        || crate::fuzz::ci_step(FUZZ_CI_SECS),
+    )?;
     step(
         "firmware under QEMU (netduinoplus2): cargo xtask qemu",
         || match crate::qemu::run()? {

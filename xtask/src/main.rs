@@ -4,6 +4,8 @@
 mod bench_target;
 mod ci;
 mod flash;
+mod fuzz;
+mod fuzz_seeds;
 mod image;
 mod qemu;
 mod senders;
@@ -41,6 +43,8 @@ enum Cmd {
     BenchTarget,
     /// Real third-party senders (PyPI: grbl-streamer, printcore) against `sim --pty`.
     Senders,
+    /// Coverage-guided fuzzing (cargo-fuzz, nightly): all targets or one.
+    Fuzz(fuzz::FuzzArgs),
 }
 
 fn main() {
@@ -54,6 +58,7 @@ fn main() {
         Cmd::Qemu => qemu::run(),
         Cmd::BenchTarget => bench_target::run(),
         Cmd::Senders => senders::run(),
+        Cmd::Fuzz(a) => fuzz::run(&a),
     };
     match result {
         Ok(code) => std::process::exit(code),

@@ -127,6 +127,30 @@ impl Params {
         }
     }
 
+    /// Same stored values as `other`, bit for bit (the undo log aside):
+    /// what a failed line must leave behind (checked by the fuzz targets).
+    pub fn same_values(&self, other: &Params) -> bool {
+        let num = |a: &(u16, f32), b: &(u16, f32)| a.0 == b.0 && a.1.to_bits() == b.1.to_bits();
+        let named = |a: &(Name, f32), b: &(Name, f32)| a.0 == b.0 && a.1.to_bits() == b.1.to_bits();
+        self.numbered.len() == other.numbered.len()
+            && self.named.len() == other.named.len()
+            && self
+                .numbered
+                .iter()
+                .zip(&other.numbered)
+                .all(|(a, b)| num(a, b))
+            && self
+                .named
+                .iter()
+                .zip(&other.named)
+                .all(|(a, b)| named(a, b))
+    }
+
+    /// Every stored value is finite.
+    pub fn all_finite(&self) -> bool {
+        self.numbered.iter().all(|e| e.1.is_finite()) && self.named.iter().all(|e| e.1.is_finite())
+    }
+
     /// Value of a stored numbered parameter; unset ones read 0.
     pub fn get_num(&self, n: u16) -> f32 {
         match self.numbered.binary_search_by_key(&n, |e| e.0) {

@@ -1,0 +1,200 @@
+//! `executor`: interpreted G-code through the executor, planner, segment
+//! preparer and stepper (the engine's own task, no link) on a small
+//! machine. Invariants: once idle without an alarm the step position equals
+//! the commanded position; no step while the executor is in alarm; no axis
+//! steps faster than `$201` allows, nor (over 8 steps, 10 % slack) faster
+//! than its max rate, nor do its pulses overlap; and (fuzz builds
+//! only, as wall time is noisy) the job's host time stays within a bound
+//! proportional to its steps.
+
+use std::cell::Cell;
+use std::time::Instant;
+
+use burin::interp::Interpreter;
+use burin::settings::Settings;
+use burin::AXES;
+
+use super::Bytes;
+use crate::config::{HostModel, MachineConfig, ProbeSurface};
+use crate::engine::Sim;
+use crate::record::{PinEvent, Recorder};
+
+/// Virtual time run per check round, and the most a job may take.
+const ROUND_S: f64 = 0.02;
+const MAX_VIRTUAL_S: f64 = 10.0;
+/// Lines and bytes of G-code one input may hold.
+const MAX_LINES: usize = 24;
+/// Steps over which an axis's rate is measured, and the slack for the
+/// timer's rounding and the preparer's segment quantisation.
+const RATE_WINDOW: usize = 8;
+const RATE_SLACK: f64 = 1.10;
+/// Host time: fixed part and per step / per line.
+const HOST_BASE_S: f64 = 0.25;
+const HOST_PER_STEP_S: f64 = 20e-6;
+
+/// The small machine: few steps per mm, a 20 mm envelope.
+pub fn small_machine(soft_limits: bool, probe: bool) -> MachineConfig {
+    let mut s = Settings::default();
+    for (i, a) in s.axes.iter_mut().enumerate() {
+        a.steps_per_mm = [5.0, 5.0, 10.0, 2.0][i];
+        a.max_rate = [3000.0, 3000.0, 600.0, 1800.0][i];
+        a.max_accel = [200.0, 200.0, 50.0, 100.0][i];
+        a.max_travel = [20.0, 20.0, 10.0, 0.0][i];
+    }
+    s.soft_limits = soft_limits;
+    s.max_step_rate_hz = 50_000.0;
+    MachineConfig {
+        tick_hz: 96_000_000,
+        settings: s,
+        limits: [None; AXES],
+        probe: probe.then_some(ProbeSurface {
+            axis: 2,
+            trip_mm: -5.0,
+            towards_negative: true,
+        }),
+        start_position_mm: [-10.0, -10.0, -1.0, 0.0],
+        host: HostModel::INSTANT,
+        interrupts: Default::default(),
+    }
+}
+
+/// Checks each step event as it happens.
+struct Steps<'a> {
+    tick_hz: f64,
+    pulse_ticks: u64,
+    /// Shortest legal interval between two steps of one axis, ticks.
+    min_interval: u64,
+    last: [Option<u64>; AXES],
+    /// The last `RATE_WINDOW + 1` step ticks per axis (a ring), and the
+    /// shortest time `RATE_WINDOW` steps may take at the axis's max rate.
+    recent: [[u64; RATE_WINDOW + 1]; AXES],
+    seen: [usize; AXES],
+    window_ticks: [u64; AXES],
+    /// Steps so far (read between rounds).
+    count: &'a Cell<u64>,
+}
+
+impl Recorder for Steps<'_> {
+    fn step_event(&mut self, ev: &PinEvent) {
+        for i in 0..AXES {
+            if ev.step_mask >> i & 1 == 0 {
+                continue;
+            }
+            self.count.set(self.count.get() + 1);
+            if let Some(t) = self.last[i] {
+                let dt = ev.tick - t;
+                assert!(
+                    dt > self.pulse_ticks,
+                    "axis {i}: pulses at {t} and {} overlap",
+                    ev.tick
+                );
+                assert!(
+                    dt >= self.min_interval,
+                    "axis {i}: {:.0} steps/s at tick {} (limit {:.0})",
+                    self.tick_hz / dt as f64,
+                    ev.tick,
+                    self.tick_hz / self.min_interval as f64
+                );
+            }
+            self.last[i] = Some(ev.tick);
+            let k = self.seen[i];
+            self.recent[i][k % (RATE_WINDOW + 1)] = ev.tick;
+            self.seen[i] += 1;
+            if k >= RATE_WINDOW {
+                let first = self.recent[i][(k + 1) % (RATE_WINDOW + 1)];
+                assert!(
+                    ev.tick - first >= self.window_ticks[i],
+                    "axis {i}: {RATE_WINDOW} steps in {} ticks up to tick {}, faster than \
+                     its max rate allows ({} ticks)",
+                    ev.tick - first,
+                    ev.tick,
+                    self.window_ticks[i]
+                );
+            }
+        }
+    }
+}
+
+pub fn executor(data: &[u8]) {
+    let started = Instant::now();
+    let mut b = Bytes::new(data);
+    let flags = b.u8();
+    let cfg = small_machine(flags & 1 != 0, flags & 2 != 0);
+    let s = &cfg.settings;
+    let (pulse_ticks, _) = cfg.pulse_ticks();
+    let tick_hz = f64::from(cfg.tick_hz);
+    let count = Cell::new(0);
+    let mut rec = Steps {
+        tick_hz,
+        pulse_ticks: u64::from(pulse_ticks),
+        // 1 % for the timer's rounding of each period.
+        min_interval: (tick_hz / f64::from(s.max_step_rate_hz) * 0.99) as u64,
+        last: [None; AXES],
+        recent: [[0; RATE_WINDOW + 1]; AXES],
+        seen: [0; AXES],
+        window_ticks: std::array::from_fn(|i| {
+            let a = &s.axes[i];
+            let sps = f64::from(a.max_rate) / 60.0 * f64::from(a.steps_per_mm);
+            (RATE_WINDOW as f64 / sps / RATE_SLACK * tick_hz) as u64
+        }),
+        count: &count,
+    };
+    let mut it = Interpreter::new();
+    let mut sim = Sim::new(&cfg, &mut rec);
+    it.set_machine_position(sim.machine.commanded_position());
+    let mut lines = 0u32;
+    for line in b.rest().split(|&c| c == b'\n').take(MAX_LINES) {
+        lines += 1;
+        let _ = it.execute_line(line, &mut |c| sim.push_command(lines, c));
+        if it.needs_sync() {
+            // The engine runs ahead of nothing here: finish, then sync.
+            run(&mut sim, tick_hz, &count);
+            it.set_machine_position(sim.machine.commanded_position());
+        }
+    }
+    let done = run(&mut sim, tick_hz, &count);
+    if done && sim.machine.alarm().is_none() {
+        let want = sim
+            .machine
+            .planner
+            .to_steps(&sim.machine.commanded_position());
+        if let Ok(want) = want {
+            assert_eq!(
+                sim.rt.position(),
+                want,
+                "idle at a step position other than the commanded {:?}",
+                sim.machine.commanded_position()
+            );
+        }
+    }
+    drop(sim);
+    if cfg!(fuzzing) {
+        let steps = count.get();
+        let limit = HOST_BASE_S + HOST_PER_STEP_S * (steps + u64::from(lines)) as f64;
+        let took = started.elapsed().as_secs_f64();
+        assert!(took < limit, "{steps} steps took {took:.3} s of host time");
+    }
+}
+
+/// Run until idle (true) or the virtual time cap, checking the alarm rule
+/// at every round: a round that starts and ends in alarm has no step.
+fn run(sim: &mut Sim, tick_hz: f64, count: &Cell<u64>) -> bool {
+    let round = (ROUND_S * tick_hz) as u64;
+    let cap = sim.now() + (MAX_VIRTUAL_S * tick_hz) as u64;
+    while sim.now() < cap {
+        if sim.idle() {
+            return true;
+        }
+        let (alarm, steps) = (sim.machine.alarm(), count.get());
+        let t = sim.now() + round;
+        sim.run_until(t);
+        if let (Some(a), Some(_)) = (alarm, sim.machine.alarm()) {
+            assert_eq!(
+                count.get(),
+                steps,
+                "stepped during alarm {a:?} before tick {t}"
+            );
+        }
+    }
+    sim.idle()
+}
