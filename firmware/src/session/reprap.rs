@@ -19,7 +19,7 @@ use core::fmt::Write;
 /// The last accepted RepRap line number.
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct LineNumbers {
-    last: i64,
+    last: i32,
 }
 
 /// What to do with a text line.
@@ -35,7 +35,7 @@ pub(super) enum Numbered<'a> {
     Resend { checksum: bool },
 }
 
-fn int(s: &[u8]) -> Option<(i64, &[u8])> {
+fn int(s: &[u8]) -> Option<(i32, &[u8])> {
     let s = s.trim_ascii_start();
     let (neg, s) = match s.split_first() {
         Some((b'-', rest)) => (true, rest),
@@ -43,16 +43,17 @@ fn int(s: &[u8]) -> Option<(i64, &[u8])> {
         _ => (false, s),
     };
     let digits = s.iter().take_while(|b| b.is_ascii_digit()).count();
-    if digits == 0 || digits > 12 {
+    if digits == 0 || digits > 9 {
         return None;
     }
     let (num, rest) = s.split_at(digits);
-    let v = num.iter().fold(0i64, |v, d| v * 10 + i64::from(d - b'0'));
+    // At most 9 digits: no overflow.
+    let v = num.iter().fold(0i32, |v, d| v * 10 + i32::from(d - b'0'));
     Some((if neg { -v } else { v }, rest))
 }
 
 /// `M110` (not `M1100`), and its `N` parameter if any.
-fn m110(body: &[u8]) -> Option<Option<i64>> {
+fn m110(body: &[u8]) -> Option<Option<i32>> {
     let b = body.trim_ascii_start();
     let (head, rest) = b.split_at_checked(4)?;
     if !head.eq_ignore_ascii_case(b"M110") || rest.first().is_some_and(u8::is_ascii_digit) {
@@ -91,7 +92,7 @@ impl LineNumbers {
         let (head, tail) = t.split_at(star);
         let want = tail.get(1..).and_then(int).map_or(-1, |(v, _)| v);
         let got = head.iter().fold(0u8, |x, b| x ^ b);
-        if i64::from(got) != want {
+        if i32::from(got) != want {
             return Numbered::Resend { checksum: true };
         }
         let Some((n, body)) = head.get(1..).and_then(int) else {
@@ -101,7 +102,7 @@ impl LineNumbers {
             self.last = set.unwrap_or(n);
             return Numbered::Set;
         }
-        if n != self.last + 1 {
+        if n != self.last.wrapping_add(1) {
             return Numbered::Resend { checksum: false };
         }
         self.last = n;
@@ -120,7 +121,7 @@ impl LineNumbers {
             o,
             "Error:{why}, Last Line: {}\r\nResend: {}\r\nok\r\n",
             self.last,
-            self.last + 1
+            self.last.wrapping_add(1)
         );
     }
 }
