@@ -168,7 +168,15 @@ impl Interpreter {
         let bad = buf
             .get(before..)
             .is_some_and(|s| s.iter().any(|c| !cmd_finite(c)));
-        if bad || non_finite(&self.state.pos) != 0 {
+        // A line that wrote the offset tables (G10, G28.1, #5221=) must
+        // leave them finite too: `G10 L20 X4e38` overflowed to inf
+        // (found by the gcode_program fuzz target).
+        let o = &self.offsets;
+        let tables_bad = saved.is_some()
+            && (o.wcs.iter().any(|w| non_finite(w) != 0)
+                || non_finite(&o.g28) != 0
+                || non_finite(&o.g30) != 0);
+        if bad || tables_bad || non_finite(&self.state.pos) != 0 {
             return Err(GcodeError::new(ErrorKind::NotFinite, b.first_col));
         }
         Ok(())
