@@ -105,6 +105,9 @@ impl Harness<'_, '_> {
     /// Offer bytes; returns how many the device took.
     fn send(&mut self, bytes: &[u8]) -> usize {
         let n = self.dev.receive(bytes);
+        if trace() {
+            eprintln!("  send {:?} -> {n}", String::from_utf8_lossy(bytes));
+        }
         self.watch_mode();
         n
     }
