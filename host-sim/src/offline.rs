@@ -1,6 +1,6 @@
 //! `cargo xtask sim FILE`: a job streamed through the virtual board, as
 //! burin's own streamer sends it to the real one (framed protocol, line
-//! credits) over an instant in-memory link. The device session, the
+//! credits) over an in-memory link at the host model's byte rate. The device session, the
 //! executor and the stepper are the board's; this module is only the
 //! sender and the operator: it sends lines as credits allow, resumes
 //! program pauses (M0/M1: nobody is at a batch run to press cycle start),
@@ -48,7 +48,7 @@ pub fn run_file(config: &MachineConfig, source: &str, recorder: &mut dyn Recorde
     let mut sent = 0usize;
     let mut msg = String::new();
     let mut alarm = false;
-    let mut link = Link::new(config);
+    let mut wire = Wire::new(config);
     let mut idle_rounds = 0u32;
     let mut buf = [0u8; 4096];
     loop {
@@ -60,11 +60,11 @@ pub fn run_file(config: &MachineConfig, source: &str, recorder: &mut dyn Recorde
             sent += 1;
         }
         while let Ok(n @ 1..) = pipe.read(&mut buf) {
-            link.send(&buf[..n], dev.sim.now());
+            wire.send(&buf[..n], dev.sim.now());
         }
-        link.deliver(&mut dev);
+        wire.deliver(&mut dev);
         dev.sim.input_pending = sent < lines.len() || client.in_flight() > 0;
-        let until = link.next_arrival().unwrap_or(u64::MAX);
+        let until = wire.next_arrival().unwrap_or(u64::MAX);
         let spoke = advance(&mut dev, step, until);
         let out = dev.take_output();
         if !out.is_empty() {
@@ -155,7 +155,7 @@ fn advance(dev: &mut VirtualDevice, step: u64, until: u64) -> bool {
 /// The wire from the sender to the board: at the host model's byte rate
 /// (`link_bytes_per_s`, 0: instant), bytes arrive one after the other; the
 /// board takes them as its receive ring has room.
-struct Link {
+struct Wire {
     /// Ticks per byte ×2^16.
     byte_ticks_q16: u64,
     /// When the last byte sent so far is in.
@@ -166,10 +166,10 @@ struct Link {
     arrived: Vec<u8>,
 }
 
-impl Link {
+impl Wire {
     fn new(cfg: &MachineConfig) -> Self {
         let rate = u64::from(cfg.host.link_bytes_per_s);
-        Link {
+        Wire {
             byte_ticks_q16: (u64::from(cfg.tick_hz) << 16)
                 .checked_div(rate)
                 .unwrap_or(0),

@@ -21,7 +21,6 @@ use burin::controller::{Controller, Pins};
 use burin::link::{LinkMode, RtFlags, RxBacklog, RxSplitter, RxToken, RX_RING};
 use burin::persist::{FlashMap, Persist, RamFlash};
 use burin::session::{Device, Identity, Tx};
-use burin::stepper::Stepper;
 use heapless::Deque;
 
 use crate::config::MachineConfig;
@@ -90,8 +89,6 @@ impl<'r> VirtualDevice<'r> {
         booted.settings = boot.settings;
         let mut sim = Sim::new(&booted, rec);
         sim.set_device_mode();
-        sim.stepper = Stepper::new(sim.machine.step_config());
-        sim.stepper.set_position(&sim.rt, sim.rt.position());
         let ident = Identity {
             board: BOARD,
             caps: protocol::msg::caps::CHECK_MODE | protocol::msg::caps::HOMING,
