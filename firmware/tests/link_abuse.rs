@@ -149,3 +149,58 @@ fn backlog_keeps_text_and_never_delays_realtime() {
     }
     assert_eq!(got, ["G0 Y1"]);
 }
+
+/// A reset taken while the ring ends in the middle of the framed session's
+/// `Bye` (the rest still in the backlog): the voided input is still decoded
+/// to the marker, so both halves of the link end in text mode and a line
+/// after the reset is read as text (fuzz finding, device target).
+#[test]
+fn reset_with_a_bye_cut_by_the_ring_keeps_the_modes_in_step() {
+    use burin::link::LinkMode;
+    use protocol::frame;
+    use protocol::msg::HostMsg;
+    let mut wire = vec![0u8];
+    let mut buf = [0u8; 64];
+    for _ in 0..20 {
+        let n = frame::encode(&HostMsg::Bye, &mut buf).expect("encode");
+        // A long frame of padding, then the `Bye`; only the last counts.
+        wire.extend_from_slice(&[b'U'; 40]);
+        wire.push(0);
+        // (`encode` ends the frame with its 0x00.)
+        wire.extend_from_slice(&buf[..n]);
+        // Back to framed for the next round, except after the last one.
+        wire.push(0);
+    }
+    wire.pop();
+    // Try every cut of the ring around the final `Bye`.
+    for cap in 1..wire.len() {
+        let mut ring: Deque<RxToken, 2048> = Deque::new();
+        let mut backlog: RxBacklog<4096> = RxBacklog::new();
+        let (mut split, mut asm, flags) =
+            (RxSplitter::new(), LineAssembler::new(), RtFlags::new());
+        // The ring takes only `cap` tokens before the reset arrives.
+        let mut small: Deque<RxToken, 2048> = Deque::new();
+        backlog.feed(&mut split, &wire, &mut small, &flags);
+        while small.len() > cap {
+            let t = small.pop_back().expect("token");
+            ring.push_front(t).expect("room");
+        }
+        assert!(!split.is_framed(), "framed before reset");
+        backlog.feed(&mut split, b"\x18$I\n", &mut ring, &flags);
+        assert!(flags.take().contains(Rt::SoftReset));
+        assert!(!split.is_framed());
+        // The task acts on the reset with only the first `cap` tokens read.
+        asm.flush_reset(&mut small, &flags);
+        let mut got = Vec::new();
+        while let Some(t) = ring.pop_front() {
+            small.push_back(t).expect("room");
+        }
+        while let Some(ev) = asm.poll(&mut small) {
+            if let LinkEvent::System(_) = ev {
+                got.push("$I");
+            }
+        }
+        assert_eq!(asm.mode(), LinkMode::Text, "cut at {cap}");
+        assert_eq!(got, ["$I"], "cut at {cap}");
+    }
+}

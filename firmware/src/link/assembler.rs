@@ -83,7 +83,13 @@ impl LineAssembler {
     pub fn flush_reset(&mut self, rx: &mut impl TokenSource, flags: &RtFlags) {
         self.flush_to = flags.reset_marks();
         self.discard(rx);
-        self.clear_partial();
+        // Only once the marker is reached: a frame cut off by an empty ring
+        // (the rest still in the backlog) must still be decoded to its end,
+        // or a `Bye` in it is missed and the modes part (the splitter back
+        // in text, this side still framed). `poll` clears when it gets there.
+        if !self.flushing() {
+            self.clear_partial();
+        }
     }
 
     /// Markers of resets already acted on are still to come.

@@ -34,13 +34,13 @@ pub const CHECK_UTF8_REALTIME: bool = true;
 /// taken with a full ring.
 pub const CHECK_RESET_WITH_FULL_RING: bool = true;
 
-/// Known finding (2026-11-24, `firmware/fuzz/known/device/`): a soft reset
-/// taken while the receive ring still holds a framed session's last frames
-/// and a `Bye` can leave the line assembler in framed mode while the
-/// splitter is back in text mode, so the next text line is read as frame
-/// bytes and never answered. When false, the device target skips its
-/// after-reset `$I` check in that state instead of failing on it.
-pub const CHECK_MODE_AFTER_RESET: bool = false;
+/// A soft reset taken while the receive ring ended inside a framed
+/// session's `Bye` (the rest still in the backlog) left the line assembler
+/// framed while the splitter was back in text, so the next text line was
+/// never answered (found 2026-11-24, fixed in `LineAssembler::flush_reset`;
+/// input in `firmware/fuzz/regressions/device/`). When true, the device
+/// target checks the after-reset `$I` in that state too.
+pub const CHECK_MODE_AFTER_RESET: bool = true;
 
 /// A target's check: panics on a broken invariant.
 pub type Target = fn(&[u8]);
