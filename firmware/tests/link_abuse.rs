@@ -176,8 +176,7 @@ fn reset_with_a_bye_cut_by_the_ring_keeps_the_modes_in_step() {
     for cap in 1..wire.len() {
         let mut ring: Deque<RxToken, 2048> = Deque::new();
         let mut backlog: RxBacklog<4096> = RxBacklog::new();
-        let (mut split, mut asm, flags) =
-            (RxSplitter::new(), LineAssembler::new(), RtFlags::new());
+        let (mut split, mut asm, flags) = (RxSplitter::new(), LineAssembler::new(), RtFlags::new());
         // The ring takes only `cap` tokens before the reset arrives.
         let mut small: Deque<RxToken, 2048> = Deque::new();
         backlog.feed(&mut split, &wire, &mut small, &flags);

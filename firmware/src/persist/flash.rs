@@ -17,7 +17,11 @@
 //!   of two valid pages the higher sequence number wins. A leftover page is
 //!   erased before it is reused.
 //!
-//! Reads scan the current page (16 KiB on the boards: boot and M501 only).
+//! The first use scans the current page once and keeps an index of the
+//! newest record of each key and of where the free space starts; appends
+//! keep it current. A boot's sixty-odd loads and writes then cost one scan,
+//! not one each (the index is a few hundred bytes of RAM; with more keys
+//! than it holds, reads fall back to scanning).
 
 use crate::seams::Storage;
 use embedded_storage::nor_flash::NorFlash;
@@ -57,6 +61,19 @@ struct Found {
     len: usize,
 }
 
+/// Keys the index holds: every setting, offset and tool record with room
+/// to spare.
+const INDEX: usize = 112;
+
+/// An index entry: key, and where its value starts and how long it is
+/// (page-relative, so two bytes suffice for pages up to 64 KiB).
+#[derive(Clone, Copy, Debug)]
+struct Entry {
+    key: u16,
+    at: u16,
+    len: u8,
+}
+
 /// What [`FlashMap::scan`] calls for each valid record.
 type Visit<'a, F> = dyn FnMut(
         &mut FlashMap<F>,
@@ -71,6 +88,14 @@ pub struct FlashMap<F: NorFlash> {
     pages: u32,
     /// Current page and its sequence number; `None` until first used.
     current: Option<(u32, u32)>,
+    /// Newest record of each key in the current page, valid while
+    /// `free` is `Some`.
+    index: heapless::Vec<Entry, INDEX>,
+    /// Where the current page's free space starts (page-relative); `None`
+    /// until indexed, and again after a page move or a failed write.
+    free: Option<u32>,
+    /// The page holds more keys than the index: reads scan.
+    overflow: bool,
 }
 
 impl<F: NorFlash> core::fmt::Debug for FlashMap<F> {
@@ -96,16 +121,53 @@ impl<F: NorFlash> FlashMap<F> {
             flash,
             pages,
             current: None,
+            index: heapless::Vec::new(),
+            free: None,
+            overflow: false,
+        }
+    }
+
+    /// Index the current page if it is not; returns where its free space
+    /// starts (`None`: the page is full or its tail unreadable).
+    fn indexed(&mut self) -> Result<Option<u32>, MapError<F::Error>> {
+        if let Some(at) = self.free {
+            return Ok(Some(at));
+        }
+        let (page, _) = self.open()?;
+        self.index.clear();
+        self.overflow = false;
+        let free = self.scan(page, &mut |me, r| {
+            me.note(r);
+            Ok(())
+        })?;
+        self.free = free;
+        Ok(free)
+    }
+
+    /// Record `r` as its key's newest.
+    fn note(&mut self, r: Found) {
+        let at = (r.at % Self::PAGE) as u16;
+        let e = Entry {
+            key: r.key,
+            at,
+            len: r.len as u8,
+        };
+        if let Some(old) = self.index.iter_mut().find(|o| o.key == r.key) {
+            *old = e;
+        } else if self.index.push(e).is_err() {
+            self.overflow = true;
         }
     }
 
     /// The flash underneath (tests and host-sim read or clone it).
     pub fn flash(&mut self) -> Option<&mut F> {
+        // The caller may change it: index afresh.
+        self.free = None;
         Some(&mut self.flash)
     }
 
     fn usable(&self) -> bool {
-        self.pages >= 2 && F::WRITE_SIZE <= MAX_ALIGN && F::ERASE_SIZE >= 256
+        self.pages >= 2 && F::WRITE_SIZE <= MAX_ALIGN && (256..=1 << 16).contains(&F::ERASE_SIZE)
     }
 
     fn read(&mut self, at: u32, buf: &mut [u8]) -> Result<(), MapError<F::Error>> {
@@ -265,14 +327,25 @@ impl<F: NorFlash> Storage for FlashMap<F> {
     type Error = MapError<F::Error>;
 
     fn load(&mut self, key: u16, out: &mut [u8]) -> Result<Option<usize>, Self::Error> {
+        self.indexed()?;
         let (page, _) = self.open()?;
-        let mut last = None;
-        self.scan(page, &mut |_, r| {
-            if r.key == key {
-                last = Some(r);
-            }
-            Ok(())
-        })?;
+        let last = if self.free.is_some() && !self.overflow {
+            let e = self.index.iter().find(|e| e.key == key);
+            e.map(|e| Found {
+                key,
+                at: page * Self::PAGE + u32::from(e.at),
+                len: usize::from(e.len),
+            })
+        } else {
+            let mut last = None;
+            self.scan(page, &mut |_, r| {
+                if r.key == key {
+                    last = Some(r);
+                }
+                Ok(())
+            })?;
+            last
+        };
         let Some(r) = last else { return Ok(None) };
         let dst = out.get_mut(..r.len).ok_or(MapError::TooLong)?;
         self.read(r.at, dst)?;
@@ -283,10 +356,24 @@ impl<F: NorFlash> Storage for FlashMap<F> {
         if data.len() > MAX_VALUE || key == 0xFFFF {
             return Err(MapError::TooLong);
         }
+        let free = self.indexed()?;
         let (page, _) = self.open()?;
-        match self.scan(page, &mut |_, _| Ok(()))? {
-            Some(at) if self.append(page, at, key, data).is_ok() => Ok(()),
-            _ => self.migrate(key, data),
+        // Whatever happens below but a clean append, index afresh next time.
+        self.free = None;
+        match free {
+            Some(at) => match self.append(page, at, key, data) {
+                Ok(next) => {
+                    self.note(Found {
+                        key,
+                        at: page * Self::PAGE + at + HEAD as u32,
+                        len: data.len(),
+                    });
+                    self.free = Some(next);
+                    Ok(())
+                }
+                Err(_) => self.migrate(key, data),
+            },
+            None => self.migrate(key, data),
         }
     }
 }

@@ -202,3 +202,52 @@ fn an_interrupted_page_move_loses_nothing() {
         assert_eq!(read(&mut m, 1), 168, "cut at {cut}");
     }
 }
+
+/// The map's index against a plain model: random keys and values, loads
+/// between stores, page moves, more keys than the index holds, and a
+/// fresh map over the same flash (which indexes from scratch) agreeing.
+#[test]
+fn the_index_reads_what_a_scan_reads() {
+    let mut map = FlashMap::new(Small::new());
+    let mut model = [None::<[u8; 4]>; 160];
+    let mut x: u32 = 12345;
+    for i in 0..3000u32 {
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        // Keys beyond the index's capacity after a while.
+        let span = if i < 1500 { 40 } else { 160 };
+        let key = (x % span) as usize;
+        let v = i.to_le_bytes();
+        map.store(key as u16, &v).expect("store");
+        model[key] = Some(v);
+        if i % 7 == 0 {
+            let probe = ((x >> 8) % 160) as usize;
+            let mut out = [0u8; 8];
+            let got = map.load(probe as u16, &mut out).expect("load");
+            assert_eq!(
+                got.map(|n| &out[..n]),
+                model[probe].as_ref().map(|v| &v[..])
+            );
+        }
+    }
+    let flash = map.flash().cloned().expect("flash");
+    assert!(flash.erases >= 2, "the pages moved: {}", flash.erases);
+    let mut fresh = FlashMap::new(flash);
+    for (key, want) in model.iter().enumerate() {
+        let mut a = [0u8; 8];
+        let mut b = [0u8; 8];
+        let got = map.load(key as u16, &mut a).expect("load");
+        let again = fresh.load(key as u16, &mut b).expect("load");
+        assert_eq!(
+            got.map(|n| &a[..n]),
+            want.as_ref().map(|v| &v[..]),
+            "key {key}"
+        );
+        assert_eq!(
+            again.map(|n| &b[..n]),
+            want.as_ref().map(|v| &v[..]),
+            "key {key}"
+        );
+    }
+}

@@ -345,12 +345,25 @@ fn trace() -> bool {
     *T.get_or_init(|| std::env::var_os("BURIN_FUZZ_TRACE").is_some())
 }
 
+/// The settings flash as the first power-up on erased flash leaves it.
+/// Every input starts from a copy: that first boot writes all 59 records
+/// (a fifth of an input's time), and it is the same for every input.
+fn booted_flash(cfg: &crate::config::MachineConfig) -> crate::device_sim::SimFlash {
+    static FLASH: std::sync::OnceLock<crate::device_sim::SimFlash> = std::sync::OnceLock::new();
+    FLASH
+        .get_or_init(|| {
+            let mut rec = Discard;
+            VirtualDevice::new(cfg, &mut rec).flash()
+        })
+        .clone()
+}
+
 pub fn device(data: &[u8]) {
     let mut cfg = super::executor::small_machine(false, false);
     cfg.host = HostModel::INSTANT;
     cfg.start_position_mm = [-10.0, -10.0, -1.0, 0.0];
     let mut rec = Discard;
-    let mut dev = VirtualDevice::new(&cfg, &mut rec);
+    let mut dev = VirtualDevice::with_flash(&cfg, &mut rec, booted_flash(&cfg));
     dev.log = Some(Vec::new());
     dev.tx.0.clear();
     let mut h = Harness {
