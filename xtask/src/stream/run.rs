@@ -276,6 +276,9 @@ impl<'a, T: Read + Write> Stream<'a, T> {
                 Some(left) => {
                     if !paused {
                         self.samples.push((active, left));
+                        if std::env::var_os("ETA_DEBUG").is_some() {
+                            eprintln!("DBG {active:.3} {} {left:.3} {:.5}", self.line_now, eta.drift());
+                        }
                     }
                     let tag = if paused { " (paused)" } else { "" };
                     self.ui.bar.set_prefix(format!("ETA {}{tag}", clock(left)));
