@@ -129,7 +129,11 @@ pub fn run_file_watched(
         let seq = dev.sim.rt.running().1;
         watch(Progress {
             tick: dev.sim.now(),
-            line: if seq == 0 { 0 } else { file_line(&seq_lines, seq) },
+            line: if seq == 0 {
+                0
+            } else {
+                file_line(&seq_lines, seq)
+            },
             stepping: dev.sim.rt.stepping(),
         });
         // The operator presses cycle start at a program pause.

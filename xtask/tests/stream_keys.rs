@@ -53,7 +53,7 @@ fn message_pause_key_hold_resume_and_end_position() {
         .current_dir(&dir);
     let mut s = Session::spawn(cmd).expect("stream in a pty");
     s.set_expect_timeout(Some(Duration::from_secs(60)));
-    let mut step = |s: &mut Session, what: &str| {
+    let step = |s: &mut Session, what: &str| {
         if let Err(e) = s.expect(what) {
             panic!("waiting for {what:?}: {e}");
         }
@@ -69,7 +69,10 @@ fn message_pause_key_hold_resume_and_end_position() {
     step(&mut s, "paused: held from the keyboard");
     s.send("~").expect("~");
     step(&mut s, "running again");
-    step(&mut s, "pause.gcode: finished: 6/6 lines sent, 0 error(s), 0 alarm(s)");
+    step(
+        &mut s,
+        "pause.gcode: finished: 6/6 lines sent, 0 error(s), 0 alarm(s)",
+    );
     // The virtual machine starts at its configured Z; X and Y are the job's.
     step(&mut s, "WPos X60.000 Y2.000 Z");
     let _ = std::fs::remove_dir_all(&dir);

@@ -67,6 +67,9 @@ const RECENT: usize = 8;
 /// The running estimate.
 pub struct Eta {
     profile: Profile,
+    /// The end is seen at the first status report after it: half a
+    /// report interval on average.
+    latency_s: f64,
     /// (active wall seconds, simulated seconds) where a line was first seen.
     anchors: Vec<(f64, f64)>,
     last_line: usize,
@@ -81,9 +84,10 @@ pub struct Eta {
 }
 
 impl Eta {
-    pub fn new(profile: Profile) -> Eta {
+    pub fn new(profile: Profile, latency_s: f64) -> Eta {
         Eta {
             profile,
+            latency_s,
             anchors: Vec::new(),
             last_line: 0,
             last_seen: 0.0,
@@ -126,12 +130,11 @@ impl Eta {
     /// (1 until the job has moved for a while).
     pub fn drift(&self) -> f64 {
         let d = self.n * self.sxx - self.sx * self.sx;
-        let span = self.anchors.last().map_or(0.0, |l| l.1) - self.anchors.first().map_or(0.0, |f| f.1);
-        if self.n < 2.0 || d <= 0.0 || span < 0.2 {
+        if self.n < 2.0 || d <= 0.0 {
             return 1.0;
         }
         let r = (self.n * self.sxy - self.sx * self.sy) / d;
-        if r.is_finite() && r > 0.0 {
+        if r.is_finite() && (1e-3..1e3).contains(&r) {
             r
         } else {
             1.0
@@ -149,7 +152,7 @@ impl Eta {
         let floor = self
             .next_start(self.last_line)
             .map_or(0.0, |n| r * (self.profile.total_s - n));
-        Some((end - active).max(floor).max(0.0))
+        Some((end - active).max(floor).max(0.0) + self.latency_s)
     }
 
     fn next_start(&self, line: usize) -> Option<f64> {
@@ -167,7 +170,7 @@ mod tests {
             starts: vec![0.0, 1.0, 2.0, f64::NAN, 3.0, 4.0],
             total_s: 5.0,
         };
-        let mut eta = Eta::new(profile);
+        let mut eta = Eta::new(profile, 0.0);
         assert_eq!(eta.remaining(0.0), None);
         // Twice as slow as simulated, a status report every 0.1 s.
         let line_at = |s: f64| match s {

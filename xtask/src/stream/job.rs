@@ -46,13 +46,15 @@ impl Job {
                 }
             }
             let mut kind = None;
-            for (letter, value) in &words {
-                match (letter, *value) {
-                    ('T', v) if v >= 0.0 => tool = Some(v as u32),
-                    ('M', v) if v == 0.0 => kind = Some(PauseKind::Stop),
-                    ('M', v) if v == 1.0 => kind = Some(PauseKind::Optional),
-                    ('M', v) if v == 6.0 => kind = Some(PauseKind::Tool(None)),
-                    ('M', v) if v == 117.0 => {
+            for &(letter, value) in &words {
+                // Whole numbers only: M0.5 is not M0.
+                let n = (value.fract() == 0.0 && value >= 0.0).then_some(value as u32);
+                match (letter, n) {
+                    ('T', Some(t)) => tool = Some(t),
+                    ('M', Some(0)) => kind = Some(PauseKind::Stop),
+                    ('M', Some(1)) => kind = Some(PauseKind::Optional),
+                    ('M', Some(6)) => kind = Some(PauseKind::Tool(None)),
+                    ('M', Some(117)) => {
                         let at = l.to_ascii_uppercase().find("M117").map_or(0, |p| p + 4);
                         messages.push((i + 1, l[at..].trim().to_string()));
                     }
@@ -63,7 +65,10 @@ impl Job {
                 if k == PauseKind::Tool(None) {
                     k = PauseKind::Tool(tool);
                 }
-                pauses.push(Pause { line: i + 1, kind: k });
+                pauses.push(Pause {
+                    line: i + 1,
+                    kind: k,
+                });
             }
         }
         Job {
@@ -140,9 +145,18 @@ mod tests {
         assert_eq!(
             j.pauses,
             vec![
-                Pause { line: 2, kind: PauseKind::Stop },
-                Pause { line: 4, kind: PauseKind::Tool(Some(3)) },
-                Pause { line: 5, kind: PauseKind::Optional },
+                Pause {
+                    line: 2,
+                    kind: PauseKind::Stop
+                },
+                Pause {
+                    line: 4,
+                    kind: PauseKind::Tool(Some(3))
+                },
+                Pause {
+                    line: 5,
+                    kind: PauseKind::Optional
+                },
             ]
         );
         assert_eq!(

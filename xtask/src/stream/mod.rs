@@ -139,7 +139,7 @@ pub fn stream_file(
             job.name,
             run::clock(profile.total_s)
         );
-        Some(eta::Eta::new(profile))
+        Some(eta::Eta::new(profile, o.status_every.as_secs_f64() / 2.0))
     } else {
         None
     };

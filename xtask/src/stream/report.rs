@@ -24,7 +24,7 @@ pub fn run(dir: &Path, speed: f64) -> Result<i32> {
         .collect();
     jobs.sort();
     let exe = std::env::current_exe()?;
-    println!("ETA against the real time left, sim --pty --speed {speed}, status every 20 ms");
+    println!("ETA against the real time left, sim --pty --speed {speed}, status every 5 ms");
     println!("| job | sim s | wall s | at 10 %: ETA / real s (err) | at 50 % | at 90 % |");
     println!("|---|---:|---:|---|---|---|");
     let mut worst: f64 = 0.0;
@@ -40,13 +40,15 @@ pub fn run(dir: &Path, speed: f64) -> Result<i32> {
         }
         let port = first.trim().to_string();
         let source = std::fs::read_to_string(path)?;
-        let name = path.file_name().map_or(String::new(), |n| n.to_string_lossy().into());
+        let name = path
+            .file_name()
+            .map_or(String::new(), |n| n.to_string_lossy().into());
         let opts = Options {
             check: false,
             resume_pauses: true,
             eta: true,
             interactive: false,
-            status_every: Duration::from_millis(20),
+            status_every: Duration::from_millis(5),
         };
         let result = stream_file(&port, Job::new(name.clone(), &source), &source, &opts);
         let _ = sim.kill();

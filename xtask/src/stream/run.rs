@@ -85,7 +85,10 @@ impl<'a, T: Read + Write> Stream<'a, T> {
     /// Wall seconds since the first line went out, pauses left out.
     pub fn active_s(&self) -> f64 {
         let Some(t0) = self.started else { return 0.0 };
-        let paused_now = self.pause.as_ref().map_or(0.0, |p| p.1.elapsed().as_secs_f64());
+        let paused_now = self
+            .pause
+            .as_ref()
+            .map_or(0.0, |p| p.1.elapsed().as_secs_f64());
         t0.elapsed().as_secs_f64() - self.paused_s - paused_now
     }
 
@@ -134,7 +137,9 @@ impl<'a, T: Read + Write> Stream<'a, T> {
                 Ok(None) => continue,
                 Err(e) => bail!("{e}"),
             };
-            let ClientEvent::Device(msg) = ev else { continue };
+            let ClientEvent::Device(msg) = ev else {
+                continue;
+            };
             match msg {
                 DeviceMsg::Msg(m) => {
                     if let Some(end) = self.on_msg(&m, check_seq.is_some() && done_sent) {
@@ -142,7 +147,10 @@ impl<'a, T: Read + Write> Stream<'a, T> {
                     }
                 }
                 DeviceMsg::Error { seq, code, .. } => {
-                    let line = seq.and_then(|s| self.seq_line.get(&s)).copied().unwrap_or(0);
+                    let line = seq
+                        .and_then(|s| self.seq_line.get(&s))
+                        .copied()
+                        .unwrap_or(0);
                     let text = self.error_text.take().unwrap_or_else(|| {
                         protocol::Code::from_code(code)
                             .map_or("device error", |c| c.message())
@@ -165,7 +173,8 @@ impl<'a, T: Read + Write> Stream<'a, T> {
     }
 
     fn error(&mut self, line: usize, code: u16, text: String) {
-        self.ui.say(format!("{}: error[{code}]: {text}", self.job.at(line)));
+        self.ui
+            .say(format!("{}: error[{code}]: {text}", self.job.at(line)));
         self.errors.push((line, code, text));
     }
 
@@ -184,7 +193,10 @@ impl<'a, T: Read + Write> Stream<'a, T> {
             .to_string();
         if let Some((line, code)) = self.alarm_wants_text.take() {
             let what = alarm_text(code);
-            self.ui.say(format!("{}: alarm[{code}]: {text}: {what}", self.job.at(line)));
+            self.ui.say(format!(
+                "{}: alarm[{code}]: {text}: {what}",
+                self.job.at(line)
+            ));
             return Some(Outcome::Alarm);
         }
         if let Some(rest) = text.strip_prefix("line ") {
@@ -209,7 +221,8 @@ impl<'a, T: Read + Write> Stream<'a, T> {
         if job.messages[..self.next_msg].iter().any(|(_, t)| same(t)) {
             return None;
         }
-        self.ui.say(format!("{}: message: {text}", self.job.at(self.line_now)));
+        self.ui
+            .say(format!("{}: message: {text}", self.job.at(self.line_now)));
         self.last_msg = Some((self.line_now, text));
         None
     }
@@ -223,7 +236,8 @@ impl<'a, T: Read + Write> Stream<'a, T> {
             if *line > upto {
                 break;
             }
-            self.ui.say(format!("{}: message: {text}", self.job.at(*line)));
+            self.ui
+                .say(format!("{}: message: {text}", self.job.at(*line)));
             self.last_msg = Some((*line, text.clone()));
             self.next_msg += 1;
         }
@@ -263,7 +277,8 @@ impl<'a, T: Read + Write> Stream<'a, T> {
                 self.paused_s += since.elapsed().as_secs_f64();
                 self.pause = None;
                 self.we_held = false;
-                self.ui.say(format!("{}: running again", self.job.at(self.line_now)));
+                self.ui
+                    .say(format!("{}: running again", self.job.at(self.line_now)));
             }
             _ => {}
         }
@@ -276,9 +291,6 @@ impl<'a, T: Read + Write> Stream<'a, T> {
                 Some(left) => {
                     if !paused {
                         self.samples.push((active, left));
-                        if std::env::var_os("ETA_DEBUG").is_some() {
-                            eprintln!("DBG {active:.3} {} {left:.3} {:.5}", self.line_now, eta.drift());
-                        }
                     }
                     let tag = if paused { " (paused)" } else { "" };
                     self.ui.bar.set_prefix(format!("ETA {}{tag}", clock(left)));
@@ -328,12 +340,14 @@ impl<'a, T: Read + Write> Stream<'a, T> {
             text += &format!("\n  last message ({}): {m}", self.job.at(*l));
         }
         if self.ui.interactive() {
-            text += "\n  Enter, space or ~ continues; x resets (aborts the job); Ctrl-C for the menu";
+            text +=
+                "\n  Enter, space or ~ continues; x resets (aborts the job); Ctrl-C for the menu";
         } else if self.resume_pauses {
             text += "\n  continuing (--resume-pauses)";
             self.client.realtime(Rt::CycleStart)?;
         } else {
-            text += "\n  waiting for cycle start (the board's start input, or ~ from another sender)";
+            text +=
+                "\n  waiting for cycle start (the board's start input, or ~ from another sender)";
         }
         self.ui.say(text);
         self.pause = Some((reason, Instant::now()));
@@ -373,7 +387,8 @@ impl<'a, T: Read + Write> Stream<'a, T> {
             Key::Feed100 => self.client.realtime(Rt::FeedOv100)?,
             Key::Status => self.detail(),
             Key::Reset => {
-                self.ui.say("soft reset aborts the job: press y to confirm, any other key keeps it");
+                self.ui
+                    .say("soft reset aborts the job: press y to confirm, any other key keeps it");
                 self.ask = Some(Ask::Reset);
             }
             Key::Interrupt if !self.ui.interactive() => {
@@ -386,7 +401,8 @@ impl<'a, T: Read + Write> Stream<'a, T> {
             }
             Key::Interrupt => {
                 self.hold()?;
-                self.ui.say("feed hold. [c]ontinue, [r]eset (abort the job), [q]uit leaving it held?");
+                self.ui
+                    .say("feed hold. [c]ontinue, [r]eset (abort the job), [q]uit leaving it held?");
                 self.ask = Some(Ask::Interrupt);
             }
             Key::Other(_) => {}
