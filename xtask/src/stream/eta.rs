@@ -104,9 +104,9 @@ impl Eta {
     }
 
     /// A status report at `active` seconds (wall time the machine was not
-    /// paused) said file line `line` runs.
+    /// paused) said file line `line` runs (0: none yet).
     pub fn observe(&mut self, active: f64, line: usize) {
-        if line != self.last_line {
+        if line != 0 && line != self.last_line {
             if let Some(s) = self.profile.start(line) {
                 // The line started between the previous report and this one.
                 let a = if self.anchors.is_empty() {

@@ -15,6 +15,7 @@
 mod board;
 mod eta;
 mod job;
+mod keys;
 mod pause;
 mod report;
 mod run;

@@ -95,3 +95,41 @@ pub fn wpos_text(st: &Status) -> String {
     let w = st.wpos();
     format!("X{:.3} Y{:.3} Z{:.3}", w[0], w[1], w[2])
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reasons_in_words() {
+        let held = Status {
+            state: MachineState::Hold,
+            ..Status::default()
+        };
+        let m6 = Some((12, PauseKind::Tool(Some(3))));
+        let r = Reason::from_status(&held, m6, false);
+        assert_eq!(r.describe(None), "tool change (M6): insert tool T3");
+        // The board's own message naming the tool wins over the file's T.
+        assert_eq!(
+            r.describe(Some("Change to tool 4 (6 mm end mill)")),
+            "tool change (M6): Change to tool 4 (6 mm end mill)"
+        );
+        assert_eq!(
+            Reason::from_status(&held, Some((4, PauseKind::Stop)), false).describe(None),
+            "program pause (M0)"
+        );
+        // A hold from the keyboard is not the M0 further down the file.
+        assert_eq!(Reason::from_status(&held, m6, true), Reason::Keyboard);
+        let door = Status {
+            pins: pins::DOOR,
+            ..held
+        };
+        assert_eq!(Reason::from_status(&door, m6, true), Reason::Door);
+        let input = Status {
+            pins: pins::HOLD,
+            ..held
+        };
+        assert_eq!(Reason::from_status(&input, None, false), Reason::HoldInput);
+        assert!(alarm_text(protocol::codes::alarm::HARD_LIMIT).contains("$X"));
+    }
+}

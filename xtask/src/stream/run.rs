@@ -4,7 +4,7 @@
 use super::eta::Eta;
 use super::job::Job;
 use super::pause::{alarm_text, is_pause, wpos_text, Reason};
-use super::term::{Key, Ui};
+use super::term::Ui;
 use super::Outcome;
 use anyhow::{bail, Result};
 use protocol::client::{Client, ClientError, ClientEvent};
@@ -15,7 +15,7 @@ use std::time::{Duration, Instant};
 
 /// A question waiting for its key.
 #[derive(Clone, Copy, PartialEq, Eq)]
-enum Ask {
+pub(super) enum Ask {
     Reset,
     Interrupt,
 }
@@ -38,17 +38,17 @@ pub struct Stream<'a, T> {
     pub paused_s: f64,
     pub samples: Vec<(f64, f64)>,
     pub started: Option<Instant>,
-    seq_line: HashMap<u32, usize>,
-    msg_part: String,
-    error_text: Option<String>,
-    alarm_wants_text: Option<(usize, u16)>,
-    last_msg: Option<(usize, String)>,
-    next_msg: usize,
-    next_pause: usize,
-    pause: Option<(Reason, Instant)>,
-    we_held: bool,
-    ask: Option<Ask>,
-    line_now: usize,
+    pub(super) seq_line: HashMap<u32, usize>,
+    pub(super) msg_part: String,
+    pub(super) error_text: Option<String>,
+    pub(super) alarm_wants_text: Option<(usize, u16)>,
+    pub(super) last_msg: Option<(usize, String)>,
+    pub(super) next_msg: usize,
+    pub(super) next_pause: usize,
+    pub(super) pause: Option<(Reason, Instant)>,
+    pub(super) we_held: bool,
+    pub(super) ask: Option<Ask>,
+    pub(super) line_now: usize,
 }
 
 impl<'a, T: Read + Write> Stream<'a, T> {
@@ -284,8 +284,9 @@ impl<'a, T: Read + Write> Stream<'a, T> {
         }
         let active = self.active_s();
         if let Some(eta) = &mut self.eta {
-            if !paused && st.state == MachineState::Run && self.line_now > 0 {
-                eta.observe(active, self.line_now);
+            if !paused {
+                let running = st.state == MachineState::Run;
+                eta.observe(active, if running { self.line_now } else { 0 });
             }
             match eta.remaining(active) {
                 Some(left) => {
@@ -352,94 +353,6 @@ impl<'a, T: Read + Write> Stream<'a, T> {
         self.ui.say(text);
         self.pause = Some((reason, Instant::now()));
         Ok(())
-    }
-
-    fn on_key(&mut self, k: Key) -> Result<Option<Outcome>> {
-        if let Some(ask) = self.ask.take() {
-            match (ask, k) {
-                (Ask::Reset, Key::Other('y')) | (Ask::Interrupt, Key::Other('r')) => {
-                    self.client.realtime(Rt::SoftReset)?;
-                    self.ui.say("soft reset: job aborted");
-                    return Ok(Some(Outcome::Reset));
-                }
-                (Ask::Interrupt, Key::Other('q')) | (Ask::Interrupt, Key::Interrupt) => {
-                    self.ui.say("quit: the machine is left in feed hold");
-                    return Ok(Some(Outcome::Interrupted));
-                }
-                (Ask::Interrupt, Key::Other('c')) => {
-                    self.client.realtime(Rt::CycleStart)?;
-                    return Ok(None);
-                }
-                _ => {
-                    self.ui.say("(cancelled)");
-                    return Ok(None);
-                }
-            }
-        }
-        let held = self.pause.is_some();
-        match k {
-            Key::Hold => self.hold()?,
-            Key::Resume => self.client.realtime(Rt::CycleStart)?,
-            Key::Toggle if held => self.client.realtime(Rt::CycleStart)?,
-            Key::Toggle => self.hold()?,
-            Key::FeedUp => self.client.realtime(Rt::FeedOvPlus10)?,
-            Key::FeedDown => self.client.realtime(Rt::FeedOvMinus10)?,
-            Key::Feed100 => self.client.realtime(Rt::FeedOv100)?,
-            Key::Status => self.detail(),
-            Key::Reset => {
-                self.ui
-                    .say("soft reset aborts the job: press y to confirm, any other key keeps it");
-                self.ask = Some(Ask::Reset);
-            }
-            Key::Interrupt if !self.ui.interactive() => {
-                // No one to ask: stop the motion, then the job.
-                self.client.realtime(Rt::FeedHold)?;
-                std::thread::sleep(Duration::from_millis(200));
-                self.client.realtime(Rt::SoftReset)?;
-                self.ui.say("interrupted: held and reset");
-                return Ok(Some(Outcome::Interrupted));
-            }
-            Key::Interrupt => {
-                self.hold()?;
-                self.ui
-                    .say("feed hold. [c]ontinue, [r]eset (abort the job), [q]uit leaving it held?");
-                self.ask = Some(Ask::Interrupt);
-            }
-            Key::Other(_) => {}
-        }
-        Ok(None)
-    }
-
-    fn hold(&mut self) -> Result<()> {
-        if self.pause.is_none() {
-            self.we_held = true;
-        }
-        self.client.realtime(Rt::FeedHold)?;
-        Ok(())
-    }
-
-    fn detail(&self) {
-        let Some(st) = &self.last else { return };
-        let m = st.mpos;
-        self.ui.say(format!(
-            "{}: {}{} MPos X{:.3} Y{:.3} Z{:.3} WPos {} F{:.0} S{:.0} Ov:{},{},{} Bf:{},{} lines sent {}/{}",
-            self.job.at(self.line_now),
-            st.state.name(),
-            if st.state.has_substate() { format!(":{}", st.substate) } else { String::new() },
-            m[0],
-            m[1],
-            m[2],
-            wpos_text(st),
-            st.feed,
-            st.spindle,
-            st.overrides.feed,
-            st.overrides.rapid,
-            st.overrides.spindle,
-            st.planner_free,
-            st.rx_free,
-            self.sent,
-            self.job.lines.len()
-        ));
     }
 }
 

@@ -30,8 +30,9 @@ pub enum Key {
     Other(char),
 }
 
+/// The key help under the bar (fits 80 columns).
 pub const HELP: &str =
-    "keys: space/!/~/Enter hold·resume  +/- feed ±10%  0 feed 100%  s status  x reset  Ctrl-C menu";
+    "space/! hold  ~/Enter resume  +/- feed ±10%  0 100%  s status  x reset  ^C menu";
 
 /// Ctrl-C without a terminal (a signal; in raw mode it is a key).
 static INTERRUPTED: AtomicBool = AtomicBool::new(false);
