@@ -23,12 +23,14 @@ impl<T: Read + Write> Stream<'_, T> {
                     self.ui.say("quit: the machine is left in feed hold");
                     return Ok(Some(Outcome::Interrupted));
                 }
-                (Ask::Interrupt, Key::Other('c')) => {
+                (Ask::Interrupt, Key::Other('c')) | (Ask::Interrupt, Key::Resume) => {
                     self.client.realtime(Rt::CycleStart)?;
                     return Ok(None);
                 }
-                _ => {
-                    self.ui.say("(cancelled)");
+                // The menu stays open; other keys do what they always do.
+                (Ask::Interrupt, _) => self.ask = Some(Ask::Interrupt),
+                (Ask::Reset, _) => {
+                    self.ui.say("(reset cancelled)");
                     return Ok(None);
                 }
             }

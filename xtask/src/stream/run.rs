@@ -41,6 +41,8 @@ pub struct Stream<'a, T> {
     pub(super) seq_line: HashMap<u32, usize>,
     pub(super) msg_part: String,
     pub(super) error_text: Option<String>,
+    /// A board message not yet shown: it may be the next error's text.
+    pub(super) held_msg: Option<String>,
     pub(super) alarm_wants_text: Option<(usize, u16)>,
     pub(super) last_msg: Option<(usize, String)>,
     pub(super) next_msg: usize,
@@ -71,6 +73,7 @@ impl<'a, T: Read + Write> Stream<'a, T> {
             seq_line: HashMap::new(),
             msg_part: String::new(),
             error_text: None,
+            held_msg: None,
             alarm_wants_text: None,
             last_msg: None,
             next_msg: 0,
@@ -140,6 +143,14 @@ impl<'a, T: Read + Write> Stream<'a, T> {
             let ClientEvent::Device(msg) = ev else {
                 continue;
             };
+            // A board message right before an error is that error's text;
+            // before anything else it is for the operator.
+            if let Some(text) = self.held_msg.take() {
+                match msg {
+                    DeviceMsg::Error { .. } => self.error_text = Some(text),
+                    _ => self.board_message(text),
+                }
+            }
             match msg {
                 DeviceMsg::Msg(m) => {
                     if let Some(end) = self.on_msg(&m, check_seq.is_some() && done_sent) {
@@ -151,6 +162,7 @@ impl<'a, T: Read + Write> Stream<'a, T> {
                         .and_then(|s| self.seq_line.get(&s))
                         .copied()
                         .unwrap_or(0);
+                    self.flush_messages(line.saturating_sub(1));
                     let text = self.error_text.take().unwrap_or_else(|| {
                         protocol::Code::from_code(code)
                             .map_or("device error", |c| c.message())
@@ -191,7 +203,18 @@ impl<'a, T: Read + Write> Stream<'a, T> {
             .trim_end_matches(']')
             .trim()
             .to_string();
-        if let Some((line, code)) = self.alarm_wants_text.take() {
+        if let Some((mut line, code)) = self.alarm_wants_text.take() {
+            // The line that was running when it stopped (a report in Alarm
+            // still names it).
+            if let Ok(Some(st)) = super::board::query_status(&mut self.client) {
+                if let Some(&l) = st.line.and_then(|s| self.seq_line.get(&s)) {
+                    line = l;
+                    if let Some(a) = self.alarms.last_mut() {
+                        a.0 = l;
+                    }
+                }
+                self.last = Some(st);
+            }
             let what = alarm_text(code);
             self.ui.say(format!(
                 "{}: alarm[{code}]: {text}: {what}",
@@ -210,21 +233,26 @@ impl<'a, T: Read + Write> Stream<'a, T> {
         if text == "Enabled" || text == "Disabled" {
             return (leaving_check && text == "Disabled").then_some(Outcome::Done);
         }
-        // The board's copy of a `(MSG,…)` in the file: shown with its line.
+        self.held_msg = Some(text);
+        None
+    }
+
+    /// A message from the board for the operator: the board's copy of a
+    /// `(MSG,…)` in the file is shown with that file line.
+    fn board_message(&mut self, text: String) {
         let same = |t: &String| t.starts_with(text.as_str()) || text.starts_with(t.as_str());
         let job = self.job;
         let ahead = &job.messages[self.next_msg.min(job.messages.len())..];
         if let Some(i) = ahead.iter().position(|(_, t)| same(t)) {
             self.flush_messages(ahead[i].0);
-            return None;
+            return;
         }
         if job.messages[..self.next_msg].iter().any(|(_, t)| same(t)) {
-            return None;
+            return;
         }
         self.ui
             .say(format!("{}: message: {text}", self.job.at(self.line_now)));
         self.last_msg = Some((self.line_now, text));
-        None
     }
 
     /// The job's own messages up to file line `upto`: the board runs lines
