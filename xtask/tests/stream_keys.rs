@@ -77,3 +77,57 @@ fn message_pause_key_hold_resume_and_end_position() {
     step(&mut s, "WPos X60.000 Y2.000 Z");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Without a terminal: no prompts, `--resume-pauses` goes on by itself,
+/// errors read `FILE:LINE: error[CODE]: text` (the board's text), and the exit code says the
+/// job ran to its end with rejected lines (1).
+#[test]
+fn without_a_terminal_pauses_resume_and_the_exit_code_tells() {
+    let exe = env!("CARGO_BIN_EXE_xtask");
+    let dir = std::env::temp_dir().join(format!("burin-stream-pipe-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    std::fs::write(
+        dir.join("pipe.gcode"),
+        "G21 G90\n(MSG,hello)\nG1 X1\nM0\nG0 X3 Y1\n",
+    )
+    .expect("job file");
+    let mut dev = KillOnDrop(
+        Command::new(exe)
+            .args(["sim", "--pty", "--speed", "100"])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("start the virtual device"),
+    );
+    let mut first = String::new();
+    BufReader::new(dev.0.stdout.take().expect("stdout"))
+        .read_line(&mut first)
+        .expect("device path line");
+    let out = Command::new(exe)
+        .args([
+            "stream",
+            "pipe.gcode",
+            "--resume-pauses",
+            "--port",
+            first.trim(),
+        ])
+        .current_dir(&dir)
+        .stdin(Stdio::null())
+        .output()
+        .expect("run the streamer");
+    let text = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{text}");
+    for want in [
+        "pipe.gcode:2: message: hello",
+        "pipe.gcode:3: error[",
+        "pipe.gcode:4: paused: program pause (M0)",
+        "continuing (--resume-pauses)",
+        "pipe.gcode: finished: 5/5 lines sent, 1 error(s), 0 alarm(s)",
+        "WPos X3.000 Y1.000",
+    ] {
+        assert!(text.contains(want), "{want:?} missing from:\n{text}");
+    }
+    // The board's own words for the error, not a placeholder.
+    assert!(!text.contains("device error"), "{text}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
