@@ -6,17 +6,22 @@ use super::run::{Ask, Stream};
 use super::term::Key;
 use super::Outcome;
 use anyhow::Result;
-use protocol::Rt;
+use protocol::{MachineState, Rt};
 use std::io::{Read, Write};
 use std::time::Duration;
+
+/// A reset with motion left in the planner is an alarm (3) on burin, as on
+/// GRBL: the held motion is gone and the position is not trusted.
+const AFTER_RESET: &str =
+    "soft reset: job aborted; the machine is in alarm: unlock with $X or home with $H";
 
 impl<T: Read + Write> Stream<'_, T> {
     pub(super) fn on_key(&mut self, k: Key) -> Result<Option<Outcome>> {
         if let Some(ask) = self.ask.take() {
             match (ask, k) {
                 (Ask::Reset, Key::Other('y')) | (Ask::Interrupt, Key::Other('r')) => {
-                    self.client.realtime(Rt::SoftReset)?;
-                    self.ui.say("soft reset: job aborted");
+                    self.stop_and_reset()?;
+                    self.ui.say(AFTER_RESET);
                     return Ok(Some(Outcome::Reset));
                 }
                 (Ask::Interrupt, Key::Other('q')) | (Ask::Interrupt, Key::Interrupt) => {
@@ -47,15 +52,13 @@ impl<T: Read + Write> Stream<'_, T> {
             Key::Status => self.detail(),
             Key::Reset => {
                 self.ui
-                    .say("soft reset aborts the job: press y to confirm, any other key keeps it");
+                    .say("soft reset aborts the job (the machine then needs $X or $H): y confirms, any other key keeps it");
                 self.ask = Some(Ask::Reset);
             }
             Key::Interrupt if !self.ui.interactive() => {
                 // No one to ask: stop the motion, then the job.
-                self.client.realtime(Rt::FeedHold)?;
-                std::thread::sleep(Duration::from_millis(200));
-                self.client.realtime(Rt::SoftReset)?;
-                self.ui.say("interrupted: held and reset");
+                self.stop_and_reset()?;
+                self.ui.say(AFTER_RESET);
                 return Ok(Some(Outcome::Interrupted));
             }
             Key::Interrupt => {
@@ -67,6 +70,24 @@ impl<T: Read + Write> Stream<'_, T> {
             Key::Other(_) => {}
         }
         Ok(None)
+    }
+
+    /// Hold, wait until the hold has stopped (`Hold:0`), then reset: a
+    /// reset while still moving would lose the position (alarm 3).
+    fn stop_and_reset(&mut self) -> Result<()> {
+        self.client.realtime(Rt::FeedHold)?;
+        let t0 = std::time::Instant::now();
+        while t0.elapsed() < Duration::from_secs(10) {
+            match super::board::query_status(&mut self.client)? {
+                Some(st) if st.state == MachineState::Hold && st.substate == 0 => break,
+                Some(st) if st.state != MachineState::Run && st.state != MachineState::Hold => {
+                    break
+                }
+                _ => std::thread::sleep(Duration::from_millis(20)),
+            }
+        }
+        self.client.realtime(Rt::SoftReset)?;
+        Ok(())
     }
 
     fn hold(&mut self) -> Result<()> {
