@@ -13,7 +13,7 @@ use std::time::Duration;
 /// A reset with motion left in the planner is an alarm (3) on burin, as on
 /// GRBL: the held motion is gone and the position is not trusted.
 const AFTER_RESET: &str =
-    "soft reset: job aborted; the machine is in alarm: unlock with $X or home with $H";
+    "soft reset: job aborted; the machine is in alarm if motion was left: unlock with $X or home with $H";
 
 impl<T: Read + Write> Stream<'_, T> {
     pub(super) fn on_key(&mut self, k: Key) -> Result<Option<Outcome>> {
