@@ -28,6 +28,7 @@ pub fn run(dir: &Path, speed: f64) -> Result<i32> {
     println!("| job | sim s | wall s | at 10 %: ETA / real s (err) | at 50 % | at 90 % |");
     println!("|---|---:|---:|---|---|---|");
     let mut worst: f64 = 0.0;
+    let (mut within, mut points) = (0, 0);
     for path in &jobs {
         let mut sim = Command::new(&exe)
             .args(["sim", "--pty", "--speed", &speed.to_string()])
@@ -66,6 +67,10 @@ pub fn run(dir: &Path, speed: f64) -> Result<i32> {
                     let real = run_s - a;
                     let err = (eta - real) / real * 100.0;
                     worst = worst.max(err.abs());
+                    points += 1;
+                    if err.abs() <= 2.0 {
+                        within += 1;
+                    }
                     cells.push(format!("{eta:.2} / {real:.2} ({err:+.1} %)"));
                 }
                 None => cells.push("-".into()),
@@ -77,6 +82,6 @@ pub fn run(dir: &Path, speed: f64) -> Result<i32> {
             cells.join(" | ")
         );
     }
-    println!("worst |error|: {worst:.1} %");
+    println!("within 2 %: {within} of {points} points; worst |error|: {worst:.1} %");
     Ok(0)
 }
