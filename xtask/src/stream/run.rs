@@ -288,13 +288,15 @@ impl<'a, T: Read + Write> Stream<'a, T> {
         ));
         self.last = Some(st);
         if st.state == MachineState::Alarm {
-            if self.alarms.is_empty() {
-                self.alarms.push((self.line_now, 0));
-                self.ui.say(format!(
-                    "{}: alarm: the machine is in alarm; {}",
-                    self.job.at(self.line_now),
-                    alarm_text(0)
-                ));
+            // An alarm whose text never came, or none announced at all.
+            let (line, code) = self.alarm_wants_text.take().unwrap_or((self.line_now, 0));
+            if self.alarms.is_empty() || code != 0 {
+                if self.alarms.is_empty() {
+                    self.alarms.push((line, code));
+                }
+                let at = self.job.at(line);
+                self.ui
+                    .say(format!("{at}: alarm[{code}]: {}", alarm_text(code)));
             }
             return Ok(Some(Outcome::Alarm));
         }
