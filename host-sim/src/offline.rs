@@ -30,6 +30,31 @@ const IDLE_STEP_S: f64 = 0.01;
 /// Stream `source` into a fresh virtual board on `config`; the recorder
 /// gets the board's steps and commanded path.
 pub fn run_file(config: &MachineConfig, source: &str, recorder: &mut dyn Recorder) -> Summary {
+    run_file_watched(config, source, recorder, &mut |_| {})
+}
+
+/// What the board is doing after one round of [`run_file_watched`]: the
+/// same facts its status report gives (`Ln:`), in virtual time, so a
+/// streamer can turn the line a real board reports into time left.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Progress {
+    /// Virtual time, in timer ticks.
+    pub tick: u64,
+    /// File line (1-based) of the segment the stepper runs; 0 before the
+    /// first motion.
+    pub line: u32,
+    /// The step timer runs (a move or a dwell).
+    pub stepping: bool,
+}
+
+/// [`run_file`], calling `watch` after every round (at most
+/// `IDLE_STEP_S` of virtual time apart, more often while the board talks).
+pub fn run_file_watched(
+    config: &MachineConfig,
+    source: &str,
+    recorder: &mut dyn Recorder,
+    watch: &mut dyn FnMut(Progress),
+) -> Summary {
     let mut dev = VirtualDevice::new(config, recorder);
     // The power-up banner went out before the sender connected.
     let _ = dev.take_output();
@@ -101,6 +126,16 @@ pub fn run_file(config: &MachineConfig, source: &str, recorder: &mut dyn Recorde
                 _ => {}
             }
         }
+        let seq = dev.sim.rt.running().1;
+        watch(Progress {
+            tick: dev.sim.now(),
+            line: if seq == 0 {
+                0
+            } else {
+                file_line(&seq_lines, seq)
+            },
+            stepping: dev.sim.rt.stepping(),
+        });
         // The operator presses cycle start at a program pause.
         if paused(&dev) {
             let _ = client.realtime(Rt::CycleStart);

@@ -55,7 +55,7 @@ fn stream_demo_job_through_the_pty() {
     let cfg = host_sim::config::MachineConfig::default();
     let s = host_sim::engine::run_job(&cfg, &job, &mut host_sim::record::Discard);
     let p = s.final_position_mm;
-    let want = format!("MPos:{:.3},{:.3},{:.3},{:.3}", p[0], p[1], p[2], p[3]);
+    let want = format!("final MPos X{:.3} Y{:.3} Z{:.3}", p[0], p[1], p[2]);
     assert!(text.contains(&want), "expected {want}, got: {text}");
     std::thread::sleep(Duration::from_millis(10));
 }
