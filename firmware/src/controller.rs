@@ -27,11 +27,7 @@ use crate::settings::Settings;
 use crate::stepper::prep::SegmentSink;
 use crate::stepper::Switches;
 
-/// The session runs only with this much room for replies: it holds the
-/// longest burst one pass writes (a `$$` listing is about 600 bytes), so a
-/// reply is never dropped; reading the link just pauses while the host is
-/// slow to read.
-pub const TX_HEADROOM: usize = 768;
+pub use crate::session::TX_HEADROOM;
 
 /// What the shell reports at the start of a pass.
 #[derive(Clone, Copy, Debug, Default)]
@@ -178,8 +174,12 @@ impl<S: Storage> Controller<S> {
             link.asm.flush_reset(link.rx, link.flags);
         }
         for _ in 0..2 {
+            // Realtime commands act whatever the link does; only the
+            // reading of new input waits for reply room.
             if tx.room() >= TX_HEADROOM {
                 self.session.poll(&mut link, &mut core, tx);
+            } else {
+                self.session.poll_realtime(&mut link, &mut core, tx);
             }
             // A soft reset (0x18, e-stop) stops spindle and coolant.
             if self.session.stats.resets != self.resets {
@@ -240,8 +240,8 @@ impl<R: TokenSource> LinkPort for TaskLink<'_, R> {
     fn poll(&mut self) -> Option<LinkEvent<'_>> {
         self.asm.poll(self.rx)
     }
-    fn take_realtime(&mut self) -> RtSet {
-        let set = self.flags.take();
+    fn take_realtime(&mut self, mask: u32) -> RtSet {
+        let set = self.flags.take_masked(mask);
         if set.contains(protocol::Rt::SoftReset) {
             // Input from before the reset is void.
             self.asm.flush_reset(self.rx, self.flags);

@@ -19,9 +19,10 @@
 //!    `RxSplitter` into the token ring (realtime bytes flag at once), reply
 //!    bytes out of the TX ring;
 //!    `cycle_start`, `feed_hold`, `probe` (EXTI0, EXTI1, EXTI3) share this
-//!    level: they only mask their line and record the edge; the heartbeat
-//!    acts once the level has settled (a button must not act on a glitch,
-//!    and their action goes through the session like `~`/`!` anyway);
+//!    level: they mask their line and record the edge; a hold raises its
+//!    flag at once (like `!`), cycle start and the probe wait for the
+//!    heartbeat to see the level settled (a start must not act on a
+//!    glitch); both act through the session like `~`/`!`;
 //! 1. `parse` (async software task): the device session (`burin::session`:
 //!    parser, interpreter, executor) and `Machine::poll` (planner, segment
 //!    preparer). It sleeps on a wake channel the other tasks signal.
@@ -169,6 +170,7 @@ mod app {
         wake_limit_x: Wake,
         wake_limit_yz: Wake,
         wake_estop: Wake,
+        wake_hold: Wake,
         watchdog: IndependentWatchdog,
     }
 
@@ -347,6 +349,7 @@ mod app {
                 wake_limit_x: wake_step.clone(),
                 wake_limit_yz: wake_step.clone(),
                 wake_estop: wake_step.clone(),
+                wake_hold: wake_step.clone(),
                 wake_beat: wake_step,
                 watchdog,
             },
@@ -403,10 +406,12 @@ mod app {
         crate::inputs::take_edges(pac::Interrupt::EXTI0, inp::CYCLE_START);
     }
 
-    /// Feed hold (PA1), as cycle start.
-    #[task(binds = EXTI1, priority = 2)]
-    fn feed_hold(_: feed_hold::Context) {
-        crate::inputs::take_edges(pac::Interrupt::EXTI1, inp::FEED_HOLD);
+    /// Feed hold (PA1): acts on the first edge, as `!` from the host.
+    #[task(binds = EXTI1, priority = 2, local = [wake_hold])]
+    fn feed_hold(cx: feed_hold::Context) {
+        if crate::inputs::on_feed_hold() {
+            let _ = cx.local.wake_hold.try_send(());
+        }
     }
 
     /// Probe (PA3): only its `Pn:` bit; probing itself is timed by the

@@ -61,6 +61,18 @@ pub const CMD_SLOTS: usize = 2 * LINE_COMMANDS;
 /// Framed job lines acknowledged but not yet interpreted (the credits).
 pub const LINE_SLOTS: usize = 8;
 
+/// The session reads new input only with this much room for replies: it
+/// holds the longest burst one event writes (a `$$` listing is about 600
+/// bytes), so a reply is never dropped; reading the link just pauses while
+/// the host is slow to read. Realtime commands do not wait for it
+/// ([`Device::poll_realtime`]).
+pub const TX_HEADROOM: usize = 768;
+
+/// Reply room a status query or a soft reset needs before it is acted on
+/// (a full text status report, or alarm + banner + unlock hint, with room
+/// to spare).
+pub const RT_REPLY_ROOM: usize = 256;
+
 /// Static facts for `$I` and the handshake.
 #[derive(Clone, Copy, Debug)]
 pub struct Identity {
@@ -196,15 +208,15 @@ impl<S: Storage> Device<S> {
     /// One pass of the parse/plan task: realtime first, then alarms, then
     /// feeding the executor, then new input as far as there is room.
     pub fn poll(&mut self, link: &mut impl LinkPort, m: &mut impl MotionPort, tx: &mut impl Tx) {
-        let rt = link.take_realtime();
-        for r in rt.iter() {
-            let framed = link.framed();
-            let rx_free = protocol::RX_WINDOW.saturating_sub(link.rx_pending()) as u16;
-            self.realtime(r, rx_free, m, &mut Out::new(tx, framed));
-        }
+        self.poll_realtime(link, m, tx);
         self.watch(m, &mut Out::new(tx, link.framed()));
         loop {
             self.feed(m, tx, link.framed());
+            // Each event may write a burst (a `$$` listing): take the next
+            // one only while the longest burst still fits.
+            if tx.room() < TX_HEADROOM {
+                break;
+            }
             // The splitter runs ahead: when it is framed, a switch to frames
             // is on its way and whatever text precedes it has no listener.
             if !(link.events_framed() || link.framed() || self.can_take()) {
@@ -231,6 +243,30 @@ impl<S: Storage> Device<S> {
         let mut o = Out::new(tx, true);
         if link.framed() {
             self.port.refresh(free, &mut |msg| o.frame(msg));
+        }
+    }
+
+    /// The realtime half of [`Self::poll`], which the shell runs on its
+    /// own while the reply ring is too full to read new input: hold, cycle
+    /// start, jog cancel and the overrides write nothing and act at once;
+    /// a status query or a soft reset waits until its reply fits
+    /// ([`RT_REPLY_ROOM`]), so no reply is ever cut.
+    pub fn poll_realtime(
+        &mut self,
+        link: &mut impl LinkPort,
+        m: &mut impl MotionPort,
+        tx: &mut impl Tx,
+    ) {
+        let replying = protocol::Rt::SoftReset.bit() | protocol::Rt::StatusQuery.bit();
+        let mask = if tx.room() >= RT_REPLY_ROOM {
+            u32::MAX
+        } else {
+            !replying
+        };
+        for r in link.take_realtime(mask).iter() {
+            let framed = link.framed();
+            let rx_free = protocol::RX_WINDOW.saturating_sub(link.rx_pending()) as u16;
+            self.realtime(r, rx_free, m, &mut Out::new(tx, framed));
         }
     }
 
