@@ -435,6 +435,9 @@ impl<S: Storage> Device<S> {
         if !m.motion_idle() {
             return Err(protocol::Code::NotIdle.code());
         }
+        if self.interp.outputs_on() {
+            return Err(protocol::Code::OutputsOn.code());
+        }
         m.set_setting(n, value).map_err(|e| e.code().code())?;
         self.save_settings(m, o);
         Ok(())
