@@ -182,7 +182,7 @@ fn laser_power_follows_each_segment() {
     assert!(of(4).any(|s| s.3 < 0.4), "no M4 scaling seen");
     assert!(of(3).any(|s| s.3 > 0.99), "never at full power");
     // S500 arrived between the two G1 moves without a stop at X10.
-    let last3 = of(3).last().expect("line 3 ran");
+    let last3 = of(3).next_back().expect("line 3 ran");
     let first4 = of(4).next().expect("line 4 ran");
     assert!(
         last3.1 > 500.0 && first4.1 > 500.0,
