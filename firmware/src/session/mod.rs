@@ -45,6 +45,7 @@ mod sys;
 
 pub use out::{Out, Tx};
 pub use ports::{LinkPort, MotionPort};
+pub use sys::RT_REPLY_ROOM;
 
 use crate::command::Command;
 use crate::executor::{self, MachineError};
@@ -67,11 +68,6 @@ pub const LINE_SLOTS: usize = 8;
 /// the host is slow to read. Realtime commands do not wait for it
 /// ([`Device::poll_realtime`]).
 pub const TX_HEADROOM: usize = 768;
-
-/// Reply room a status query or a soft reset needs before it is acted on
-/// (a full text status report, or alarm + banner + unlock hint, with room
-/// to spare).
-pub const RT_REPLY_ROOM: usize = 256;
 
 /// Static facts for `$I` and the handshake.
 #[derive(Clone, Copy, Debug)]
@@ -243,30 +239,6 @@ impl<S: Storage> Device<S> {
         let mut o = Out::new(tx, true);
         if link.framed() {
             self.port.refresh(free, &mut |msg| o.frame(msg));
-        }
-    }
-
-    /// The realtime half of [`Self::poll`], which the shell runs on its
-    /// own while the reply ring is too full to read new input: hold, cycle
-    /// start, jog cancel and the overrides write nothing and act at once;
-    /// a status query or a soft reset waits until its reply fits
-    /// ([`RT_REPLY_ROOM`]), so no reply is ever cut.
-    pub fn poll_realtime(
-        &mut self,
-        link: &mut impl LinkPort,
-        m: &mut impl MotionPort,
-        tx: &mut impl Tx,
-    ) {
-        let replying = protocol::Rt::SoftReset.bit() | protocol::Rt::StatusQuery.bit();
-        let mask = if tx.room() >= RT_REPLY_ROOM {
-            u32::MAX
-        } else {
-            !replying
-        };
-        for r in link.take_realtime(mask).iter() {
-            let framed = link.framed();
-            let rx_free = protocol::RX_WINDOW.saturating_sub(link.rx_pending()) as u16;
-            self.realtime(r, rx_free, m, &mut Out::new(tx, framed));
         }
     }
 
