@@ -18,7 +18,7 @@
 use crate::command::{Command, Pos};
 use crate::executor::{self, Machine, MachineError, Note, State};
 use crate::link::{LineAssembler, LinkEvent, LinkMode, RtFlags, RtSet, TokenSource};
-use crate::outputs::{Enable, Motion, Outputs, Spindle};
+use crate::outputs::{Enable, LaserQueue, Motion, Outputs, Spindle};
 use crate::realtime::Realtime;
 use crate::seams::Storage;
 use crate::session::{Device, LinkPort, MotionPort, Tx};
@@ -27,11 +27,7 @@ use crate::settings::Settings;
 use crate::stepper::prep::SegmentSink;
 use crate::stepper::Switches;
 
-/// The session runs only with this much room for replies: it holds the
-/// longest burst one pass writes (a `$$` listing is about 600 bytes), so a
-/// reply is never dropped; reading the link just pauses while the host is
-/// slow to read.
-pub const TX_HEADROOM: usize = 768;
+pub use crate::session::TX_HEADROOM;
 
 /// What the shell reports at the start of a pass.
 #[derive(Clone, Copy, Debug, Default)]
@@ -98,6 +94,7 @@ pub struct Controller<S: Storage> {
     pub session: Device<S>,
     asm: LineAssembler,
     outputs: Outputs,
+    laser: LaserQueue,
     enable: Enable,
     resets: u32,
     /// The segment generation the last pass saw, and whether a flush since
@@ -114,6 +111,7 @@ impl<S: Storage> Controller<S> {
             session,
             asm: LineAssembler::new(),
             outputs: Outputs::new(settings),
+            laser: LaserQueue::new(),
             enable: Enable::new(settings.idle_delay_ms, wake_ms),
             resets,
             generation: 0,
@@ -168,6 +166,7 @@ impl<S: Storage> Controller<S> {
             segments,
             rt,
             outputs: &mut self.outputs,
+            laser: &mut self.laser,
             pins: input.pins,
             obs,
         };
@@ -178,13 +177,18 @@ impl<S: Storage> Controller<S> {
             link.asm.flush_reset(link.rx, link.flags);
         }
         for _ in 0..2 {
+            // Realtime commands act whatever the link does; only the
+            // reading of new input waits for reply room.
             if tx.room() >= TX_HEADROOM {
                 self.session.poll(&mut link, &mut core, tx);
+            } else {
+                self.session.poll_realtime(&mut link, &mut core, tx);
             }
             // A soft reset (0x18, e-stop) stops spindle and coolant.
             if self.session.stats.resets != self.resets {
                 self.resets = self.session.stats.resets;
                 core.outputs.all_off();
+                core.laser.clear();
             }
             core.poll(input.switches);
         }
@@ -206,16 +210,25 @@ impl<S: Storage> Controller<S> {
         let alarm = state == State::Alarm || self.session.sleeping();
         if alarm {
             core.outputs.all_off();
+            core.laser.clear();
         }
+        // Laser mode: spindle commands apply as their line starts to run,
+        // all of them once the motion has stopped.
+        let running = (busy && !core.laser.is_empty()).then(|| rt.running().1);
+        core.laser.release(core.outputs, running);
         let enable = self
             .enable
             .update(input.now_ms, busy, state == State::Hold, alarm);
-        // Laser mode cannot yet tell a rapid from a feed here: it fires
-        // whenever steps run (see README).
-        let motion = if busy {
-            Motion::Feed { ratio: 1.0 }
-        } else {
+        // Laser mode: the beam follows the segment the step interrupt runs
+        // (`Segment::cut`): dark on rapids, waits and dwells, in a hold and
+        // when stopped; M4 scales with that segment's speed.
+        let cut = rt.running_cut();
+        let motion = if !stepping || state == State::Hold {
             Motion::Stopped
+        } else if cut > 0.0 {
+            Motion::Feed { ratio: cut }
+        } else {
+            Motion::Rapid
         };
         Pass {
             pins: Pins {
@@ -240,8 +253,8 @@ impl<R: TokenSource> LinkPort for TaskLink<'_, R> {
     fn poll(&mut self) -> Option<LinkEvent<'_>> {
         self.asm.poll(self.rx)
     }
-    fn take_realtime(&mut self) -> RtSet {
-        let set = self.flags.take();
+    fn take_realtime(&mut self, mask: u32) -> RtSet {
+        let set = self.flags.take_masked(mask);
         if set.contains(protocol::Rt::SoftReset) {
             // Input from before the reset is void.
             self.asm.flush_reset(self.rx, self.flags);
@@ -265,15 +278,20 @@ struct Core<'a, Q, const N: usize> {
     segments: &'a mut Q,
     rt: &'a Realtime,
     outputs: &'a mut Outputs,
+    laser: &'a mut LaserQueue,
     pins: u16,
     obs: &'a mut dyn FnMut(Event),
 }
 
 /// Spindle and coolant commands reach the outputs as the executor runs
 /// them: in program order, synced with motion.
-fn note(outputs: &mut Outputs, obs: &mut dyn FnMut(Event), n: Note) {
-    if let Note::Executed { command, .. } = &n {
-        outputs.apply(command);
+fn note(outputs: &mut Outputs, laser: &mut LaserQueue, obs: &mut dyn FnMut(Event), n: Note) {
+    if let Note::Executed { command, line } = &n {
+        if outputs.laser() {
+            laser.push(outputs, *line, command);
+        } else {
+            outputs.apply(command);
+        }
     }
     obs(Event::Note(&n));
 }
@@ -281,9 +299,10 @@ fn note(outputs: &mut Outputs, obs: &mut dyn FnMut(Event), n: Note) {
 impl<Q: SegmentSink, const N: usize> Core<'_, Q, N> {
     /// Background work of the executor: fill the segment queue.
     fn poll(&mut self, sw: Switches) {
-        let (outputs, obs) = (&mut *self.outputs, &mut *self.obs);
-        self.machine
-            .poll(self.rt, self.segments, sw, &mut |n| note(outputs, obs, n));
+        let (outputs, laser, obs) = (&mut *self.outputs, &mut *self.laser, &mut *self.obs);
+        self.machine.poll(self.rt, self.segments, sw, &mut |n| {
+            note(outputs, laser, obs, n)
+        });
     }
 }
 
@@ -295,9 +314,9 @@ impl<Q: SegmentSink, const N: usize> MotionPort for Core<'_, Q, N> {
         self.machine.ready()
     }
     fn submit(&mut self, cmd: &Command, line: u32) -> Result<(), MachineError> {
-        let (outputs, obs) = (&mut *self.outputs, &mut *self.obs);
+        let (outputs, laser, obs) = (&mut *self.outputs, &mut *self.laser, &mut *self.obs);
         self.machine
-            .submit(self.rt, cmd, line, &mut |n| note(outputs, obs, n))?;
+            .submit(self.rt, cmd, line, &mut |n| note(outputs, laser, obs, n))?;
         (self.obs)(Event::Accepted {
             line,
             motion: cmd.end().is_some(),

@@ -25,15 +25,17 @@ pub const ALL: u8 = 0x7F;
 
 /// Inputs that act on their first edge, with no delay: a limit or the
 /// e-stop that waited for a contact to stop bouncing would let the machine
-/// drive on for that long. They re-arm only after a settled *release*, so a
-/// switch held closed raises one event, not one per bounce. (The probe is
-/// here for its status bit; probing itself is timed by the step interrupt,
-/// which reads the pin at every step event.)
-pub const INSTANT: u8 = LIMITS | PROBE | ESTOP;
+/// drive on for that long, and a feed hold must act within a millisecond
+/// (a hold on a glitch only pauses the job; the operator resumes it). They
+/// re-arm only after a settled *release*, so a switch held closed raises
+/// one event, not one per bounce. (The probe is here for its status bit;
+/// probing itself is timed by the step interrupt, which reads the pin at
+/// every step event.)
+pub const INSTANT: u8 = LIMITS | PROBE | FEED_HOLD | ESTOP;
 
-/// Buttons act only once their new level has held for the settle time:
-/// a glitch on a long cable must not pause or resume a job.
-pub const BUTTONS: u8 = FEED_HOLD | CYCLE_START;
+/// Cycle start acts only once its new level has held for the settle time:
+/// a glitch on a long cable must not resume a job.
+pub const BUTTONS: u8 = CYCLE_START;
 
 /// The inverts that apply to the inputs, from the settings: `$5` limits,
 /// `$6` probe and `$14` control inputs (bit 0 e-stop, 1 feed hold, 2 cycle
@@ -244,14 +246,29 @@ mod tests {
     #[test]
     fn button_needs_a_settled_press() {
         let mut d = Debounce::new(SETTLE, 0);
-        let c = d.edge(FEED_HOLD, FEED_HOLD, 1000);
-        assert_eq!(c.pressed, 0, "a button never acts on the edge");
-        assert_eq!(d.poll(FEED_HOLD, 1010), Change::default());
-        let c = d.poll(FEED_HOLD, 1020);
-        assert_eq!(c.pressed, FEED_HOLD);
-        assert_eq!(c.rearm, FEED_HOLD, "a button re-arms while held");
+        let c = d.edge(CYCLE_START, CYCLE_START, 1000);
+        assert_eq!(c.pressed, 0, "cycle start never acts on the edge");
+        assert_eq!(d.poll(CYCLE_START, 1010), Change::default());
+        let c = d.poll(CYCLE_START, 1020);
+        assert_eq!(c.pressed, CYCLE_START);
+        assert_eq!(c.rearm, CYCLE_START, "a button re-arms while held");
         // Held on: no second press.
+        assert_eq!(d.poll(CYCLE_START, 1100), Change::default());
+    }
+
+    #[test]
+    fn feed_hold_acts_on_the_first_edge_once() {
+        let mut d = Debounce::new(SETTLE, 0);
+        assert_eq!(acts_now(FEED_HOLD, FEED_HOLD), FEED_HOLD);
+        let c = d.edge(FEED_HOLD, FEED_HOLD, 1000);
+        assert_eq!(c.pressed, FEED_HOLD, "no settle delay for a hold");
+        // Bouncing and held: no second press, masked until released.
+        assert_eq!(d.poll(0, 1002).pressed, 0);
+        assert_eq!(d.poll(FEED_HOLD, 1004).pressed, 0);
         assert_eq!(d.poll(FEED_HOLD, 1100), Change::default());
+        assert_eq!(d.masked(), FEED_HOLD);
+        let c = d.poll(0, 1200);
+        assert_eq!(d.poll(0, 1220).rearm | c.rearm, FEED_HOLD);
     }
 
     #[test]
@@ -269,19 +286,19 @@ mod tests {
     #[test]
     fn bouncing_restarts_the_settle_time() {
         let mut d = Debounce::new(SETTLE, 0);
-        d.edge(FEED_HOLD, FEED_HOLD, 0);
+        d.edge(CYCLE_START, CYCLE_START, 0);
         d.poll(0, 10);
-        d.poll(FEED_HOLD, 18);
+        d.poll(CYCLE_START, 18);
         // 18 + 20 > 30: not settled yet though the first edge was 30 ms ago.
-        assert_eq!(d.poll(FEED_HOLD, 30).pressed, 0);
-        assert_eq!(d.poll(FEED_HOLD, 38).pressed, FEED_HOLD);
+        assert_eq!(d.poll(CYCLE_START, 30).pressed, 0);
+        assert_eq!(d.poll(CYCLE_START, 38).pressed, CYCLE_START);
     }
 
     #[test]
     fn clock_wrap_does_not_stall() {
         let mut d = Debounce::new(SETTLE, 0);
-        d.edge(FEED_HOLD, FEED_HOLD, u32::MAX - 5);
-        assert_eq!(d.poll(FEED_HOLD, 14).pressed, FEED_HOLD);
+        d.edge(CYCLE_START, CYCLE_START, u32::MAX - 5);
+        assert_eq!(d.poll(CYCLE_START, 14).pressed, CYCLE_START);
     }
 
     #[test]
@@ -298,8 +315,8 @@ mod tests {
     fn unrelated_inputs_are_untouched() {
         let mut d = Debounce::new(SETTLE, 0);
         d.edge(LIMIT_X, LIMIT_X, 0);
-        // Feed hold reads closed but had no edge: not masked, not reported.
-        let c = d.poll(LIMIT_X | FEED_HOLD, 100);
+        // Cycle start reads closed but had no edge: not masked, not reported.
+        let c = d.poll(LIMIT_X | CYCLE_START, 100);
         assert_eq!(c, Change::default());
         assert_eq!(d.masked(), LIMIT_X);
     }

@@ -10,6 +10,10 @@
 use crate::command::{Command, SpindleDir};
 use crate::settings::Settings;
 
+#[path = "outputs_laser.rs"]
+mod laser;
+pub use laser::{LaserQueue, LASER_QUEUE};
+
 /// What the machine is doing, for laser mode (`$32`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Motion {
@@ -100,6 +104,12 @@ impl Outputs {
         self.mist = false;
     }
 
+    /// Laser mode (`$32=1`): spindle commands flow with the motion
+    /// ([`LaserQueue`]).
+    pub fn laser(&self) -> bool {
+        self.laser
+    }
+
     pub fn spindle_dir(&self) -> SpindleDir {
         self.dir
     }
@@ -125,6 +135,8 @@ impl Outputs {
     /// power with the speed ratio (dynamic power). One difference: with M3
     /// the laser is also off while stopped (GRBL keeps it on between
     /// moves); a stopped laser burns a hole, and a G4 dot is not worth that.
+    /// The motion comes from the segment the step interrupt runs
+    /// (`Segment::cut`), and holds count as stopped.
     pub fn spindle(&self, motion: Motion) -> Spindle {
         let off = Spindle {
             enable: false,

@@ -62,6 +62,7 @@ pub struct Realtime {
     /// per segment, not per step).
     running_speed: AtomicU32,
     running_line: AtomicU32,
+    running_cut: AtomicU32,
     /// Hard limits apply now (`$21` on, not homing, not in alarm): decided
     /// by the controller each pass, read by the stepper at every event and
     /// by the board's limit interrupts.
@@ -96,6 +97,7 @@ impl Realtime {
             new_position_set: AtomicBool::new(false),
             running_speed: AtomicU32::new(0),
             running_line: AtomicU32::new(0),
+            running_cut: AtomicU32::new(0),
             limits_armed: AtomicBool::new(false),
         }
     }
@@ -269,9 +271,15 @@ impl Realtime {
             self.running_line.load(Relaxed),
         )
     }
-    pub(crate) fn set_running(&self, speed_mm_min: f32, line: u32) {
+    pub(crate) fn set_running(&self, speed_mm_min: f32, line: u32, cut: f32) {
         self.running_speed.store(speed_mm_min.to_bits(), Relaxed);
         self.running_line.store(line, Relaxed);
+        self.running_cut.store(cut.to_bits(), Relaxed);
+    }
+    /// The running segment's `Segment::cut` (0 while idle): laser mode
+    /// fires only while it is above 0.
+    pub fn running_cut(&self) -> f32 {
+        f32::from_bits(self.running_cut.load(Relaxed))
     }
     /// Whether a closed limit switch trips now (see the field).
     pub fn limits_armed(&self) -> bool {
@@ -310,6 +318,7 @@ mod tests {
             end_of_motion: true,
             generation,
             speed_mm_min: 600.0,
+            cut: 0.0,
             line: 7,
         }
     }

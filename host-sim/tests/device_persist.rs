@@ -189,3 +189,38 @@ fn rst_restores_defaults_and_saves_them() {
     assert!(has(&b.cmd("$$"), &format!("$110={default_rate:.3}")));
     assert!(has(&b.cmd("$#"), "[G54:0.000,0.000,0.000,0.000]"));
 }
+
+/// Issue 13 item 5c: no flash write while the spindle or coolant is on (a
+/// sector erase stalls the e-stop handler for up to 0.8 s). The refused
+/// line leaves no trace; once M5 M9 have run the same writes go through.
+#[test]
+fn no_flash_write_with_spindle_or_coolant_on() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut a = Rig::boot(&cfg, &mut rec, SimFlash::new());
+    a.lines();
+    assert_eq!(a.cmd("M3 S1000"), ["ok"]);
+    assert_eq!(a.cmd("G10 L2 P1 X3"), ["error:8"]);
+    assert_eq!(a.cmd("G28.1"), ["error:8"]);
+    assert_eq!(a.cmd("M500"), ["error:8"]);
+    assert_eq!(a.cmd("$110=1234"), ["error:113"]);
+    assert_eq!(a.cmd("$RST=#"), ["error:113"]);
+    let params = a.cmd("$#");
+    assert!(has(&params, "[G54:0.000,0.000,0.000,0.000]"), "{params:?}");
+    // Coolant alone counts too.
+    assert_eq!(a.cmd("M5 M8"), ["ok"]);
+    assert_eq!(a.cmd("G10 L2 P1 X3"), ["error:8"]);
+    // Reading is no write.
+    assert_eq!(a.cmd("M501"), ["ok"]);
+    // Turned off in the same line: written after the outputs are off.
+    assert_eq!(a.cmd("M9 G10 L2 P2 X5"), ["ok"]);
+    assert_eq!(a.cmd("$110=1234"), ["ok"]);
+    let flash = a.dev.flash();
+    let mut rec2 = Discard;
+    let mut b = Rig::boot(&cfg, &mut rec2, flash);
+    b.lines();
+    let params = b.cmd("$#");
+    assert!(has(&params, "[G55:5.000,0.000,0.000,0.000]"), "{params:?}");
+    assert!(has(&params, "[G54:0.000,0.000,0.000,0.000]"), "{params:?}");
+    assert_eq!(b.dev.sim.machine.settings().axes[0].max_rate, 1234.0);
+}

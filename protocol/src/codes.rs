@@ -49,11 +49,14 @@ pub enum Code {
     SettingNotInteger = 111,
     /// A mask setting has bits for axes that do not exist.
     SettingBadMask = 112,
+    /// A settings write (`$n=`, `$RST=`) with the spindle or coolant on:
+    /// the flash erase would stall the e-stop handler (M5 M9 first).
+    OutputsOn = 113,
 }
 
 impl Code {
     /// Every code, for tables and tests.
-    pub const ALL: [Code; 20] = [
+    pub const ALL: [Code; 21] = [
         Code::BadNumber,
         Code::InvalidStatement,
         Code::NegativeValue,
@@ -74,6 +77,7 @@ impl Code {
         Code::SettingRange,
         Code::SettingNotInteger,
         Code::SettingBadMask,
+        Code::OutputsOn,
     ];
 
     /// The stable number.
@@ -109,6 +113,7 @@ impl Code {
             Code::SettingRange => "setting value out of range",
             Code::SettingNotInteger => "setting needs a whole number",
             Code::SettingBadMask => "mask names axes that do not exist",
+            Code::OutputsOn => "no flash write with spindle or coolant on (M5 M9 first)",
         }
     }
 }

@@ -9,7 +9,14 @@ use std::time::Duration;
 /// A step event is both step-interrupt handlers, rise and fall (until the
 /// step driver moved into the core it was the rise's `on_event` and two
 /// stores only, goals 120 and 250, with the pulse-end handler uncounted).
-const GOALS: [(&str, Option<f64>, &str); 9] = [
+/// The step path is everything one step costs on the chip, interrupt
+/// entries and exits included (issue 13: at most 192 cycles, 500 kHz at
+/// 96 MHz, and at most 30 % of the CPU at 100 kHz).
+const GOALS: [(&str, Option<f64>, &str); 13] = [
+    ("step_path_cycles_1axis", Some(192.0), "cyc"),
+    ("cpu_percent_at_100khz", Some(30.0), "%"),
+    ("cpu_percent_at_default_201", None, "%"),
+    ("step_path_insns_1axis", None, "insns"),
     ("step_event_insns_1axis", Some(240.0), "insns"),
     ("step_event_insns_4axis", Some(260.0), "insns"),
     ("step_rise_insns_1axis", None, "insns"),
@@ -21,9 +28,8 @@ const GOALS: [(&str, Option<f64>, &str); 9] = [
     // A floor, checked separately below.
     ("max_step_rate_hz_1axis", None, "Hz"),
 ];
-/// Step rate goal on the 96 MHz F411: the default `$201` (200 kHz) with
-/// room for the rest of the app.
-const STEP_RATE_GOAL_HZ: f64 = 250_000.0;
+/// Step rate goal on the 96 MHz F411 (issue 13), on the whole step path.
+const STEP_RATE_GOAL_HZ: f64 = 500_000.0;
 
 pub fn run() -> Result<i32> {
     let elf = qemu::build_bin("bench-target", &["board-qemu", "bench-target"])?;

@@ -163,6 +163,19 @@ fn parse(bytes: &[u8]) -> Result<ElfFile32<'_>> {
     ElfFile32::parse(bytes).context("not a 32-bit ELF")
 }
 
+/// The stack region `[bottom, top)`: cortex-m-rt's `_stack_end` (the top
+/// of the statics) and `_stack_start` (the initial stack pointer).
+pub fn stack_region(elf: &Path) -> Result<(u32, u32)> {
+    let bytes = read(elf)?;
+    let file = parse(&bytes)?;
+    let bottom = checks::symbol(&file, "_stack_end")?;
+    let top = checks::symbol(&file, "_stack_start")?;
+    if top <= bottom {
+        bail!("stack region {bottom:#x}..{top:#x} is empty");
+    }
+    Ok((bottom, top))
+}
+
 pub fn size_report(elf: &Path) -> Result<Sizes> {
     let bytes = read(elf)?;
     sizes_of(&parse(&bytes)?)

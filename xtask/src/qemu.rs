@@ -3,13 +3,15 @@
 //! QEMU has no USB OTG model). The test talks to USART1 through QEMU's
 //! stdin/stdout and kills QEMU when done. Also the QEMU plumbing that
 //! `bench-target` shares.
-use crate::util;
+use crate::{image, util};
 use anyhow::{bail, Context, Result};
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
+
+mod stack;
 
 const QEMU: &str = "qemu-system-arm";
 const MACHINE: &str = "netduinoplus2";
@@ -53,8 +55,17 @@ pub fn ensure_installed() -> Result<()> {
 /// exit status of `cortex_m_semihosting`), no display, no monitor. USART1
 /// (the first `-serial`) goes to stdin/stdout.
 pub fn command(elf: &Path) -> Command {
+    command_with_monitor(elf, None)
+}
+
+/// [`command`] with QEMU's monitor on the unix socket `monitor`, if given.
+fn command_with_monitor(elf: &Path, monitor: Option<&Path>) -> Command {
     let mut cmd = Command::new(QEMU);
-    cmd.args(["-M", MACHINE, "-display", "none", "-monitor", "none"]);
+    cmd.args(["-M", MACHINE, "-display", "none", "-monitor"]);
+    match monitor {
+        Some(sock) => cmd.arg(format!("unix:{},server=on,wait=off", sock.display())),
+        None => cmd.arg("none"),
+    };
     cmd.args(["-semihosting-config", "enable=on,target=native"]);
     cmd.args(["-serial", "stdio", "-kernel"]);
     cmd.arg(elf);
@@ -172,7 +183,11 @@ fn offline_end() -> Result<([i64; 4], [f64; 4])> {
 pub fn run() -> Result<i32> {
     let elf = build_bin("burin-fw", &["board-qemu"])?;
     ensure_installed()?;
-    let (mut guard, rx) = spawn(command(&elf))?;
+    let (bottom, top) = image::stack_region(&elf)?;
+    let dir = elf.parent().context("ELF path has no directory")?;
+    let sock = dir.join("qemu-monitor.sock");
+    let _ = std::fs::remove_file(&sock);
+    let (mut guard, rx) = spawn(command_with_monitor(&elf, Some(&sock)))?;
     let mut stdin = guard.0.stdin.take().context("QEMU stdin")?;
     let mut seen = Vec::new();
     // QEMU's USART model drops bytes that arrive before the firmware has
@@ -207,6 +222,16 @@ pub fn run() -> Result<i32> {
     let (want, spm) = offline_end()?;
     job_test(&mut stdin, &rx, &mut seen, want, spm)?;
     settings_test(&mut stdin, &rx, &mut seen)?;
+    let region = stack::dump(&sock, bottom, top, &dir.join("qemu-stack.bin"))?;
+    let used = stack::used(&region, top - bottom);
+    println!("stack_high_water_bytes {used}");
+    println!("stack_region_bytes {}", top - bottom);
+    if used + 64 > top - bottom {
+        bail!(
+            "the stack reached its guard words ({used} of {} bytes)",
+            top - bottom
+        );
+    }
     println!(
         "qemu: the RTIC app ran host-sim/jobs/agree.gcode on {MACHINE} over USART1 \
          and ended on the offline run's step {want:?}"

@@ -19,9 +19,10 @@
 //!    `RxSplitter` into the token ring (realtime bytes flag at once), reply
 //!    bytes out of the TX ring;
 //!    `cycle_start`, `feed_hold`, `probe` (EXTI0, EXTI1, EXTI3) share this
-//!    level: they only mask their line and record the edge; the heartbeat
-//!    acts once the level has settled (a button must not act on a glitch,
-//!    and their action goes through the session like `~`/`!` anyway);
+//!    level: they mask their line and record the edge; a hold raises its
+//!    flag at once (like `!`), cycle start and the probe wait for the
+//!    heartbeat to see the level settled (a start must not act on a
+//!    glitch); both act through the session like `~`/`!`;
 //! 1. `parse` (async software task): the device session (`burin::session`:
 //!    parser, interpreter, executor) and `Machine::poll` (planner, segment
 //!    preparer). It sleeps on a wake channel the other tasks signal.
@@ -56,6 +57,9 @@ mod outputs;
 #[path = "burin-fw/rings.rs"]
 mod rings;
 #[cfg(target_os = "none")]
+#[path = "burin-fw/stack.rs"]
+mod stack;
+#[cfg(target_os = "none")]
 #[path = "burin-fw/step.rs"]
 mod step;
 #[cfg(target_os = "none")]
@@ -70,7 +74,19 @@ mod usart;
 mod usb;
 
 #[cfg(target_os = "none")]
-use {defmt_rtt as _, panic_probe as _};
+use defmt_rtt as _;
+
+/// A panic stops everything and formats nothing: the message and the
+/// panic locations (build paths) cost kilobytes of flash, and the debug
+/// probe's backtrace says where it happened. `udf` raises a HardFault (the
+/// probe shows it; without one the watchdog resets the chip).
+#[cfg(target_os = "none")]
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo) -> ! {
+    cortex_m::interrupt::disable();
+    defmt::error!("panic");
+    cortex_m::asm::udf()
+}
 
 /// SysTick rate; the watchdog timeout must be several of these periods.
 #[cfg(target_os = "none")]
@@ -112,6 +128,7 @@ mod app {
     use burin::stepper::{Segment, Stepper};
     #[cfg(not(feature = "board-qemu"))]
     use burin::usb_ids::{serial_from_uid, USB_SERIAL_LEN};
+    use core::mem::MaybeUninit;
     #[cfg(not(feature = "board-qemu"))]
     use core::sync::atomic::Ordering;
     use cortex_m::peripheral::syst::SystClkSource;
@@ -160,8 +177,13 @@ mod app {
         rx_tokens: Consumer<'static, RxToken>,
         tx_bytes: Producer<'static, u8>,
         segments: Producer<'static, Segment>,
-        machine: Machine<PLANNER_BLOCKS>,
-        controller: Controller<crate::storage::Store>,
+        /// Built by `parse` when it starts, into init's static slot: in
+        /// init, on top of init's own frame, it took about 40 KB of stack
+        /// (the F401 has 29.5 KiB).
+        machine: &'static mut MaybeUninit<Machine<PLANNER_BLOCKS>>,
+        /// What `parse` builds the machine on.
+        boot: (Settings, u32),
+        controller: &'static mut Controller<crate::storage::Store>,
         led: PC13<Output>,
         debounce: Debounce,
         io: Io,
@@ -169,6 +191,7 @@ mod app {
         wake_limit_x: Wake,
         wake_limit_yz: Wake,
         wake_estop: Wake,
+        wake_hold: Wake,
         watchdog: IndependentWatchdog,
     }
 
@@ -176,6 +199,8 @@ mod app {
         rx_ring: Queue<RxToken, RX_RING> = Queue::new(),
         tx_ring: Queue<u8, TX_RING> = Queue::new(),
         seg_ring: Queue<Segment, SEGMENT_SLOTS> = Queue::new(),
+        machine_slot: MaybeUninit<Machine<PLANNER_BLOCKS>> = MaybeUninit::uninit(),
+        controller_slot: MaybeUninit<Controller<crate::storage::Store>> = MaybeUninit::uninit(),
         #[cfg(not(feature = "board-qemu"))]
         ep_memory: [u32; 1024] = [0; 1024],
         #[cfg(not(feature = "board-qemu"))]
@@ -266,8 +291,8 @@ mod app {
         // Motion core: executor on the default settings, stepper with the
         // same pin timing, the step port with the same inverts.
         let timer = Tim5::new(dp.TIM5, &mut rcc);
-        let machine = Machine::new(settings, burin::seams::StepTimer::tick_hz(&timer));
-        let cfg = machine.step_config();
+        let tick_hz = burin::seams::StepTimer::tick_hz(&timer);
+        let cfg = burin::stepper::StepConfig::new(&settings, tick_hz);
         let steppers = pins.steppers;
         // Outputs: spindle, coolant, and the enable pin for the idle timer
         // (same `$4` polarity as the step port, fixed until reset like it).
@@ -303,8 +328,7 @@ mod app {
             board: board::NAME,
             caps: 0,
         };
-        let session = Device::with_storage(identity, persist, Some(&boot));
-        let controller = Controller::new(session, &settings, crate::outputs::WAKE_MS);
+        let controller = build_controller(cx.local.controller_slot, identity, persist, &boot);
 
         // The parse task prints the banner, then waits for a wake-up.
         if parse::spawn().is_err() {
@@ -339,7 +363,8 @@ mod app {
                 rx_tokens,
                 tx_bytes,
                 segments,
-                machine,
+                machine: cx.local.machine_slot,
+                boot: (settings, tick_hz),
                 controller,
                 led: pins.led,
                 debounce,
@@ -347,16 +372,21 @@ mod app {
                 wake_limit_x: wake_step.clone(),
                 wake_limit_yz: wake_step.clone(),
                 wake_estop: wake_step.clone(),
+                wake_hold: wake_step.clone(),
                 wake_beat: wake_step,
                 watchdog,
             },
         )
     }
 
-    /// Sleep until an interrupt; feed the watchdog every time through.
+    /// Sleep until an interrupt; feed the watchdog every time through,
+    /// after checking the stack guard (`stack.rs`).
     #[idle(local = [watchdog])]
     fn idle(cx: idle::Context) -> ! {
         loop {
+            if !crate::stack::intact() {
+                crate::stack::overflowed();
+            }
             cx.local.watchdog.feed();
             cortex_m::asm::wfi();
         }
@@ -403,10 +433,12 @@ mod app {
         crate::inputs::take_edges(pac::Interrupt::EXTI0, inp::CYCLE_START);
     }
 
-    /// Feed hold (PA1), as cycle start.
-    #[task(binds = EXTI1, priority = 2)]
-    fn feed_hold(_: feed_hold::Context) {
-        crate::inputs::take_edges(pac::Interrupt::EXTI1, inp::FEED_HOLD);
+    /// Feed hold (PA1): acts on the first edge, as `!` from the host.
+    #[task(binds = EXTI1, priority = 2, local = [wake_hold])]
+    fn feed_hold(cx: feed_hold::Context) {
+        if crate::inputs::on_feed_hold() {
+            let _ = cx.local.wake_hold.try_send(());
+        }
     }
 
     /// Probe (PA3): only its `Pn:` bit; probing itself is timed by the
@@ -437,7 +469,7 @@ mod app {
     /// Parser -> interpreter -> planner -> segment preparer, one pass of
     /// `burin::controller` per wake-up; this task only carries its inputs
     /// in and its pin levels out.
-    #[task(priority = 1, local = [wake, rx_tokens, tx_bytes, segments, machine, controller, io])]
+    #[task(priority = 1, local = [wake, rx_tokens, tx_bytes, segments, machine, boot, controller, io])]
     async fn parse(cx: parse::Context) {
         let parse::LocalResources {
             wake,
@@ -445,10 +477,12 @@ mod app {
             tx_bytes,
             segments,
             machine,
+            boot,
             controller,
             io,
             ..
         } = cx.local;
+        let machine = build_machine(machine, boot.0, boot.1);
         let mut tx = TxRing {
             ring: tx_bytes,
             dropped: 0,
@@ -541,6 +575,34 @@ mod app {
             );
         }
         let _ = wake_beat.try_send(());
+    }
+
+    /// The machine, built straight into its static slot in a frame of its
+    /// own, once, when `parse` starts (init's frame is gone by then; the
+    /// stack peak is `cargo xtask qemu`'s `stack_high_water_bytes`).
+    #[inline(never)]
+    fn build_machine(
+        slot: &mut MaybeUninit<Machine<PLANNER_BLOCKS>>,
+        settings: Settings,
+        tick_hz: u32,
+    ) -> &mut Machine<PLANNER_BLOCKS> {
+        slot.write(Machine::new(settings, tick_hz))
+    }
+
+    /// The session and controller, as [`build_machine`].
+    #[inline(never)]
+    fn build_controller(
+        slot: &'static mut MaybeUninit<Controller<crate::storage::Store>>,
+        identity: Identity,
+        persist: Persist<crate::storage::Store>,
+        boot: &burin::persist::Loaded,
+    ) -> &'static mut Controller<crate::storage::Store> {
+        let session = Device::with_storage(identity, persist, Some(boot));
+        slot.write(Controller::new(
+            session,
+            &boot.settings,
+            crate::outputs::WAKE_MS,
+        ))
     }
 
     /// HSI as the system clock and the PLL off, as after a reset (where

@@ -117,6 +117,13 @@ impl<const N: usize> Machine<N> {
                 obs(Note::Executed { line, command: cmd });
                 Ok(())
             }
+            // Laser mode (GRBL's): a new S or M3/M4/M5 does not stop the
+            // motion; the outputs apply it when its line's first segment
+            // runs (`outputs::LaserQueue`).
+            Command::Spindle { .. } if self.planner.settings.laser_mode => {
+                obs(Note::Executed { line, command: cmd });
+                Ok(())
+            }
             Command::Aux { synced: false, .. } | Command::Message(_) | Command::Report(_) => {
                 obs(Note::Executed { line, command: cmd });
                 Ok(())

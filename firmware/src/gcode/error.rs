@@ -117,6 +117,9 @@ pub enum ErrorKind {
     TooManyCommands,
     /// A word that only the first command of a line may carry.
     WordAfterSplit(u8),
+    /// G10 L2/L20, G28.1, G30.1 or M500 with the spindle or coolant on: a
+    /// flash write stalls the CPU (and the e-stop handler) for up to 0.8 s.
+    FlashWriteOutputsOn,
 }
 
 impl ErrorKind {
@@ -169,6 +172,7 @@ impl ErrorKind {
             SplinePlane => 325,
             TooManyCommands => 326,
             WordAfterSplit(_) => 327,
+            FlashWriteOutputsOn => 328,
         }
     }
 
@@ -201,6 +205,7 @@ impl ErrorKind {
             UnusedWord(_) | SplinePlane => 36,
             ValueOutOfRange(_) => 4,
             TooManyCommands => 11,
+            FlashWriteOutputsOn => 8,
         }
     }
 
@@ -330,6 +335,9 @@ impl fmt::Display for ErrorKind {
             SplinePlane => f.write_str("G5/G5.1 need G17 and only X/Y axis words"),
             TooManyCommands => f.write_str("too many commands on one line"),
             WordAfterSplit(c) => write!(f, "word {} after a second command on the line", letter(c)),
+            FlashWriteOutputsOn => {
+                f.write_str("no flash write with spindle or coolant on (M5 M9 first)")
+            }
         }
     }
 }

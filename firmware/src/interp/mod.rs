@@ -136,7 +136,16 @@ impl Interpreter {
         let mut saved = None;
         self.params.begin_line();
         let mut buf = exec::Out::new();
-        match self.run(line, &mut buf, &mut saved) {
+        let r = self.run(line, &mut buf, &mut saved).and_then(|()| {
+            let writes = (self.state.offsets_changed && !snapshot.offsets_changed)
+                || buf.iter().any(|c| matches!(c, Command::SaveSettings));
+            if writes && self.outputs_on() {
+                Err(GcodeError::new(ErrorKind::FlashWriteOutputsOn, 0))
+            } else {
+                Ok(())
+            }
+        });
+        match r {
             Ok(()) => {
                 // By reference: moving the whole buffer into an iterator
                 // would copy all its slots (1.3 KB) on every line.
@@ -154,6 +163,15 @@ impl Interpreter {
                 Err(e)
             }
         }
+    }
+
+    /// Spindle or coolant on, as the lines so far leave them (and as the
+    /// outputs will be when this line's storage write comes due: writes
+    /// wait for the motion and commands before them). A flash write stalls
+    /// the CPU for up to 0.8 s per sector erase, e-stop and limit handlers
+    /// included, so the session writes nothing while they are on.
+    pub fn outputs_on(&self) -> bool {
+        self.state.spindle != crate::command::SpindleDir::Off || self.state.flood || self.state.mist
     }
 
     fn run_block(

@@ -36,6 +36,13 @@ impl RtFlags {
         RtSet(self.pending.swap(0, Ordering::Acquire))
     }
 
+    /// Take only the pending commands in `mask`; the rest stay pending
+    /// (the task acts on commands that need no reply room at once, and
+    /// leaves `?` and soft reset until their reply fits).
+    pub fn take_masked(&self, mask: u32) -> RtSet {
+        RtSet(self.pending.fetch_and(!mask, Ordering::Acquire) & mask)
+    }
+
     /// Whether anything is pending, without taking it (for a wake-up check).
     pub fn any(&self) -> bool {
         self.pending.load(Ordering::Acquire) != 0

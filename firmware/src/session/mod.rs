@@ -45,6 +45,7 @@ mod sys;
 
 pub use out::{Out, Tx};
 pub use ports::{LinkPort, MotionPort};
+pub use sys::RT_REPLY_ROOM;
 
 use crate::command::Command;
 use crate::executor::{self, MachineError};
@@ -60,6 +61,13 @@ use protocol::{DeviceInfo, DeviceMsg, HostMsg, LineText};
 pub const CMD_SLOTS: usize = 2 * LINE_COMMANDS;
 /// Framed job lines acknowledged but not yet interpreted (the credits).
 pub const LINE_SLOTS: usize = 8;
+
+/// The session reads new input only with this much room for replies: it
+/// holds the longest burst one event writes (a `$$` listing is about 600
+/// bytes), so a reply is never dropped; reading the link just pauses while
+/// the host is slow to read. Realtime commands do not wait for it
+/// ([`Device::poll_realtime`]).
+pub const TX_HEADROOM: usize = 768;
 
 /// Static facts for `$I` and the handshake.
 #[derive(Clone, Copy, Debug)]
@@ -196,15 +204,15 @@ impl<S: Storage> Device<S> {
     /// One pass of the parse/plan task: realtime first, then alarms, then
     /// feeding the executor, then new input as far as there is room.
     pub fn poll(&mut self, link: &mut impl LinkPort, m: &mut impl MotionPort, tx: &mut impl Tx) {
-        let rt = link.take_realtime();
-        for r in rt.iter() {
-            let framed = link.framed();
-            let rx_free = protocol::RX_WINDOW.saturating_sub(link.rx_pending()) as u16;
-            self.realtime(r, rx_free, m, &mut Out::new(tx, framed));
-        }
+        self.poll_realtime(link, m, tx);
         self.watch(m, &mut Out::new(tx, link.framed()));
         loop {
             self.feed(m, tx, link.framed());
+            // Each event may write a burst (a `$$` listing): take the next
+            // one only while the longest burst still fits.
+            if tx.room() < TX_HEADROOM {
+                break;
+            }
             // The splitter runs ahead: when it is framed, a switch to frames
             // is on its way and whatever text precedes it has no listener.
             if !(link.events_framed() || link.framed() || self.can_take()) {
@@ -398,6 +406,9 @@ impl<S: Storage> Device<S> {
     ) -> Result<(), u16> {
         if !m.motion_idle() {
             return Err(protocol::Code::NotIdle.code());
+        }
+        if self.interp.outputs_on() {
+            return Err(protocol::Code::OutputsOn.code());
         }
         m.set_setting(n, value).map_err(|e| e.code().code())?;
         self.save_settings(m, o);

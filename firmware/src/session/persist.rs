@@ -17,6 +17,12 @@
 //!   sync point, as it cancels the queued motion; offsets already changed
 //!   are still saved when the machine next stops.
 //! * Check mode (`$C`) writes nothing.
+//! * Nothing is written while the spindle or coolant is on (as the lines
+//!   so far leave them): a sector erase stalls every flash fetch for up
+//!   to 0.8 s, the e-stop and limit interrupts included. `$n=` and `$RST=`
+//!   then fail with `error:113` (`Code::OutputsOn`), and a line with G10
+//!   L2/L20, G28.1, G30.1 or M500 with G-code error 328
+//!   (`FlashWriteOutputsOn`, GRBL `error:8`) and leaves no trace.
 
 use super::{Device, Identity, LinkLost, MotionPort, Out, Stats, Tx};
 use crate::command::Command;
@@ -170,6 +176,9 @@ impl<S: Storage> Device<S> {
     ) -> Result<(), u16> {
         if self.check || !m.motion_idle() || !self.cmds.is_empty() {
             return Err(protocol::Code::NotIdle.code());
+        }
+        if self.interp.outputs_on() {
+            return Err(protocol::Code::OutputsOn.code());
         }
         if matches!(what, Restore::Settings | Restore::All) {
             let d = *self.persist.defaults();

@@ -12,7 +12,9 @@ use crate::settings::Settings;
 /// controller, over the assembler and the receive ring).
 pub trait LinkPort {
     fn poll(&mut self) -> Option<LinkEvent<'_>>;
-    fn take_realtime(&mut self) -> RtSet;
+    /// Take the pending realtime commands in `mask` (bits of
+    /// `protocol::Rt::bit`); the others stay pending.
+    fn take_realtime(&mut self, mask: u32) -> RtSet;
     /// Received bytes not yet turned into events.
     fn rx_pending(&self) -> usize;
     /// The receive side's mode right now (the splitter's, which runs

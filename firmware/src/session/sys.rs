@@ -1,7 +1,7 @@
 //! `$` commands, realtime commands, status reports, jogging and the error
 //! and alarm replies of the device session.
 
-use super::{Device, MotionPort, Out, Tx};
+use super::{Device, LinkPort, MotionPort, Out, Tx};
 use crate::command::{Command, Feed};
 use crate::executor::{self, MachineError};
 use crate::link::reply::{self, BuildInfo, Format};
@@ -9,6 +9,11 @@ use crate::link::SysCmd;
 use core::fmt::Write;
 use protocol::codes::alarm;
 use protocol::{Code, DeviceMsg, MachineState, Overrides, Rt, Status, WIRE_AXES};
+
+/// Reply room a status query or a soft reset needs before it is acted on
+/// (a full text status report, or alarm + banner + unlock hint, with room
+/// to spare).
+pub const RT_REPLY_ROOM: usize = 256;
 
 /// `ok` / `error:N` in text mode; nothing / `DeviceMsg::Error` in framed.
 pub(super) fn reply(r: Result<(), u16>, seq: Option<u32>, o: &mut Out<'_, impl Tx>) {
@@ -64,6 +69,30 @@ pub(super) fn report_late(e: MachineError, line: u32, o: &mut Out<'_, impl Tx>) 
 }
 
 impl<S: crate::seams::Storage> Device<S> {
+    /// The realtime half of [`Device::poll`], which the shell runs on its
+    /// own while the reply ring is too full to read new input: hold, cycle
+    /// start, jog cancel and the overrides write nothing and act at once;
+    /// a status query or a soft reset waits until its reply fits
+    /// ([`RT_REPLY_ROOM`]), so no reply is ever cut.
+    pub fn poll_realtime(
+        &mut self,
+        link: &mut impl LinkPort,
+        m: &mut impl MotionPort,
+        tx: &mut impl Tx,
+    ) {
+        let replying = protocol::Rt::SoftReset.bit() | protocol::Rt::StatusQuery.bit();
+        let mask = if tx.room() >= RT_REPLY_ROOM {
+            u32::MAX
+        } else {
+            !replying
+        };
+        for r in link.take_realtime(mask).iter() {
+            let framed = link.framed();
+            let rx_free = protocol::RX_WINDOW.saturating_sub(link.rx_pending()) as u16;
+            self.realtime(r, rx_free, m, &mut Out::new(tx, framed));
+        }
+    }
+
     pub(super) fn status(&mut self, rx_free: u16, m: &impl MotionPort) -> Status {
         let s = m.settings();
         let pos = m.rt().position();

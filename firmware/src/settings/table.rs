@@ -131,6 +131,9 @@ const AXIS_GROUPS: [(u16, Kind); 4] = [
     (130, Kind::Real { min: 0.0, max: BIG }),
 ];
 
+/// `$201`'s maximum, Hz (see its table entry).
+pub const MAX_STEP_RATE_HZ: f32 = 250_000.0;
+
 /// burin's own, `$200`–`$208` (documented on the [`Settings`] fields;
 /// `$210` is used by other GRBL forks).
 const BURIN: [(u16, Kind); 9] = [
@@ -141,11 +144,14 @@ const BURIN: [(u16, Kind); 9] = [
             max: 100.0,
         },
     ),
+    // The ceiling follows the step path's measured cost on the F411 at
+    // 96 MHz (`cargo xtask bench-target`: about 370 cycles a step, so
+    // 259 kHz would take the whole CPU); the next step-path change moves it.
     (
         201,
         Kind::Real {
             min: 1.0,
-            max: 2.0e6,
+            max: MAX_STEP_RATE_HZ,
         },
     ),
     (202, Kind::Int { min: 0, max: 1 }),

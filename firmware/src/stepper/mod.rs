@@ -62,6 +62,10 @@ pub struct Segment {
     pub speed_mm_min: f32,
     /// Source line of the block.
     pub line: u32,
+    /// Laser mode's view of this segment: 0 when it does not cut (rapid,
+    /// homing, probing, dwell, wait), else the path speed over the
+    /// programmed feed (M4 scales the power with it).
+    pub cut: f32,
 }
 
 /// Switch inputs as pin levels (before the invert settings).
@@ -219,7 +223,7 @@ impl Stepper {
         self.left = 0;
         if self.run.speed_mm_min != 0.0 {
             self.run.speed_mm_min = 0.0;
-            rt.set_running(0.0, 0);
+            rt.set_running(0.0, 0, 0.0);
         }
         rt.set_stepper_idle(true);
         self.event(0, 0)
@@ -256,7 +260,7 @@ impl Stepper {
             line: s.line,
             moving: s.steps.iter().any(|&n| n != 0),
         };
-        rt.set_running(s.speed_mm_min, s.line);
+        rt.set_running(s.speed_mm_min, s.line, s.cut);
         if s.new_block {
             self.acc = [self.run.threshold / 2; AXES];
             if s.dir_mask != self.dir {

@@ -7,7 +7,7 @@
 //! handed out exactly: the last segment of a block takes every step left.
 
 use super::{Segment, StepConfig, MAX_AMASS};
-use crate::planner::{Block, BlockKind, Planner, Profile, Shape};
+use crate::planner::{Block, BlockKind, Planner, Profile, Shape, Watch};
 use crate::realtime::{Realtime, Trip};
 use crate::settings::Settings;
 
@@ -387,6 +387,7 @@ impl Preparer {
                     generation: rt.generation(),
                     speed_mm_min: 0.0,
                     line: b.line,
+                    cut: 0.0,
                 });
             }
             return None;
@@ -451,6 +452,18 @@ impl Preparer {
             generation: rt.generation(),
             speed_mm_min,
             line: b.line,
+            cut: cut_ratio(&b, speed_mm_min),
         })
     }
+}
+
+/// `Segment::cut` of a segment of `b` at `speed_mm_min`: only plain feed
+/// moves cut (not rapids, homing or probing), and a cutting segment is
+/// never 0 however slow it starts.
+fn cut_ratio(b: &Block, speed_mm_min: f32) -> f32 {
+    let feed = b.programmed * 60.0;
+    if b.rapid || b.watch != Watch::default() || !(feed > 0.0 && feed.is_finite()) {
+        return 0.0;
+    }
+    (speed_mm_min / feed).max(f32::MIN_POSITIVE)
 }

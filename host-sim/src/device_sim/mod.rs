@@ -42,13 +42,19 @@ pub const BACKLOG: usize = 16384;
 /// `WAKE_MS`).
 const WAKE_MS: u16 = 0;
 
-/// Output bytes collected for the transport.
+/// Output bytes collected for the transport; with a capacity (`.1`, the
+/// board's TX ring size) it reports its room as the ring does, so tests
+/// can leave replies unread and see what the board does with a full ring.
 #[derive(Debug, Default)]
-pub struct TxBuf(pub Vec<u8>);
+pub struct TxBuf(pub Vec<u8>, pub Option<usize>);
 
 impl Tx for TxBuf {
     fn send(&mut self, bytes: &[u8]) {
         self.0.extend_from_slice(bytes);
+    }
+    fn room(&self) -> usize {
+        self.1
+            .map_or(usize::MAX, |cap| cap.saturating_sub(self.0.len()))
     }
 }
 

@@ -35,7 +35,7 @@ pub fn check_vectors(elf: &Path) -> Result<()> {
     Ok(())
 }
 
-fn symbol(file: &ElfFile32<'_>, name: &str) -> Result<u32> {
+pub(super) fn symbol(file: &ElfFile32<'_>, name: &str) -> Result<u32> {
     let sym = file
         .symbol_by_name(name)
         .with_context(|| format!("no symbol `{name}` in the ELF"))?;

@@ -19,11 +19,32 @@ use stm32f4xx_hal as _;
 
 /// Core clock the step rate is quoted for (the F411 at 96 MHz).
 const TARGET_HZ: f32 = 96.0e6;
-/// Cortex-M4 exception entry and exit (stacking/unstacking, no FPU context,
-/// zero-wait-state flash: ART accelerator hit), cycles.
+/// Cortex-M4 exception entry and exit, cycles: 12 to stack eight words
+/// and fetch the vector, 12 to unstack (RM: 12 each with zero-wait-state
+/// memory; the step handlers use no FPU register, so lazy stacking adds
+/// nothing). QEMU's -icount counts neither: they are added here.
 const ISR_ENTRY_EXIT: f32 = 12.0 + 12.0;
-/// Assumed cycles per instruction of the straight-line ISR code.
-const CPI: f32 = 1.0;
+/// Instructions of the RTIC binding around the driver, per interrupt, that
+/// the timed region does not contain: the vector's function (BASEPRI save
+/// and restore for a priority-3 task), `StepTask::on_interrupt`'s call,
+/// its prologue/epilogue and the `try_send` test of its result.
+const BINDING_INSNS: f32 = 14.0;
+/// Assumed cycles per instruction of the handler code: QEMU counts
+/// instructions, the chip spends cycles. Loads take 2 cycles, taken
+/// branches 2-4 (pipeline refill), ALU operations 1; flash at 96 MHz has 3
+/// wait states, hidden by the ART accelerator while the handler stays in
+/// its 1 KB instruction cache (it is small and runs at every step). 1.3 is
+/// an estimate, not a measurement: only DWT.CYCCNT on a board settles it.
+const CPI: f32 = 1.3;
+/// Peripheral reads per step and their extra cycles: TIM5 CNT at the rise
+/// and at the fall (APB1 at 48 MHz behind the bridge: about 5 cycles
+/// each), GPIOA IDR at the rise (AHB1: about 2). Stores go through the
+/// write buffer and do not stall.
+const BUS_CYCLES: f32 = 2.0 * 5.0 + 2.0;
+/// Interrupts per step: the rise and the fall.
+const IRQS_PER_STEP: f32 = 2.0;
+/// The default `$201` (burin's step-rate ceiling), Hz.
+const DEFAULT_201_HZ: f32 = 200_000.0;
 /// Same size as the firmware's ring (host-sim uses 64 too).
 const PLANNER_BLOCKS: usize = 64;
 /// Step timer rate the stepper is configured with (TIM5 at 96 MHz).
@@ -165,6 +186,7 @@ fn segment(steps: [u32; AXES], events: u32, dir_mask: u8, new_block: bool) -> Se
         generation: 0,
         speed_mm_min: 6000.0,
         line: 1,
+        cut: 0.0,
     }
 }
 
@@ -345,9 +367,13 @@ pub fn run() -> ! {
     let (one, four) = (rise1 + fall1, rise4 + fall4);
     let line = line(&mut clock);
     let plan = plan_block(&mut clock);
-    // Two interrupts per step: rise and fall.
-    let cycles = one * CPI + 2.0 * ISR_ENTRY_EXIT;
+    // Every cycle one step costs: both handlers' instructions and their
+    // bindings at the assumed CPI, both interrupts' entry and exit, and the
+    // peripheral reads' bus stalls.
+    let path_insns = one + IRQS_PER_STEP * BINDING_INSNS;
+    let cycles = path_insns * CPI + IRQS_PER_STEP * ISR_ENTRY_EXIT + BUS_CYCLES;
     let rate = TARGET_HZ / cycles;
+    let cpu = |hz: f32| cycles * hz / TARGET_HZ * 100.0;
     hprintln!("step_event_insns_1axis {}", libm::roundf(one) as u32);
     hprintln!("step_event_insns_4axis {}", libm::roundf(four) as u32);
     hprintln!("step_rise_insns_1axis {}", libm::roundf(rise1) as u32);
@@ -356,11 +382,26 @@ pub fn run() -> ! {
     hprintln!("step_fall_insns_4axis {}", libm::roundf(fall4) as u32);
     hprintln!("line_insns {}", libm::roundf(line) as u32);
     hprintln!("plan_block_insns {}", libm::roundf(plan) as u32);
+    hprintln!("step_path_insns_1axis {}", libm::roundf(path_insns) as u32);
+    hprintln!("step_path_cycles_1axis {}", libm::roundf(cycles) as u32);
     hprintln!("max_step_rate_hz_1axis {}", libm::roundf(rate) as u32);
     hprintln!(
-        "# max_step_rate_hz_1axis = 96 MHz / (step_event_insns_1axis x {} CPI + 2 x {} cycles ISR entry/exit); step_event = rise + fall handler",
+        "cpu_percent_at_100khz {}",
+        libm::roundf(cpu(100_000.0)) as u32
+    );
+    hprintln!(
+        "cpu_percent_at_default_201 {}",
+        libm::roundf(cpu(DEFAULT_201_HZ)) as u32
+    );
+    hprintln!(
+        "# step_path_cycles_1axis = (step_event_insns_1axis + {} x {} binding insns) x {} CPI (assumed) + {} interrupts x {} cycles entry/exit + {} cycles of peripheral-read stalls; max_step_rate_hz_1axis = 96 MHz / that; cpu_percent_at_* = that x rate / 96 MHz ($201 default {} Hz)",
+        IRQS_PER_STEP,
+        BINDING_INSNS,
         CPI,
-        ISR_ENTRY_EXIT
+        IRQS_PER_STEP,
+        ISR_ENTRY_EXIT,
+        BUS_CYCLES,
+        DEFAULT_201_HZ
     );
     exit(true)
 }

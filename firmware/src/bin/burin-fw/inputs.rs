@@ -7,11 +7,12 @@
 //! flip side: EXTI9_5 carries both Y and Z limits and is masked for both.
 //!
 //! Who acts when:
-//! - limits (EXTI4, EXTI9_5) and e-stop (EXTI2) act in their interrupt on
-//!   the first edge: hard-limit trip / reset, then mask the line;
-//! - feed hold, cycle start (EXTI1, EXTI0) and the probe (EXTI3) only mask
-//!   their line and leave the edge to the heartbeat, which acts once the
-//!   level has settled;
+//! - limits (EXTI4, EXTI9_5), e-stop (EXTI2) and feed hold (EXTI1) act in
+//!   their interrupt on the first edge: hard-limit trip / reset / hold
+//!   flag, then mask the line;
+//! - cycle start (EXTI0) and the probe (EXTI3) only mask their line and
+//!   leave the edge to the heartbeat, which acts once the level has
+//!   settled;
 //! - the heartbeat unmasks a line once `Debounce` says it settled.
 use crate::boards::board;
 use burin::inputs::{self as inp, Change, Debounce};
@@ -133,6 +134,18 @@ pub fn on_estop() -> bool {
     if act {
         EDGES.fetch_or(u16::from(inp::ESTOP) << 8, Relaxed);
         estop();
+    }
+    act
+}
+
+/// Feed-hold interrupt: raises the hold flag (as a `!` from the host) if
+/// the button reads pressed after its edge; the caller wakes the session.
+pub fn on_feed_hold() -> bool {
+    let fired = take_edges(Interrupt::EXTI1, inp::FEED_HOLD);
+    let act = inp::acts_now(fired, active_now()) & inp::FEED_HOLD != 0;
+    if act {
+        EDGES.fetch_or(u16::from(inp::FEED_HOLD) << 8, Relaxed);
+        crate::FLAGS.raise(protocol::Rt::FeedHold);
     }
     act
 }

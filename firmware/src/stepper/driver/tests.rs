@@ -87,6 +87,7 @@ fn segment(steps: u32, dir: u8, new_block: bool) -> Segment {
         generation: 0,
         speed_mm_min: 1.0,
         line: 1,
+        cut: 0.0,
     }
 }
 

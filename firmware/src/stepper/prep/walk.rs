@@ -138,6 +138,7 @@ impl Preparer {
             generation: rt.generation(),
             speed_mm_min: self.v * 60.0,
             line: self.last_line,
+            cut: 0.0,
         }
     }
 
@@ -165,6 +166,7 @@ impl Preparer {
             generation: rt.generation(),
             speed_mm_min: 0.0,
             line: b.line,
+            cut: 0.0,
         })
     }
 }
