@@ -18,6 +18,8 @@ mod block;
 mod codes;
 mod exec;
 mod geom;
+mod homes;
+mod mcodes;
 mod motion;
 mod state;
 
@@ -189,10 +191,14 @@ impl Interpreter {
         saved: &mut Option<Offsets>,
     ) -> Result<(), GcodeError> {
         let mut lx = Lexer::new(line)?;
-        if lx.block_delete && self.state.block_delete {
+        if lx.percent {
+            self.state.percent = homes::percent_line(self.state.percent);
+        }
+        if lx.block_delete && self.state.block_delete || self.state.percent == 2 {
             return Ok(());
         }
         let mut block = Block::default();
+        let mut split = false;
         loop {
             let tok = {
                 let mut tables = Tables::new(&mut self.offsets, saved);
@@ -213,10 +219,16 @@ impl Interpreter {
                         block.msg = Some((text, col));
                     }
                 }
+                Some(Token::Value { text, value, col }) => {
+                    let c = Command::Message(mcodes::value_text(text, value));
+                    buf.push(c)
+                        .map_err(|_| GcodeError::new(ErrorKind::TooManyCommands, col))?;
+                }
                 Some(Token::Word(w)) => {
                     if block.splits_on(&w) {
                         self.run_block(&block, buf, saved)?;
                         block = Block::default();
+                        split = true;
                     }
                     block.add(&w)?;
                     if w.letter == b'M' && w.tenths() == Some(1170) {
@@ -224,6 +236,9 @@ impl Interpreter {
                     }
                 }
             }
+        }
+        if split && block.is_mode_only() {
+            return Err(GcodeError::new(ErrorKind::AmbiguousOrder, block.first_col));
         }
         if !block.is_empty() {
             self.run_block(&block, buf, saved)?;
@@ -293,6 +308,12 @@ impl Interpreter {
         core::mem::take(&mut self.state.offsets_changed)
     }
 
+    /// `$210`: true for BeagleG's G28 (home) and G30 (probe), false for
+    /// RS274NGC's stored positions (the default).
+    pub fn set_g28_homes(&mut self, on: bool) {
+        self.state.g28_homes = on;
+    }
+
     /// Block delete switch (`/` lines skipped while on; on by default).
     pub fn set_block_delete(&mut self, on: bool) {
         self.state.block_delete = on;
@@ -310,6 +331,7 @@ impl Interpreter {
             probe_ok: s.probe_ok,
             tool: s.tool,
             block_delete: s.block_delete,
+            g28_homes: s.g28_homes,
             ..State::new()
         };
     }

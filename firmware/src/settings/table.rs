@@ -131,9 +131,9 @@ const AXIS_GROUPS: [(u16, Kind); 4] = [
     (130, Kind::Real { min: 0.0, max: BIG }),
 ];
 
-/// burin's own, `$200`–`$208` (documented on the [`Settings`] fields;
-/// `$210` is used by other GRBL forks).
-const BURIN: [(u16, Kind); 9] = [
+/// burin's own, `$200`–`$208` and `$210` (documented on the [`Settings`]
+/// fields).
+const BURIN: [(u16, Kind); 10] = [
     (
         200,
         Kind::Real {
@@ -187,6 +187,7 @@ const BURIN: [(u16, Kind); 9] = [
             max: AXES as u32,
         },
     ),
+    (210, Kind::Bool),
 ];
 
 /// The kind of setting `n`, or `None` if there is no such setting.
@@ -305,6 +306,7 @@ impl Settings {
             206 => f32::from(self.homing_order),
             207 => self.enable_delay_us,
             208 => f32::from(self.report_axes),
+            210 => b(self.g28_homes),
             _ => return None,
         })
     }
@@ -371,6 +373,7 @@ impl Settings {
             206 => self.homing_order = u16v,
             207 => self.enable_delay_us = v,
             208 => self.report_axes = u8v,
+            210 => self.g28_homes = on,
             _ => return Err(SettingError::Unknown),
         }
         Ok(())
