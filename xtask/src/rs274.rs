@@ -306,7 +306,11 @@ pub fn run(install: bool) -> Result<()> {
             String::from_utf8_lossy(&std::fs::read(&f).with_context(|| name.clone())?).into_owned();
         let canon = parse(&run_rs274(&bin, &libs, &f).with_context(|| name.clone())?);
         let ours = host_sim::check::motion_ends(&src, &settings);
-        let short = name.rsplit("corpus/").next().unwrap_or(&name);
+        let short = name
+            .rsplit("corpus/")
+            .next()
+            .and_then(|n| n.rsplit("host-sim/").next())
+            .unwrap_or(&name);
         match (canon, ours) {
             (Canon::Ok(theirs), Ok(ours)) => {
                 let theirs = dedup(theirs, close);
