@@ -124,7 +124,10 @@ fn settings_listing() {
     let mut all = String::new();
     reply::settings(&mut all, &Settings::default()).expect("string sink");
     assert_eq!(all.lines().count(), 49);
-    assert!(all.contains("$210=0\r\n"), "G28 meaning listed, RS274NGC by default");
+    assert!(
+        all.contains("$210=0\r\n"),
+        "G28 meaning listed, RS274NGC by default"
+    );
     assert!(all.starts_with("$0=2.000\r\n$1=25\r\n$2=0\r\n"));
 }
 

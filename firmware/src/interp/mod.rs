@@ -17,6 +17,7 @@
 mod block;
 mod codes;
 mod exec;
+mod finite;
 mod geom;
 mod homes;
 mod mcodes;
@@ -30,6 +31,7 @@ use crate::command::{Command, Plane, Pos};
 use crate::gcode::{ErrorKind, GcodeError, Lexer, Name, ParamStore, Params, Token};
 use block::Block;
 use core::fmt::{self, Write};
+use finite::{cmd_finite, non_finite};
 use state::Tables;
 
 /// The interpreter: modal state, offset tables and parameters. About 2.3 KiB.
@@ -82,34 +84,6 @@ impl ParamStore for Env<'_, '_> {
     }
     fn set_named(&mut self, name: &Name, v: f32) -> Result<(), ErrorKind> {
         self.params.set_name(name, v)
-    }
-}
-
-/// Non-zero when some value in `s` is infinite or NaN (exponent all ones).
-/// Branch-free: this runs on every value of every command.
-fn non_finite(s: &[f32]) -> u32 {
-    s.iter().fold(0, |a, v| {
-        a | u32::from(v.to_bits() & 0x7f80_0000 == 0x7f80_0000)
-    })
-}
-
-fn cmd_finite(c: &Command) -> bool {
-    let feed = |f: &crate::command::Feed| match f {
-        crate::command::Feed::PerMin(v) | crate::command::Feed::InverseTime(v) => non_finite(&[*v]),
-    };
-    0 == match c {
-        Command::Rapid { end } => non_finite(end),
-        Command::Line { end, feed: f } | Command::Probe { end, feed: f, .. } => {
-            non_finite(end) | feed(f)
-        }
-        Command::Arc(a) => non_finite(&a.end) | non_finite(&a.center) | feed(&a.feed),
-        Command::Spline(s) => {
-            non_finite(&s.end) | non_finite(&s.p1) | non_finite(&s.p2) | feed(&s.feed)
-        }
-        Command::Dwell { seconds } => non_finite(&[*seconds]),
-        Command::Spindle { speed, .. } => non_finite(&[*speed]),
-        Command::Aux { value, .. } => non_finite(&[*value]),
-        _ => 0,
     }
 }
 
