@@ -62,10 +62,8 @@ pub(crate) fn centre_r(s: P2, e: P2, r: f32, cw: bool) -> Result<P2, ErrorKind> 
     let ar = r.abs();
     let half = d * 0.5;
     let h2 = ar * ar - half * half;
-    if h2 < 0.0 {
-        if half - ar > R_SHORTFALL {
-            return Err(ErrorKind::ArcRadius);
-        }
+    if h2 < 0.0 && half - ar > R_SHORTFALL {
+        return Err(ErrorKind::ArcRadius);
     }
     let h = sqrtf(h2.max(0.0));
     let u = [chord[0] / d, chord[1] / d];
