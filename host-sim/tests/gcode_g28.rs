@@ -2,6 +2,7 @@
 //! check mode. A file shaped like Fusion 360's GRBL post output used to
 //! stop at `G28 G91 Z0` with `error 409 homing is disabled`.
 mod common;
+mod rig;
 
 use common::*;
 use host_sim::engine::run_job;
@@ -61,4 +62,19 @@ fn machine_file_key_sets_210() {
     std::fs::write(&p, "[gcode]\ng28_meaning = \"grbl\"\n").unwrap();
     assert!(host_sim::config::MachineConfig::load(&p).is_err());
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Through the device session: operator text reaches the sender as
+/// `[MSG:]` before the line's `ok`; heaters are a GRBL error (20).
+#[test]
+fn device_prints_messages_and_refuses_heaters() {
+    let cfg = rig::origin();
+    let mut rec = host_sim::record::Discard;
+    let mut r = rig::Rig::new(&cfg, &mut rec);
+    r.lines();
+    assert_eq!(r.cmd("#1=12.5"), ["ok"]);
+    assert_eq!(r.cmd("#1"), ["[MSG:#1=12.5]", "ok"]);
+    assert_eq!(r.cmd("M10"), ["[MSG:M10: vacuum not fitted]", "ok"]);
+    assert_eq!(r.cmd("(MSG, hello)"), ["[MSG:hello]", "ok"]);
+    assert_eq!(r.cmd("M109 S200"), ["error:20"]);
 }
