@@ -31,19 +31,15 @@ const KNOWN_FAULTS: &[(&str, u16, &str)] = &[
         "`$X` is a GRBL system command for the link layer, not G-code",
     ),
     (
-        "good-arc.big.imperial.center-format.ngc",
-        321,
-        "radius mismatch beyond issue 3's 0.5 mm / 0.1% rule (LinuxCNC 2.9 is looser)",
+        "gcode-rs/_mach3.gcode",
+        318,
+        "`G53 G90 G40` without G0/G1 or axis words: LinuxCNC refuses it too (issue 14)",
     ),
-    ("good-arc.big.metric.center-format.ngc", 321, "as above"),
     (
-        "good-arc.medium.imperial.center-format.ngc",
-        321,
-        "as above",
+        "beagleg/spiral-cut.gcode",
+        342,
+        "`I0` in a G19 arc: an offset off the plane, which LinuxCNC refuses (issue 14)",
     ),
-    ("good-arc.medium.metric.center-format.ngc", 321, "as above"),
-    ("good-arc.small.imperial.center-format.ngc", 321, "as above"),
-    ("good-arc.small.metric.center-format.ngc", 321, "as above"),
 ];
 
 fn corpus_dir() -> Option<PathBuf> {

@@ -26,7 +26,9 @@ fn gc_state_report() {
     let mut s = String::new();
     it.write_gc_state(&mut s).unwrap();
     assert_eq!(s, "G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0");
-    run(&mut it, "G20 G91 G18 G59.2 M4 S300 M7 M8 T2 F10 G1");
+    // M7 and M8 are one modal group: two lines (LinuxCNC), both stay on.
+    run(&mut it, "G20 G91 G18 G59.2 M4 S300 M7 T2 F10 G1");
+    run(&mut it, "M8");
     s.clear();
     it.write_gc_state(&mut s).unwrap();
     assert_eq!(s, "G1 G59.2 G18 G20 G91 G94 M4 M7 M8 T2 F10 S300");
@@ -83,6 +85,7 @@ fn failing_line_restores_offsets_it_wrote() {
 #[test]
 fn machine_position_feedback() {
     let mut it = Interpreter::new();
+    it.set_g28_homes(true);
     run(&mut it, "G28");
     assert!(it.needs_sync());
     it.set_machine_position([-5.0, -6.0, -1.0, 0.0]);

@@ -148,13 +148,16 @@ pub fn command_json(c: &Command) -> String {
 
 /// Interprets `source` line by line; prints errors (and with `dump` the
 /// commands) to `out`; returns how many lines failed.
+/// `settings` are the machine's (`--machine`): `$210` decides what G28/G30 mean.
 pub fn check_file(
     path_label: &str,
     source: &str,
     dump: bool,
+    settings: &burin::settings::Settings,
     out: &mut dyn Write,
 ) -> io::Result<usize> {
     let mut interp = Interpreter::new();
+    interp.set_g28_homes(settings.g28_homes);
     let mut errors = 0;
     for (i, line) in source.split('\n').enumerate() {
         let n = i + 1;
@@ -184,4 +187,39 @@ pub fn check_file(
         }
     }
     Ok(errors)
+}
+
+/// What a conformance comparison needs of a file: every motion end point
+/// (machine mm, A in degrees) up to the first M2/M30 (LinuxCNC reads no
+/// further), or the first error as `(line, "CODE message")`.
+pub fn motion_ends(
+    source: &str,
+    settings: &burin::settings::Settings,
+) -> Result<Vec<Pos>, (usize, String)> {
+    let mut interp = Interpreter::new();
+    interp.set_g28_homes(settings.g28_homes);
+    let mut ends = Vec::new();
+    for (i, line) in source.split('\n').enumerate() {
+        let mut cmds: Vec<Command> = Vec::new();
+        interp
+            .execute_line(line.as_bytes(), &mut |c| cmds.push(c))
+            .map_err(|e| (i + 1, format!("error[{}]: {e}", e.code())))?;
+        for c in &cmds {
+            if matches!(c, Command::ProgramEnd) {
+                return Ok(ends);
+            }
+            ends.extend(c.end().copied());
+        }
+        if interp.needs_sync() {
+            match cmds
+                .iter()
+                .rev()
+                .find(|c| matches!(c, Command::Probe { .. }))
+            {
+                Some(Command::Probe { end, .. }) => interp.probe_finished(*end, true),
+                _ => interp.set_machine_position(interp.state().pos),
+            }
+        }
+    }
+    Ok(ends)
 }

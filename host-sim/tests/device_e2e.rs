@@ -222,6 +222,7 @@ fn text_char_counting_and_send_response_end_where_run_job_ends() {
 #[test]
 fn device_probe_then_relative_move_matches_run_job() {
     let mut cfg = common::config_with_switches();
+    cfg.settings.g28_homes = true; // $210=1: the reference's G28 homes
     cfg.start_position_mm = [-40.0, -40.0, -10.0, 0.0];
     let job = "$H\nG90 G0 X-10 Y-10\nG38.2 Z-40 F600\nG91 G1 Z5 F500\nG90\nG1 X[#5061] F800\n";
     let reference = job.replacen("$H", "G28", 1);

@@ -62,6 +62,7 @@ fn gcode_errors_carry_line_numbers_and_job_continues() {
 #[test]
 fn gcode_homing_and_probing_sync_the_interpreter() {
     let mut cfg = config_with_switches();
+    cfg.settings.g28_homes = true; // $210=1: G28 homes (BeagleG)
     cfg.start_position_mm = [-40.0, -40.0, -10.0, 0.0];
     // Home, probe down to the plate at Z=-20, then a relative move from
     // wherever the probe stopped.

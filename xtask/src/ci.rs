@@ -57,6 +57,11 @@ pub fn run_all() -> Result<i32> {
         })?;
     }
     step("corpus conformance (../shared/corpus)", corpus)?;
+    // Fetches LinuxCNC's rs274 from Debian into target/ the first time;
+    // says "skipped" when that is not possible.
+    step("rs274 conformance (LinuxCNC): cargo xtask rs274", || {
+        crate::rs274::run(true)
+    })?;
     // Skipped (not failed) without nightly or cargo-fuzz; fails on a finding.
     step(
         &format!("fuzz: every target {FUZZ_CI_SECS} s (cargo xtask fuzz)"),

@@ -8,6 +8,7 @@ mod fuzz;
 mod fuzz_seeds;
 mod image;
 mod qemu;
+mod rs274;
 mod senders;
 mod sim;
 mod stream;
@@ -45,6 +46,12 @@ enum Cmd {
     Senders,
     /// Coverage-guided fuzzing (cargo-fuzz, nightly): all targets or one.
     Fuzz(fuzz::FuzzArgs),
+    /// Compare the interpreter's end points with LinuxCNC's rs274 (corpus + own programs).
+    Rs274 {
+        /// Fetch rs274 from Debian into target/rs274 if it is not there.
+        #[arg(long)]
+        install: bool,
+    },
 }
 
 fn main() {
@@ -59,6 +66,7 @@ fn main() {
         Cmd::BenchTarget => bench_target::run(),
         Cmd::Senders => senders::run(),
         Cmd::Fuzz(a) => fuzz::run(&a),
+        Cmd::Rs274 { install } => rs274::run(install).map(|()| 0),
     };
     match result {
         Ok(code) => std::process::exit(code),

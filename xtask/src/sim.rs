@@ -65,19 +65,19 @@ pub fn run(a: SimArgs) -> Result<i32> {
         ),
         None => ("host-sim/jobs/demo.gcode".to_string(), DEMO.to_string()),
     };
+    let cfg = match &a.machine {
+        Some(p) => MachineConfig::load(p).map_err(|e| anyhow::anyhow!("{e}"))?,
+        None => MachineConfig::default(),
+    };
     if a.check {
         let mut out = std::io::stdout().lock();
-        let errors = host_sim::check::check_file(&name, &source, a.dump, &mut out)?;
+        let errors = host_sim::check::check_file(&name, &source, a.dump, &cfg.settings, &mut out)?;
         if errors > 0 {
             eprintln!("{name}: {errors} error(s)");
             return Ok(1);
         }
         return Ok(0);
     }
-    let cfg = match &a.machine {
-        Some(p) => MachineConfig::load(p).map_err(|e| anyhow::anyhow!("{e}"))?,
-        None => MachineConfig::default(),
-    };
     let outputs = Outputs {
         json: a.json,
         trace: a.trace,

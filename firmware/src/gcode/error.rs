@@ -13,6 +13,7 @@
 //! | 200–219 | parameters and expressions |
 //! | 300–309 | words that are recognised but not supported (named) |
 //! | 310–339 | block semantics: modal groups, missing/unused words, arcs |
+//! | 340–359 | dialect rules: several commands on a line, BeagleG's M list |
 
 use core::fmt;
 
@@ -120,6 +121,15 @@ pub enum ErrorKind {
     /// G10 L2/L20, G28.1, G30.1 or M500 with the spindle or coolant on: a
     /// flash write stalls the CPU (and the e-stop handler) for up to 0.8 s.
     FlashWriteOutputsOn,
+    // --- dialect rules (340..) ---
+    /// Mode words (G20, G91, F, ...) after the last command of a line that
+    /// holds several: RS274NGC would apply them to that command, BeagleG
+    /// only to the lines after, so the line is refused.
+    AmbiguousOrder,
+    /// M104/M105/M109/M116: a 3D printer's heater commands.
+    NoHeaters,
+    /// An arc offset (I/J/K) off the active plane: `I` in G19, `J` in G18, `K` in G17.
+    ArcWordOffPlane(u8),
 }
 
 impl ErrorKind {
@@ -173,6 +183,9 @@ impl ErrorKind {
             TooManyCommands => 326,
             WordAfterSplit(_) => 327,
             FlashWriteOutputsOn => 328,
+            AmbiguousOrder => 340,
+            NoHeaters => 341,
+            ArcWordOffPlane(_) => 342,
         }
     }
 
@@ -193,7 +206,9 @@ impl ErrorKind {
             ModalGroupViolation => 21,
             UndefinedFeed => 22,
             NotInteger(_) => 23,
-            AxisCommandConflict | WordAfterSplit(_) => 24,
+            AxisCommandConflict | WordAfterSplit(_) | AmbiguousOrder => 24,
+            NoHeaters => 20,
+            ArcWordOffPlane(_) => 36,
             RepeatedWord(_) => 25,
             NoAxisWords => 26,
             ValueWordMissing(_) => 28,
@@ -338,6 +353,11 @@ impl fmt::Display for ErrorKind {
             FlashWriteOutputsOn => {
                 f.write_str("no flash write with spindle or coolant on (M5 M9 first)")
             }
+            AmbiguousOrder => f.write_str(
+                "mode words after the last command of a line with several commands are ambiguous: move them before a command or to their own line",
+            ),
+            NoHeaters => f.write_str("this controller has no heaters (M104/M105/M109/M116)"),
+            ArcWordOffPlane(c) => write!(f, "arc offset {} is not in the active plane", letter(c)),
         }
     }
 }

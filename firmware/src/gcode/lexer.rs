@@ -77,6 +77,13 @@ pub enum Token<'a> {
         text: &'a [u8],
         col: u16,
     },
+    /// A parameter alone at the end of a line (`#1`, `#<x>`): BeagleG
+    /// prints its value. `text` is the reference as written.
+    Value {
+        text: &'a [u8],
+        value: f32,
+        col: u16,
+    },
 }
 
 /// Lexer over one line (without its line terminator).
@@ -215,8 +222,11 @@ impl<'a> Lexer<'a> {
             _ if self.percent => return Err(self.cur.err(ErrorKind::ExpectedLetter(b'%'))),
             b'#' => {
                 self.cur.bump();
-                self.assignment(p, col)?;
+                let v = self.assignment(p, col)?;
                 self.seen_word = true;
+                if v.is_some() {
+                    return Ok(v);
+                }
             }
             _ if !b.is_ascii() => return Err(self.cur.err(ErrorKind::NonAscii)),
             _ => return Err(self.cur.err(ErrorKind::ExpectedLetter(b))),
@@ -282,10 +292,21 @@ impl<'a> Lexer<'a> {
                 .is_some_and(|w| KEYWORDS.iter().any(|k| k.eq_ignore_ascii_case(w)))
     }
 
-    fn assignment(&mut self, p: &mut dyn ParamStore, col: usize) -> LexResult<()> {
+    fn assignment(&mut self, p: &mut dyn ParamStore, col: usize) -> LexResult<Option<Token<'a>>> {
         let r = self.cur.param_ref(p, 1)?;
+        let end = self.cur.pos;
         match self.cur.peek() {
             Some(b'=') => self.cur.bump(),
+            None | Some(b';') => {
+                let value = match &r {
+                    super::expr::ParamRef::Num(n) => p.get(*n),
+                    super::expr::ParamRef::Named(name) => p.get_named(name),
+                }
+                .map_err(|k| self.cur.err_at(k, col))?;
+                let text = self.cur.line.get(col..end).unwrap_or(&[]);
+                let col = (col + 1) as u16;
+                return Ok(Some(Token::Value { text, value, col }));
+            }
             Some(b'+' | b'-' | b'*' | b'/') if self.cur.peek2() == Some(b'=') => {
                 return Err(self
                     .cur
@@ -298,7 +319,7 @@ impl<'a> Lexer<'a> {
             super::expr::ParamRef::Num(n) => p.set(n, v),
             super::expr::ParamRef::Named(name) => p.set_named(&name, v),
         };
-        res.map_err(|k| self.cur.err_at(k, col))
+        res.map_err(|k| self.cur.err_at(k, col)).map(|()| None)
     }
 
     /// At `(`: skips the comment, or returns it as a message.

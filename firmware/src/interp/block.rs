@@ -67,6 +67,7 @@ fn m_group(n: u16) -> Option<MGroup> {
         0 | 1 | 2 | 30 => Stop,
         3..=5 => Spindle,
         7..=9 => Coolant,
+        10 | 11 | 24 | 80..=83 | 104 | 105 | 109 | 111 | 116 | 120 | 121 | 245 | 246 | 355 => Misc,
         17
         | 18
         | 84
@@ -182,12 +183,34 @@ impl<'a> Block<'a> {
         }
     }
 
-    /// Whether `w` starts the next command on the line: a motion G word
-    /// after axis words (BeagleG's `G1 X10 G1 X0`).
+    /// Whether `w` starts the next command on the line (BeagleG reads a
+    /// line left to right): any G word once this block's command has its
+    /// axis words (`G0 X10 G91 G0 X5` is two blocks, so G91 never reaches
+    /// X10), and a motion word after G27/G28/G30 (`G28 G1 X100`: home,
+    /// then move). M and value words never split: RS274NGC's order (spindle
+    /// and coolant before motion) keeps holding for them.
     pub fn splits_on(&self, w: &Word) -> bool {
-        w.letter == b'G'
-            && self.axis_mask() != 0
-            && w.tenths().and_then(g_group) == Some(GGroup::Motion)
+        if w.letter != b'G' {
+            return false;
+        }
+        let grp = w.tenths().and_then(g_group);
+        grp.is_some() && self.axis_mask() != 0
+            || grp == Some(GGroup::Motion)
+                && w.tenths() != Some(800)
+                && matches!(self.g_of(GGroup::NonModal), Some((270 | 280 | 300, _)))
+    }
+
+    /// A block that would only set modes (G20, G91, F, G80, ...): after a
+    /// split it is ambiguous, since RS274NGC would apply those words to the
+    /// earlier command and BeagleG only to later lines.
+    pub fn is_mode_only(&self) -> bool {
+        let axes_ijk = self.axis_mask() != 0
+            || self.present & (bit(b'I') | bit(b'J') | bit(b'K') | bit(b'R')) != 0;
+        !axes_ijk
+            && self.mmask == 0
+            && self.msg.is_none()
+            && self.g_of(GGroup::NonModal).is_none()
+            && matches!(self.g_of(GGroup::Motion), None | Some((800, _)))
     }
 
     /// Adds a word; [`Block::splits_on`] must have been asked first.
@@ -236,26 +259,21 @@ impl<'a> Block<'a> {
                         tenths: t * 10,
                     }));
                 };
-                if grp == MGroup::Coolant {
-                    let b = match t {
-                        7 => 1,
-                        8 => 2,
-                        _ => 4,
-                    };
-                    if self.coolant & b != 0
-                        || (b == 4 && self.coolant != 0)
-                        || (b != 4 && self.coolant & 4 != 0)
-                    {
-                        return err(ErrorKind::ModalGroupViolation);
-                    }
-                    self.coolant |= b;
-                }
                 let slot = self
                     .m
                     .get_mut(grp as usize)
                     .ok_or(GcodeError::new(ErrorKind::ModalGroupViolation, w.col))?;
-                if slot.is_some() && grp != MGroup::Coolant {
+                // One M code per group and line, as in LinuxCNC: `M7 M8`
+                // is refused (write them on two lines for both coolants).
+                if slot.is_some() {
                     return err(ErrorKind::ModalGroupViolation);
+                }
+                if grp == MGroup::Coolant {
+                    self.coolant = match t {
+                        7 => 1,
+                        8 => 2,
+                        _ => 4,
+                    };
                 }
                 *slot = Some((t, w.col));
                 self.mmask |= 1 << grp as u8;

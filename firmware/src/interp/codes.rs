@@ -31,6 +31,11 @@ pub(super) fn misc_m(
                 axes,
             }
         }
+        42 if !cx.b.has(b'S') => {
+            let pin = cx.int(b'P', 0.0, 255.0)? as u8;
+            return super::mcodes::report_pin(pin, col, out);
+        }
+        m if super::mcodes::handles(m) => return super::mcodes::beagleg(cx, m, col, out),
         42 => {
             let pin = cx.int(b'P', 0.0, 255.0)? as u8;
             let s = cx
@@ -155,14 +160,16 @@ pub(super) fn non_modal_g(
                     pos.get(i).copied().unwrap_or(0.0),
                     g92.get(i).copied().unwrap_or(0.0),
                 );
+                // L20: the current point becomes `v`, whatever G90/G91 say
+                // (LinuxCNC); L2 under G91 adds to the offset (BeagleG).
                 *o = match (l, inc) {
                     (2, false) => *v,
                     (2, true) => *o + v,
-                    (_, false) => p_i - g_i - v,
-                    (_, true) => *o - v,
+                    _ => p_i - g_i - v,
                 };
             }
         }
+        280 | 300 if !st.g28_homes => super::homes::go_stored(cx, st, tb, t, col, out)?,
         270 | 280 => {
             let mask = b.axis_mask();
             for l in AXIS_LETTERS {

@@ -5,11 +5,13 @@
 //! - mode words (G20/G21, G90/G91, G17-19, G93/94, G54..) apply to the whole
 //!   block, before any number in it is interpreted (as GRBL does);
 //! - G4 P is seconds (RS274NGC, GRBL), never milliseconds;
-//! - G28 homes the named axes, all when none are named (BeagleG/RepRap);
-//!   axis values are ignored and the homed axes are taken to be at machine 0;
+//! - G28/G30 follow `$210` (`homes.rs`): by default RS274NGC's stored
+//!   positions through an intermediate point; with `$210=1` G28 homes the
+//!   named axes, all when none are named (BeagleG/RepRap; axis values are
+//!   ignored and the homed axes are taken to be at machine 0), and G30
+//!   probes down along Z by [`G30_PROBE_TRAVEL`], an optional Z word being
+//!   the touch plate's thickness, which becomes work Z on contact;
 //! - G27 seeks the switches of the named (or all) axes to verify home;
-//! - G30 probes down along Z by [`G30_PROBE_TRAVEL`]; an optional Z word is the
-//!   thickness of the touch plate, which becomes work Z on contact (BeagleG);
 //! - G40, G49, G61, G61.1 and G64 (with its P/Q tolerances) are accepted as
 //!   no-ops: they select the only modes burin has (no cutter or tool-length
 //!   compensation; blending is the planner's junction deviation);
@@ -19,7 +21,8 @@
 //!   where they name axes (G27, G28, M17, M18, M84); elsewhere they are a
 //!   bad-number error, never a silent 0;
 //! - G10 L2 under G91 adds to the stored offset (BeagleG); LinuxCNC 2.9
-//!   treats L2 values as absolute in both modes;
+//!   treats L2 values as absolute in both modes; G10 L20 makes the current
+//!   point the given value in both modes (LinuxCNC);
 //! - G2/G3 with in-plane offsets but no axis words is a full circle where
 //!   the tool is (LinuxCNC); an explicit G2/G3 with neither is an error;
 //! - G80 may share a block with another motion code, which wins (LinuxCNC);
@@ -27,10 +30,11 @@
 //! - M42 P<pin> S<0-255> sets an aux output at once; M62/M63 switch one
 //!   with motion, M64/M65 at once; M106 [P<fan>] [S<0-255>] / M107 drive
 //!   aux output P (default 0) with motion;
-//! - the centre-format radius check is issue 3's rule: error when the
-//!   radii differ by more than 0.5 mm, or by more than 0.005 mm and 0.1%
-//!   of the radius (LinuxCNC 2.9 is looser: 0.0283 mm and 0.1%); the centre
-//!   is then moved onto the chord's bisector so the arc is consistent.
+//! - the centre-format radius check is LinuxCNC 2.9's as measured (issue
+//!   14): error when the radii differ by more than 2.83 mm, or by more than
+//!   0.0283 mm and 0.1 % of the radius; the centre is then moved onto the
+//!   chord's bisector so the arc is consistent. An R short of half the
+//!   chord by up to 0.001 mm cuts the semicircle; more is an error.
 
 use super::block::{bit, Block, GGroup, MGroup, AXIS_LETTERS, MODE_GROUPS};
 use super::state::{Motion, State, Tables};
@@ -194,7 +198,7 @@ pub(crate) fn execute(
         }
     }
     let misc = b.m_of(MGroup::Misc).map(|m| m.0);
-    let s_is_arg = matches!(misc, Some(42 | 106 | 220));
+    let s_is_arg = matches!(misc, Some(42 | 106 | 220)) || misc.is_some_and(super::mcodes::takes_s);
 
     let inverse_f = feed_word(&mut cx, st)?;
     let spindle_m = b.m_of(MGroup::Spindle);
@@ -269,7 +273,7 @@ pub(crate) fn execute(
 
     // `G28 X Y` / `M18 Z`: bare axis letters only name axes; anywhere else
     // a missing number is an error, never a silent 0.
-    let names_axes = matches!(nm, Some(270 | 280)) || motors_take_axes;
+    let names_axes = nm == Some(270) || nm == Some(280) && st.g28_homes || motors_take_axes;
     if b.bare_col != 0 && !names_axes {
         return Err(GcodeError::new(ErrorKind::BadNumber, b.bare_col));
     }
@@ -283,7 +287,10 @@ pub(crate) fn execute(
     if let Some((t, _)) = motion_word {
         st.motion = Motion::from_tenths(t).unwrap_or(Motion::Cancel);
     }
-    if g53 && (st.incremental || !matches!(st.motion, Motion::Rapid | Motion::Linear)) {
+    // G53 alone is refused (LinuxCNC): it must move, or name G0/G1.
+    let g53_alone = axes == 0 && motion_word.is_none();
+    if g53 && (st.incremental || g53_alone || !matches!(st.motion, Motion::Rapid | Motion::Linear))
+    {
         return Err(GcodeError::new(
             ErrorKind::G53Invalid,
             non_modal.map_or(col0, |x| x.1),
@@ -315,6 +322,9 @@ pub(crate) fn execute(
                 st.wcs = 0;
                 st.g92_active = false;
                 st.last_g5 = None;
+                if st.percent == 1 {
+                    st.percent = 3;
+                }
                 push(
                     out,
                     Command::Spindle {

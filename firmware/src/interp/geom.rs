@@ -15,21 +15,29 @@ fn len(a: P2) -> f32 {
 /// Start and end closer than this (mm) are the same point: a full circle.
 pub(crate) const SAME_POINT: f32 = 1e-4;
 
-/// LinuxCNC's tolerance for centre-format arcs: the start and end radii may
-/// differ by at most 0.5 mm, and by at most 0.005 mm unless that is within
-/// 0.1% of the radius.
-pub(crate) fn radius_mismatch(rs: f32, re: f32) -> bool {
+/// LinuxCNC 2.9's tolerance for centre-format arcs, as measured with its
+/// `rs274` (issue 14): the start and end radii may differ by at most
+/// 100 × `tol`, and by more than `tol` only when that is within 0.1 % of
+/// the larger radius. `tol` is 0.0283 mm in G21 and 0.00283 in (0.0718 mm)
+/// in G20: LinuxCNC keeps one constant per unit, so the limits are 2.83 mm
+/// and 7.18 mm. Looser than one might pick, but files LinuxCNC runs must run.
+pub(crate) fn radius_mismatch(rs: f32, re: f32, inch: bool) -> bool {
+    let tol = if inch { 0.002_828 * 25.4 } else { 0.028_28 };
     let d = (rs - re).abs();
-    d > 0.5 || (d > 0.005 && d > 0.001 * rs)
+    d > 100.0 * tol || (d > tol && d > 0.001 * rs.max(re))
 }
+
+/// How far (mm) an R-format radius may fall short of half the chord: the
+/// arc is then the semicircle on the chord (LinuxCNC 2.9, measured).
+pub(crate) const R_SHORTFALL: f32 = 0.001;
 
 /// Centre format (IJK): checks the radii, then moves the centre onto the
 /// chord's perpendicular bisector so both radii agree exactly and the
 /// segmenter never sees an inconsistent arc.
-pub(crate) fn centre_ijk(s: P2, e: P2, c: P2) -> Result<P2, ErrorKind> {
+pub(crate) fn centre_ijk(s: P2, e: P2, c: P2, inch: bool) -> Result<P2, ErrorKind> {
     let rs = len(sub(s, c));
     let re = len(sub(e, c));
-    if rs < SAME_POINT || radius_mismatch(rs, re) {
+    if rs < SAME_POINT || radius_mismatch(rs, re, inch) {
         return Err(ErrorKind::ArcRadius);
     }
     let chord = sub(e, s);
@@ -54,11 +62,8 @@ pub(crate) fn centre_r(s: P2, e: P2, r: f32, cw: bool) -> Result<P2, ErrorKind> 
     let ar = r.abs();
     let half = d * 0.5;
     let h2 = ar * ar - half * half;
-    if h2 < 0.0 {
-        let short = half - ar;
-        if short > 0.005 && short > 0.001 * ar {
-            return Err(ErrorKind::ArcRadius);
-        }
+    if h2 < 0.0 && half - ar > R_SHORTFALL {
+        return Err(ErrorKind::ArcRadius);
     }
     let h = sqrtf(h2.max(0.0));
     let u = [chord[0] / d, chord[1] / d];
@@ -105,13 +110,45 @@ mod tests {
 
     #[test]
     fn ijk_tolerance() {
-        assert!(centre_ijk([0.0, 0.0], [10.0, 0.0], [5.0, 0.0]).is_ok());
+        assert!(centre_ijk([0.0, 0.0], [10.0, 0.0], [5.0, 0.0], false).is_ok());
         assert_eq!(
-            centre_ijk([0.0, 0.0], [10.0, 0.0], [4.0, 0.0]),
+            centre_ijk([0.0, 0.0], [10.0, 0.0], [4.0, 0.0], false),
             Err(ErrorKind::ArcRadius)
         );
         // 0.004 mm off on a 5 mm radius: fine, and the centre is made exact.
-        let c = centre_ijk([0.0, 0.0], [10.0, 0.0], [5.002, 0.0]).unwrap();
+        let c = centre_ijk([0.0, 0.0], [10.0, 0.0], [5.002, 0.0], false).unwrap();
         assert!((c[0] - 5.0).abs() < 1e-5);
+    }
+
+    /// Issue 14's figures: |dr| 0.02 on r=10 and 0.9 on r=1000 pass;
+    /// 0.03 on r=10 (> 0.0283 and > 0.1 %) and 2.9 on r=5000 fail. In
+    /// inches the same rule scales to 0.0718 mm and 7.18 mm.
+    #[test]
+    fn centre_tolerance_is_linuxcnc_29() {
+        assert!(!radius_mismatch(10.0, 10.02, false));
+        assert!(!radius_mismatch(1000.0, 1000.9, false));
+        assert!(radius_mismatch(10.0, 10.03, false));
+        assert!(radius_mismatch(5000.0, 5002.9, false));
+        assert!(!radius_mismatch(5000.0, 5002.8, false));
+        assert!(!radius_mismatch(10.0, 10.07, true));
+        assert!(radius_mismatch(10.0, 10.08, true));
+        assert!(!radius_mismatch(7620.0, 7627.1, true));
+        assert!(radius_mismatch(7620.0, 7627.3, true));
+    }
+
+    /// R short of half the chord: up to 0.001 mm cuts the semicircle, more is an error.
+    #[test]
+    fn r_shortfall() {
+        let c = centre_r([0.0, 0.0], [10.0, 0.0], 4.9995, true).unwrap();
+        assert!((c[0] - 5.0).abs() < 1e-5 && c[1].abs() < 1e-5, "{c:?}");
+        assert_eq!(
+            centre_r([0.0, 0.0], [10.0, 0.0], 4.998, true),
+            Err(ErrorKind::ArcRadius)
+        );
+        // 0.1 % of R used to pass silently; no longer.
+        assert_eq!(
+            centre_r([0.0, 0.0], [2000.0, 0.0], 999.5, true),
+            Err(ErrorKind::ArcRadius)
+        );
     }
 }

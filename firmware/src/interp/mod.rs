@@ -17,7 +17,10 @@
 mod block;
 mod codes;
 mod exec;
+mod finite;
 mod geom;
+mod homes;
+mod mcodes;
 mod motion;
 mod state;
 
@@ -28,6 +31,7 @@ use crate::command::{Command, Plane, Pos};
 use crate::gcode::{ErrorKind, GcodeError, Lexer, Name, ParamStore, Params, Token};
 use block::Block;
 use core::fmt::{self, Write};
+use finite::{cmd_finite, non_finite};
 use state::Tables;
 
 /// The interpreter: modal state, offset tables and parameters. About 2.3 KiB.
@@ -80,34 +84,6 @@ impl ParamStore for Env<'_, '_> {
     }
     fn set_named(&mut self, name: &Name, v: f32) -> Result<(), ErrorKind> {
         self.params.set_name(name, v)
-    }
-}
-
-/// Non-zero when some value in `s` is infinite or NaN (exponent all ones).
-/// Branch-free: this runs on every value of every command.
-fn non_finite(s: &[f32]) -> u32 {
-    s.iter().fold(0, |a, v| {
-        a | u32::from(v.to_bits() & 0x7f80_0000 == 0x7f80_0000)
-    })
-}
-
-fn cmd_finite(c: &Command) -> bool {
-    let feed = |f: &crate::command::Feed| match f {
-        crate::command::Feed::PerMin(v) | crate::command::Feed::InverseTime(v) => non_finite(&[*v]),
-    };
-    0 == match c {
-        Command::Rapid { end } => non_finite(end),
-        Command::Line { end, feed: f } | Command::Probe { end, feed: f, .. } => {
-            non_finite(end) | feed(f)
-        }
-        Command::Arc(a) => non_finite(&a.end) | non_finite(&a.center) | feed(&a.feed),
-        Command::Spline(s) => {
-            non_finite(&s.end) | non_finite(&s.p1) | non_finite(&s.p2) | feed(&s.feed)
-        }
-        Command::Dwell { seconds } => non_finite(&[*seconds]),
-        Command::Spindle { speed, .. } => non_finite(&[*speed]),
-        Command::Aux { value, .. } => non_finite(&[*value]),
-        _ => 0,
     }
 }
 
@@ -207,10 +183,14 @@ impl Interpreter {
         saved: &mut Option<Offsets>,
     ) -> Result<(), GcodeError> {
         let mut lx = Lexer::new(line)?;
-        if lx.block_delete && self.state.block_delete {
+        if lx.percent {
+            self.state.percent = homes::percent_line(self.state.percent);
+        }
+        if lx.block_delete && self.state.block_delete || self.state.percent == 2 {
             return Ok(());
         }
         let mut block = Block::default();
+        let mut split = false;
         loop {
             let tok = {
                 let mut tables = Tables::new(&mut self.offsets, saved);
@@ -231,10 +211,16 @@ impl Interpreter {
                         block.msg = Some((text, col));
                     }
                 }
+                Some(Token::Value { text, value, col }) => {
+                    let c = Command::Message(mcodes::value_text(text, value));
+                    buf.push(c)
+                        .map_err(|_| GcodeError::new(ErrorKind::TooManyCommands, col))?;
+                }
                 Some(Token::Word(w)) => {
                     if block.splits_on(&w) {
                         self.run_block(&block, buf, saved)?;
                         block = Block::default();
+                        split = true;
                     }
                     block.add(&w)?;
                     if w.letter == b'M' && w.tenths() == Some(1170) {
@@ -242,6 +228,9 @@ impl Interpreter {
                     }
                 }
             }
+        }
+        if split && block.is_mode_only() {
+            return Err(GcodeError::new(ErrorKind::AmbiguousOrder, block.first_col));
         }
         if !block.is_empty() {
             self.run_block(&block, buf, saved)?;
@@ -311,6 +300,12 @@ impl Interpreter {
         core::mem::take(&mut self.state.offsets_changed)
     }
 
+    /// `$210`: true for BeagleG's G28 (home) and G30 (probe), false for
+    /// RS274NGC's stored positions (the default).
+    pub fn set_g28_homes(&mut self, on: bool) {
+        self.state.g28_homes = on;
+    }
+
     /// Block delete switch (`/` lines skipped while on; on by default).
     pub fn set_block_delete(&mut self, on: bool) {
         self.state.block_delete = on;
@@ -328,6 +323,7 @@ impl Interpreter {
             probe_ok: s.probe_ok,
             tool: s.tool,
             block_delete: s.block_delete,
+            g28_homes: s.g28_homes,
             ..State::new()
         };
     }

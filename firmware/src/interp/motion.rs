@@ -9,7 +9,7 @@ use crate::command::{Arc, ArcDir, Command, Feed, Plane, Pos, Spline};
 use crate::gcode::{ErrorKind, GcodeError};
 
 /// The target of a motion block in machine mm.
-fn target(cx: &mut Ctx, st: &State, g53: bool) -> Pos {
+pub(super) fn target(cx: &mut Ctx, st: &State, g53: bool) -> Pos {
     let u = st.unit();
     let wco = cx.wco;
     let mut end = st.pos;
@@ -136,8 +136,14 @@ fn arc(cx: &mut Ctx, st: &State, feed: Feed, col: u16) -> Result<Arc, GcodeError
     } else {
         0
     };
-    // Off-plane offsets are legal words but meaningless: consume them (LinuxCNC warns).
+    // An offset off the plane (`K` in G17, `J` in G18, `I` in G19) is an
+    // error, as in LinuxCNC: it would be ignored, and is usually a
+    // forgotten plane select.
     let li = |i: usize| letters.get(i).copied().unwrap_or(b'I');
+    let (_, _, off) = st.plane.axes();
+    if cx.b.has(li(off)) {
+        return Err(cx.err(ErrorKind::ArcWordOffPlane(li(off)), li(off)));
+    }
     let center = if let Some(r) = cx.take(b'R') {
         for l in letters {
             cx.take(l);
@@ -162,7 +168,7 @@ fn arc(cx: &mut Ctx, st: &State, feed: Feed, col: u16) -> Result<Arc, GcodeError
             None => start,
         };
         let c = [abs(o0, a0, s[0]), abs(o1, a1, s[1])];
-        geom::centre_ijk(s, en, c).map_err(|k| GcodeError::new(k, col))?
+        geom::centre_ijk(s, en, c, st.inch).map_err(|k| GcodeError::new(k, col))?
     };
     Ok(Arc {
         end,

@@ -105,6 +105,11 @@ pub struct State {
     pub needs_sync: bool,
     /// G10 L2/L20, G28.1 or G30.1 ran: the device persists the offsets.
     pub offsets_changed: bool,
+    /// `$210=1`: G28 homes and G30 probes (BeagleG); else RS274NGC's stored positions.
+    pub g28_homes: bool,
+    /// `%` lines seen: 1 after the opening one; 2 after the closing one,
+    /// when lines are skipped until the next `%` or a reset.
+    pub percent: u8,
 }
 
 impl Default for State {
@@ -139,6 +144,8 @@ impl State {
             block_delete: true,
             needs_sync: false,
             offsets_changed: false,
+            g28_homes: false,
+            percent: 0,
         }
     }
 

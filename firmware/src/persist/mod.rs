@@ -34,7 +34,7 @@ use crate::AXES;
 use record::{MAX_RECORD, OFFSETS_KEY, OFFSET_RECORDS};
 
 /// Number of `$n` settings (`table::numbers()`; a test keeps them equal).
-pub const SETTINGS: usize = 48;
+pub const SETTINGS: usize = 49;
 
 /// What a load found.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -432,10 +432,16 @@ impl<S: Storage> Device<S> {
             return self.reply_line(Err(protocol::Code::RxOverflow.code()), seq, o);
         }
         let check = self.check;
+        self.interp.set_g28_homes(m.settings().g28_homes);
         let cmds = &mut self.cmds;
         let mut probe = false;
         let mut store = persist::Pending::default();
         let r = self.interp.execute_line(text, &mut |c| {
+            // Operator text shows when the line is read, as GRBL's
+            // `(MSG,…)` does: `[MSG:…]` (a frame in framed mode).
+            if let Command::Message(t) = &c {
+                let _ = crate::link::reply::msg(o, t);
+            }
             if !check && !store.take_command(&c) {
                 probe |= matches!(c, Command::Probe { .. });
                 // Room for a whole line was checked before taking it.

@@ -119,6 +119,11 @@ pub struct Settings {
     /// framed handshake): 3 for an XYZ machine, up to the 4 burin drives.
     /// GRBL senders size their position displays from it.
     pub report_axes: u8,
+    /// `$210` what G28/G30 mean: 0 (default) RS274NGC's and GRBL's stored
+    /// positions through an intermediate point, the meaning CAM posts for
+    /// GRBL assume; 1 BeagleG's: G28 homes, G30 probes Z
+    /// (`interp/homes.rs`).
+    pub g28_homes: bool,
 }
 
 impl Default for Settings {
@@ -168,6 +173,7 @@ impl Default for Settings {
             homing_order: 0x34,
             enable_delay_us: 0.0,
             report_axes: AXES as u8,
+            g28_homes: false,
         }
     }
 }

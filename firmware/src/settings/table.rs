@@ -134,9 +134,9 @@ const AXIS_GROUPS: [(u16, Kind); 4] = [
 /// `$201`'s maximum, Hz (see its table entry).
 pub const MAX_STEP_RATE_HZ: f32 = 250_000.0;
 
-/// burin's own, `$200`–`$208` (documented on the [`Settings`] fields;
-/// `$210` is used by other GRBL forks).
-const BURIN: [(u16, Kind); 9] = [
+/// burin's own, `$200`–`$208` and `$210` (documented on the [`Settings`]
+/// fields).
+const BURIN: [(u16, Kind); 10] = [
     (
         200,
         Kind::Real {
@@ -193,6 +193,7 @@ const BURIN: [(u16, Kind); 9] = [
             max: AXES as u32,
         },
     ),
+    (210, Kind::Bool),
 ];
 
 /// The kind of setting `n`, or `None` if there is no such setting.
@@ -311,6 +312,7 @@ impl Settings {
             206 => f32::from(self.homing_order),
             207 => self.enable_delay_us,
             208 => f32::from(self.report_axes),
+            210 => b(self.g28_homes),
             _ => return None,
         })
     }
@@ -377,6 +379,7 @@ impl Settings {
             206 => self.homing_order = u16v,
             207 => self.enable_delay_us = v,
             208 => self.report_axes = u8v,
+            210 => self.g28_homes = on,
             _ => return Err(SettingError::Unknown),
         }
         Ok(())

@@ -53,8 +53,10 @@ pub fn canon(c: &Command) -> String {
 }
 
 /// Runs a whole program; one output line per command or error.
+/// A program whose first line mentions `$210=1` runs with BeagleG's G28/G30.
 pub fn run(src: &str) -> String {
     let mut it = Interpreter::new();
+    it.set_g28_homes(src.lines().next().is_some_and(|l| l.contains("$210=1")));
     let mut out = String::new();
     for (i, line) in src.split('\n').enumerate() {
         let n = i + 1;

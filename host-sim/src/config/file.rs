@@ -61,6 +61,22 @@ struct File {
     host: Host,
     #[serde(default)]
     interrupts: Irq,
+    #[serde(default)]
+    gcode: Gcode,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct Gcode {
+    /// `$210`: "rs274" (stored positions, the default) or "beagleg" (G28 homes).
+    g28_meaning: Option<G28Name>,
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(rename_all = "lowercase")]
+enum G28Name {
+    Rs274,
+    Beagleg,
 }
 
 #[derive(Deserialize, Default)]
@@ -257,6 +273,9 @@ pub(super) fn apply(text: &str, cfg: &mut MachineConfig) -> Result<(), ConfigErr
         set(&mut dst.max_travel, src.travel_mm);
     }
 
+    if let Some(g) = f.gcode.g28_meaning {
+        s.g28_homes = matches!(g, G28Name::Beagleg);
+    }
     let m = f.motion;
     set(&mut s.junction_deviation, m.junction_deviation_mm);
     set(&mut s.arc_tolerance, m.arc_tolerance_mm);
