@@ -117,6 +117,8 @@ pub enum ErrorKind {
     TooManyCommands,
     /// A word that only the first command of a line may carry.
     WordAfterSplit(u8),
+    /// G86/G88 with the spindle stopped (LinuxCNC refuses them too).
+    SpindleStopped,
 }
 
 impl ErrorKind {
@@ -169,6 +171,7 @@ impl ErrorKind {
             SplinePlane => 325,
             TooManyCommands => 326,
             WordAfterSplit(_) => 327,
+            SpindleStopped => 340,
         }
     }
 
@@ -198,6 +201,7 @@ impl ErrorKind {
             InvalidTarget => 33,
             ArcRadius => 34,
             NoOffsetsInPlane => 35,
+            SpindleStopped => 20,
             UnusedWord(_) | SplinePlane => 36,
             ValueOutOfRange(_) => 4,
             TooManyCommands => 11,
@@ -330,6 +334,7 @@ impl fmt::Display for ErrorKind {
             SplinePlane => f.write_str("G5/G5.1 need G17 and only X/Y axis words"),
             TooManyCommands => f.write_str("too many commands on one line"),
             WordAfterSplit(c) => write!(f, "word {} after a second command on the line", letter(c)),
+            SpindleStopped => f.write_str("G86/G88 need the spindle turning"),
         }
     }
 }

@@ -16,13 +16,17 @@
 
 mod block;
 mod codes;
+pub mod cycles;
 mod exec;
 mod geom;
 mod motion;
 mod state;
+pub mod tools;
 
+pub use cycles::{Cycle, CycleKind, CycleSteps};
 pub use exec::{G30_PROBE_TRAVEL, LINE_COMMANDS};
 pub use state::{Motion, Offsets, State, WCS_COUNT};
+pub use tools::{ToolEntry, TOOLS};
 
 use crate::command::{Command, Plane, Pos};
 use crate::gcode::{ErrorKind, GcodeError, Lexer, Name, ParamStore, Params, Token};
@@ -105,6 +109,11 @@ fn cmd_finite(c: &Command) -> bool {
             non_finite(&s.end) | non_finite(&s.p1) | non_finite(&s.p2) | feed(&s.feed)
         }
         Command::Dwell { seconds } => non_finite(&[*seconds]),
+        Command::Cycle(c) => {
+            non_finite(&c.hole)
+                | non_finite(&c.step)
+                | non_finite(&[c.r, c.bottom, c.clear, c.q, c.p, c.feed, c.speed])
+        }
         Command::Spindle { speed, .. } => non_finite(&[*speed]),
         Command::Aux { value, .. } => non_finite(&[*value]),
         _ => 0,
@@ -119,6 +128,7 @@ impl Interpreter {
                 wcs: [[0.0; crate::AXES]; WCS_COUNT],
                 g28: [0.0; crate::AXES],
                 g30: [0.0; crate::AXES],
+                tools: [ToolEntry::EMPTY; TOOLS],
             },
             params: Params::new(),
         }
@@ -175,8 +185,10 @@ impl Interpreter {
         let tables_bad = saved.is_some()
             && (o.wcs.iter().any(|w| non_finite(w) != 0)
                 || non_finite(&o.g28) != 0
-                || non_finite(&o.g30) != 0);
-        if bad || tables_bad || non_finite(&self.state.pos) != 0 {
+                || non_finite(&o.g30) != 0
+                || o.tools.iter().any(|t| non_finite(&[t.length, t.diameter]) != 0));
+        let pos_bad = non_finite(&self.state.pos) | non_finite(&self.state.tlo) != 0;
+        if bad || tables_bad || pos_bad {
             return Err(GcodeError::new(ErrorKind::NotFinite, b.first_col));
         }
         Ok(())
@@ -265,7 +277,7 @@ impl Interpreter {
                 if !self.state.g92_active {
                     self.state.g92 = [0.0; crate::AXES];
                 }
-                self.state.g92[2] = pos[2] - base - t;
+                self.state.g92[2] = pos[2] - base - self.state.tlo[2] - t;
                 self.state.g92_active = true;
             }
         }
@@ -293,13 +305,29 @@ impl Interpreter {
         core::mem::take(&mut self.state.offsets_changed)
     }
 
+    /// Once after a line that named a tool without a table entry (G43 H,
+    /// M6): the device tells the operator that tool has no offset.
+    pub fn take_tool_warning(&mut self) -> Option<u32> {
+        self.state.tool_warning.take()
+    }
+
+    /// A tool setter measured the new tool: its length offset along Z
+    /// becomes `z` mm (as `G43.1 Z` would set it, in mm).
+    pub fn set_tool_length(&mut self, z: f32) {
+        if z.is_finite() {
+            self.state.tlo = [0.0; crate::AXES];
+            self.state.tlo[2] = z;
+        }
+    }
+
     /// Block delete switch (`/` lines skipped while on; on by default).
     pub fn set_block_delete(&mut self, on: bool) {
         self.state.block_delete = on;
     }
 
     /// GRBL's soft reset: modal state back to defaults; offsets, stored
-    /// positions, parameters and the position survive.
+    /// positions, parameters, the position, the current tool and its
+    /// length offset survive.
     pub fn reset(&mut self) {
         let s = self.state;
         self.state = State {
@@ -309,6 +337,8 @@ impl Interpreter {
             probe: s.probe,
             probe_ok: s.probe_ok,
             tool: s.tool,
+            loaded: s.loaded,
+            tlo: s.tlo,
             block_delete: s.block_delete,
             ..State::new()
         };
@@ -360,8 +390,9 @@ impl Interpreter {
         crate::num::write_short(w, s.speed, 3)
     }
 
-    /// GRBL's `$#` report lines (G54..G59.3, G28, G30, G92, TLO, PRB), all
-    /// axes, machine mm with three decimals, each followed by `eol`.
+    /// GRBL's `$#` report lines (G54..G59.3, G28, G30, G92, TLO, the tool
+    /// table as `[T:n|length|diameter]`, PRB), all axes, machine mm with
+    /// three decimals, each followed by `eol`.
     pub fn write_offsets(&self, w: &mut dyn Write, eol: &str, axes: usize) -> fmt::Result {
         let s = &self.state;
         let pos = |w: &mut dyn Write, p: &Pos| -> fmt::Result {
@@ -391,7 +422,11 @@ impl Interpreter {
             pos(w, p)?;
             write!(w, "]{eol}")?;
         }
-        write!(w, "[TLO:0.000]{eol}[PRB:")?;
+        w.write_str("[TLO:")?;
+        crate::num::write_fixed(w, s.tlo[2], 3)?;
+        write!(w, "]{eol}")?;
+        tools::write_table(w, &o.tools, eol)?;
+        w.write_str("[PRB:")?;
         pos(w, &s.probe)?;
         write!(w, ":{}]{eol}", u8::from(s.probe_ok))
     }

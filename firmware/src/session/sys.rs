@@ -63,7 +63,29 @@ pub(super) fn report_late(e: MachineError, line: u32, o: &mut Out<'_, impl Tx>) 
     });
 }
 
+/// G43 H or M6 named a tool the table does not have: it gets no offset.
+pub(super) fn no_tool_entry(tool: u32, o: &mut Out<'_, impl Tx>) {
+    let _ = write!(o, "[MSG:T{tool} has no tool table entry: no length offset]\r\n");
+}
+
 impl<S: crate::seams::Storage> Device<S> {
+    /// M6 is held at the tool-change position, or the setter measured
+    /// the new tool (its offset goes to the interpreter, which is waiting
+    /// for the change to end before it reads the next line).
+    pub(super) fn tool_event(&mut self, ev: executor::ToolEvent, o: &mut Out<'_, impl Tx>) {
+        match ev {
+            executor::ToolEvent::Change { tool } => {
+                let _ = write!(o, "[MSG:Tool change: load T{tool}, then cycle start]\r\n");
+            }
+            executor::ToolEvent::Length { tool, z } => {
+                self.interp.set_tool_length(z);
+                let _ = write!(o, "[MSG:T{tool} length offset ");
+                let _ = crate::num::write_fixed(o, z, 3);
+                let _ = o.write_str("]\r\n");
+            }
+        }
+    }
+
     pub(super) fn status(&mut self, rx_free: u16, m: &impl MotionPort) -> Status {
         let s = m.settings();
         let pos = m.rt().position();
