@@ -290,7 +290,7 @@ impl fmt::Display for ErrorKind {
             DomainError => f.write_str("argument outside the function's domain"),
             UnknownOperation => f.write_str("unknown operation in expression"),
             ExpressionTooDeep => f.write_str("expression nested too deeply"),
-            ParamOutOfRange => f.write_str("parameter number outside 1-5399"),
+            ParamOutOfRange => f.write_str("parameter number outside 1-5399 (5400-5410 read-only)"),
             ParamReadOnly => f.write_str("parameter is read-only"),
             UndefinedParam => f.write_str("named parameter used before it was set"),
             ParamTableFull => f.write_str("parameter table full"),

@@ -59,6 +59,8 @@ impl ParamStore for Env<'_, '_> {
     fn get(&self, n: u16) -> Result<f32, ErrorKind> {
         match n {
             0 => Ok(0.0),
+            // The current tool (above the numbered table): `tools::param`.
+            5400..=5410 => Ok(self.state.param(self.tables.get(), n).unwrap_or(0.0)),
             1..=crate::gcode::params::PARAM_MAX => Ok(self
                 .state
                 .param(self.tables.get(), n)
@@ -68,7 +70,7 @@ impl ParamStore for Env<'_, '_> {
     }
     fn set(&mut self, n: u16, v: f32) -> Result<(), ErrorKind> {
         match n {
-            0 => Err(ErrorKind::ParamReadOnly),
+            0 | 5400..=5410 => Err(ErrorKind::ParamReadOnly),
             1..=crate::gcode::params::PARAM_MAX => {
                 if self.state.set_param(self.tables, n, v)? {
                     Ok(())

@@ -21,9 +21,11 @@
 //!   G89), L not a positive integer, inverse-time feed, no feed, an A word,
 //!   G86/G88 with the spindle stopped;
 //! - G88: LinuxCNC stops the program at the bottom for the operator to
-//!   retract by hand. burin cannot jog in a hold, so it pauses there
-//!   (M0's hold; `~` resumes), restarts the spindle and leaves the tool at
-//!   the bottom exactly as LinuxCNC does: the next move takes it out.
+//!   retract by hand, and carries on as if the tool were at the clear
+//!   level. burin cannot jog in a hold, so it pauses there (M0's hold,
+//!   `~` resumes), then rapids to the clear level itself with the spindle
+//!   still stopped, and restarts it: the machine ends where LinuxCNC's
+//!   interpreter believes it is.
 
 mod steps;
 
@@ -162,6 +164,7 @@ pub(super) fn cycle(
         hole,
         step,
         repeats,
+        rise: initial < r_m,
         r: r_m,
         bottom,
         clear,

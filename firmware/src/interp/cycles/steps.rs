@@ -9,9 +9,10 @@
 //!
 //! The moves follow LinuxCNC's `rs274ngc` (its documentation is the
 //! reference): with `n` the axis normal to the plane,
-//! 1. once per block, if the tool is below R, rapid along `n` up to R;
-//! 2. per hole: rapid in the plane to the hole at the current level,
-//!    rapid along `n` down to R (unless there already), then the cycle's
+//! 1. once per block, if the run of cycles began below R, rapid along `n`
+//!    to R;
+//! 2. per hole: rapid to the hole at the current level or R, whichever
+//!    is higher, rapid along `n` down to R (unless there already), then the cycle's
 //!    own moves, ending at the clear level (R under G99; under G98 the
 //!    higher of R and the level the run of cycles began at).
 
@@ -38,9 +39,9 @@ pub enum CycleKind {
     /// G86: bore, dwell, spindle stop, rapid out, spindle restart.
     G86,
     /// G88: bore, dwell, spindle stop, pause for the operator (an M0 hold
-    /// here), spindle restart; the tool stays at the bottom (see `cycles`).
+    /// here), rapid out, spindle restart (see `cycles`).
     G88,
-    /// G89: bore, dwell, feed out.
+    /// G89: bore, dwell, feed out to the clear level.
     G89,
 }
 
@@ -79,8 +80,10 @@ impl CycleKind {
             CycleKind::G82 => &[FeedBottom, Dwell, RapidClear],
             CycleKind::G85 => &[FeedBottom, FeedR, RapidClear],
             CycleKind::G86 => &[FeedBottom, Dwell, SpindleOff, RapidClear, SpindleOn],
-            CycleKind::G88 => &[FeedBottom, Dwell, SpindleOff, Pause, SpindleOn],
-            CycleKind::G89 => &[FeedBottom, Dwell, FeedR, RapidClear],
+            CycleKind::G88 => &[
+                FeedBottom, Dwell, SpindleOff, Pause, RapidClear, SpindleOn,
+            ],
+            CycleKind::G89 => &[FeedBottom, Dwell, FeedClear],
         }
     }
 }
@@ -90,6 +93,7 @@ enum Op {
     Pecks,
     FeedBottom,
     FeedR,
+    FeedClear,
     RapidClear,
     Dwell,
     SpindleOff,
@@ -110,6 +114,10 @@ pub struct Cycle {
     pub step: [f32; 2],
     /// Holes (L), at least 1.
     pub repeats: u16,
+    /// The run of cycles began below R: go to R first, from wherever the
+    /// tool is (LinuxCNC compares R with that initial level, not with the
+    /// current one, so this can be a move down).
+    pub rise: bool,
     pub r: f32,
     pub bottom: f32,
     pub clear: f32,
@@ -144,12 +152,7 @@ impl Cycle {
         let k = f32::from(self.repeats.max(1) - 1);
         p[a0] = self.hole[0] + k * self.step[0];
         p[a1] = self.hole[1] + k * self.step[1];
-        // G88 leaves the tool at the bottom (LinuxCNC's operator retracts).
-        p[n] = if self.kind == CycleKind::G88 {
-            self.bottom
-        } else {
-            self.clear
-        };
+        p[n] = self.clear;
         p
     }
 
@@ -198,7 +201,7 @@ impl Iterator for CycleSteps {
             self.stage = stage.saturating_add(1);
             match stage {
                 0 => {
-                    if self.pos[n] < c.r {
+                    if c.rise {
                         return Some(self.rapid(c.r));
                     }
                 }
@@ -206,6 +209,9 @@ impl Iterator for CycleSteps {
                     let k = f32::from(self.hole);
                     self.pos[a0] = c.hole[0] + k * c.step[0];
                     self.pos[a1] = c.hole[1] + k * c.step[1];
+                    // Never in the plane below R: from below it is one
+                    // rapid to the hole at R (rs274 does the same).
+                    self.pos[n] = self.pos[n].max(c.r);
                     return Some(Command::Rapid { end: self.pos });
                 }
                 2 => {
@@ -246,6 +252,7 @@ impl Iterator for CycleSteps {
                         }
                         Op::FeedBottom => return Some(self.feed(c.bottom)),
                         Op::FeedR => return Some(self.feed(c.r)),
+                        Op::FeedClear => return Some(self.feed(c.clear)),
                         Op::RapidClear => return Some(self.rapid(c.clear)),
                         Op::Dwell => {
                             if c.p > 0.0 {
