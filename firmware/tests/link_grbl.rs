@@ -167,7 +167,7 @@ fn session(pacing: Pacing, seed: u64) {
 
     c.send_line("$$").expect("send");
     let seen = until(&mut c, &mut d, |e| *e == TextEvent::Ok);
-    assert_eq!(seen.len(), 49, "48 settings then ok");
+    assert_eq!(seen.len(), 58, "57 settings then ok");
     assert_eq!(seen[0], TextEvent::Info("$0=2.000".into()));
 
     c.send_line("$110=6000").expect("send");
