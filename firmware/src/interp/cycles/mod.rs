@@ -19,7 +19,8 @@
 //!   at (reset by any other motion); G99 to R;
 //! - errors: depth above R, Q <= 0 (G73/G83), a missing P (G82/G86/G88/
 //!   G89), L not a positive integer, inverse-time feed, no feed, an A word,
-//!   G86/G88 with the spindle stopped;
+//!   G86/G88 with the spindle stopped; and burin's own bounds: more than
+//!   [`MAX_PECKS`] pecks per hole (Q) or [`MAX_MOVES`] moves per block (L);
 //! - G88: LinuxCNC stops the program at the bottom for the operator to
 //!   retract by hand, and carries on as if the tool were at the clear
 //!   level. burin cannot jog in a hold, so it pauses there (M0's hold,
@@ -29,7 +30,7 @@
 
 mod steps;
 
-pub use steps::{Cycle, CycleKind, CycleSteps, PECK_CLEARANCE};
+pub use steps::{Cycle, CycleKind, CycleSteps, MAX_MOVES, MAX_PECKS, PECK_CLEARANCE};
 
 use super::block::AXIS_LETTERS;
 use super::exec::{push, Ctx, Out};
@@ -141,6 +142,18 @@ pub(super) fn cycle(
     if bottom > r_m {
         return Err(cx.err(ErrorKind::ValueOutOfRange(b'R'), b'R'));
     }
+    // Bounded walks: a peck count `f32` can step through, and a block
+    // that check mode can list (LinuxCNC has no limit; real jobs are far
+    // below these).
+    let q_mm = q.unwrap_or(0.0) * u;
+    let pecks = if needs_q { (r_m - bottom) / q_mm } else { 0.0 };
+    let tiny = needs_q && r_m - q_mm >= r_m;
+    if tiny || pecks > MAX_PECKS as f32 {
+        return Err(cx.err(ErrorKind::ValueOutOfRange(b'Q'), b'Q'));
+    }
+    if f32::from(repeats) * (3.0 * pecks + 8.0) > MAX_MOVES as f32 {
+        return Err(cx.err(ErrorKind::ValueOutOfRange(b'L'), b'L'));
+    }
     let mut hole = [st.pos[a0], st.pos[a1]];
     let mut step = [0.0; 2];
     for (k, a) in [a0, a1].into_iter().enumerate() {
@@ -168,7 +181,7 @@ pub(super) fn cycle(
         r: r_m,
         bottom,
         clear,
-        q: q.unwrap_or(0.0) * u,
+        q: q_mm,
         p: p.unwrap_or(0.0),
         feed: st.feed,
         spindle: st.spindle,

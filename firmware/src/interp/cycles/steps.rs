@@ -139,10 +139,18 @@ pub struct CycleSteps {
     hole: u16,
     /// 0: rise to R, 1: to the hole, 2: down to R, 3..: body op `stage - 3`.
     stage: u8,
-    /// Next peck bottom, and where in a peck (0 feed, 1 up, 2 back down).
-    depth: f32,
+    /// Pecks done in this hole, and where in a peck (0 feed, 1 up, 2
+    /// back down). Depths are computed from the count, never accumulated,
+    /// so a peck too small for `f32` cannot stall the walk.
+    pecks: u32,
     peck: u8,
 }
+
+/// Most pecks one hole may take (the interpreter refuses more): with
+/// [`MAX_MOVES`] a bound on every walk, for check mode as for the machine.
+pub const MAX_PECKS: u32 = 10_000;
+/// Most moves one cycle block may expand to (holes x moves per hole).
+pub const MAX_MOVES: u32 = 200_000;
 
 impl Cycle {
     /// The machine position after the whole block.
@@ -162,7 +170,7 @@ impl Cycle {
             pos: *start,
             hole: 0,
             stage: 0,
-            depth: self.r - self.q,
+            pecks: 0,
             peck: 0,
         }
     }
@@ -224,27 +232,23 @@ impl Iterator for CycleSteps {
                         // Next hole: from the clear level, no rise.
                         self.hole += 1;
                         self.stage = 1;
-                        self.depth = c.r - c.q;
+                        self.pecks = 0;
                         continue;
                     };
                     match op {
                         Op::Pecks => {
-                            if self.depth > c.bottom {
+                            let d = c.r - (self.pecks + 1) as f32 * c.q;
+                            if d > c.bottom && self.pecks < MAX_PECKS {
                                 // Stay on this op until the pecks reach the bottom.
                                 self.stage = stage;
-                                let d = self.depth;
                                 let step = self.peck;
                                 self.peck = (step + 1) % 3;
                                 match (step, c.kind) {
                                     (0, _) => return Some(self.feed(d)),
                                     (1, CycleKind::G83) => return Some(self.rapid(c.r)),
-                                    (1, _) => {
-                                        self.peck = 0;
-                                        self.depth -= c.q;
-                                        return Some(self.rapid(d + PECK_CLEARANCE));
-                                    }
                                     _ => {
-                                        self.depth -= c.q;
+                                        self.peck = 0;
+                                        self.pecks += 1;
                                         return Some(self.rapid(d + PECK_CLEARANCE));
                                     }
                                 }
