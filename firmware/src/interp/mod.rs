@@ -188,7 +188,9 @@ impl Interpreter {
             && (o.wcs.iter().any(|w| non_finite(w) != 0)
                 || non_finite(&o.g28) != 0
                 || non_finite(&o.g30) != 0
-                || o.tools.iter().any(|t| non_finite(&[t.length, t.diameter]) != 0));
+                || o.tools
+                    .iter()
+                    .any(|t| non_finite(&[t.length, t.diameter]) != 0));
         let pos_bad = non_finite(&self.state.pos) | non_finite(&self.state.tlo) != 0;
         if bad || tables_bad || pos_bad {
             return Err(GcodeError::new(ErrorKind::NotFinite, b.first_col));

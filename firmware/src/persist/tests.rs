@@ -77,7 +77,11 @@ fn tool_table_round_trips_and_rejects_a_bad_number() {
         diameter: 0.0,
     };
     assert_eq!(p.save_offsets(&o).ok(), Some(2));
-    assert_eq!(p.save_offsets(&o).ok(), Some(0), "unchanged: nothing written");
+    assert_eq!(
+        p.save_offsets(&o).ok(),
+        Some(0),
+        "unchanged: nothing written"
+    );
     let mut rebooted = persist(flash_of(&mut p));
     let back = rebooted.load();
     assert!(back.report.is_clean(), "{:?}", back.report);
@@ -86,7 +90,10 @@ fn tool_table_round_trips_and_rejects_a_bad_number() {
     let mut buf = [0u8; MAX_RECORD];
     rebooted
         .storage()
-        .store(record::TOOLS_KEY, record::encode(&[1.5, 1.0, 1.0], &mut buf))
+        .store(
+            record::TOOLS_KEY,
+            record::encode(&[1.5, 1.0, 1.0], &mut buf),
+        )
         .expect("store");
     let mut again = persist(flash_of(&mut rebooted));
     let third = again.load();

@@ -65,7 +65,10 @@ pub(super) fn report_late(e: MachineError, line: u32, o: &mut Out<'_, impl Tx>) 
 
 /// G43 H or M6 named a tool the table does not have: it gets no offset.
 pub(super) fn no_tool_entry(tool: u32, o: &mut Out<'_, impl Tx>) {
-    let _ = write!(o, "[MSG:T{tool} has no tool table entry: no length offset]\r\n");
+    let _ = write!(
+        o,
+        "[MSG:T{tool} has no tool table entry: no length offset]\r\n"
+    );
 }
 
 impl<S: crate::seams::Storage> Device<S> {

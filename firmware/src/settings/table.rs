@@ -198,20 +198,8 @@ const TOOL: [(u16, Kind); 9] = [
     (215, Kind::Mask { bits: 0b111 }),
     (216, POSITION),
     (217, POSITION),
-    (
-        218,
-        Kind::Real {
-            min: 1.0,
-            max: BIG,
-        },
-    ),
-    (
-        219,
-        Kind::Real {
-            min: 0.1,
-            max: BIG,
-        },
-    ),
+    (218, Kind::Real { min: 1.0, max: BIG }),
+    (219, Kind::Real { min: 0.1, max: BIG }),
 ];
 const POSITION: Kind = Kind::Real {
     min: -BIG,

@@ -166,11 +166,7 @@ pub(super) fn cycle(
             }
         }
     }
-    let clear = if st.retract_r {
-        r_m
-    } else {
-        initial.max(r_m)
-    };
+    let clear = if st.retract_r { r_m } else { initial.max(r_m) };
     let c = Cycle {
         kind,
         plane: st.plane,

@@ -80,9 +80,7 @@ impl CycleKind {
             CycleKind::G82 => &[FeedBottom, Dwell, RapidClear],
             CycleKind::G85 => &[FeedBottom, FeedR, RapidClear],
             CycleKind::G86 => &[FeedBottom, Dwell, SpindleOff, RapidClear, SpindleOn],
-            CycleKind::G88 => &[
-                FeedBottom, Dwell, SpindleOff, Pause, RapidClear, SpindleOn,
-            ],
+            CycleKind::G88 => &[FeedBottom, Dwell, SpindleOff, Pause, RapidClear, SpindleOn],
             CycleKind::G89 => &[FeedBottom, Dwell, FeedClear],
         }
     }

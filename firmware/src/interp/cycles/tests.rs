@@ -44,7 +44,11 @@ fn moves(prog: &str) -> Vec<(char, [f32; 3])> {
 fn same(prog: &str, want: &[(char, [f32; 3])]) {
     let got = moves(prog);
     for (i, (g, w)) in got.iter().zip(want.iter()).enumerate() {
-        let close = g.0 == w.0 && g.1.iter().zip(w.1.iter()).all(|(a, b)| (a - b).abs() < 1e-3);
+        let close = g.0 == w.0
+            && g.1
+                .iter()
+                .zip(w.1.iter())
+                .all(|(a, b)| (a - b).abs() < 1e-3);
         assert!(close, "move {i}: got {g:?}, rs274 {w:?}\n{got:?}");
     }
     assert_eq!(got.len(), want.len(), "{got:?}");
@@ -129,14 +133,29 @@ fn g88_pauses_at_the_bottom_then_retracts_with_the_spindle_stopped() {
     assert_eq!(
         steps,
         [
-            Command::Rapid { end: [5.0, 0.0, 10.0, 0.0] },
-            Command::Rapid { end: [5.0, 0.0, 1.0, 0.0] },
-            Command::Line { end: [5.0, 0.0, -4.0, 0.0], feed: Feed::PerMin(60.0) },
+            Command::Rapid {
+                end: [5.0, 0.0, 10.0, 0.0]
+            },
+            Command::Rapid {
+                end: [5.0, 0.0, 1.0, 0.0]
+            },
+            Command::Line {
+                end: [5.0, 0.0, -4.0, 0.0],
+                feed: Feed::PerMin(60.0)
+            },
             Command::Dwell { seconds: 0.5 },
-            Command::Spindle { dir: Off, speed: 800.0 },
+            Command::Spindle {
+                dir: Off,
+                speed: 800.0
+            },
             Command::Pause { optional: false },
-            Command::Rapid { end: [5.0, 0.0, 10.0, 0.0] },
-            Command::Spindle { dir: Cw, speed: 800.0 },
+            Command::Rapid {
+                end: [5.0, 0.0, 10.0, 0.0]
+            },
+            Command::Spindle {
+                dir: Cw,
+                speed: 800.0
+            },
         ]
     );
 }
@@ -153,15 +172,30 @@ fn cycle_words_are_sticky_only_within_one_cycle() {
         Err(e) => e.kind,
     };
     ok(&mut it, "G0 Z5 F100");
-    assert_eq!(err(&mut it, "G81 X1 Z-1"), ErrorKind::ValueWordMissing(b'R'));
+    assert_eq!(
+        err(&mut it, "G81 X1 Z-1"),
+        ErrorKind::ValueWordMissing(b'R')
+    );
     assert_eq!(err(&mut it, "G81 X1 R1"), ErrorKind::ValueWordMissing(b'Z'));
     ok(&mut it, "G81 X1 Z-1 R1");
     ok(&mut it, "X2");
     assert_eq!(err(&mut it, "G82 X3"), ErrorKind::ValueWordMissing(b'R'));
-    assert_eq!(err(&mut it, "G82 X3 Z-1 R1"), ErrorKind::ValueWordMissing(b'P'));
-    assert_eq!(err(&mut it, "G83 X3 Z-1 R1"), ErrorKind::ValueWordMissing(b'Q'));
-    assert_eq!(err(&mut it, "G83 X3 Z-1 R1 Q0"), ErrorKind::ValueOutOfRange(b'Q'));
-    assert_eq!(err(&mut it, "G81 X3 Z2 R1"), ErrorKind::ValueOutOfRange(b'R'));
+    assert_eq!(
+        err(&mut it, "G82 X3 Z-1 R1"),
+        ErrorKind::ValueWordMissing(b'P')
+    );
+    assert_eq!(
+        err(&mut it, "G83 X3 Z-1 R1"),
+        ErrorKind::ValueWordMissing(b'Q')
+    );
+    assert_eq!(
+        err(&mut it, "G83 X3 Z-1 R1 Q0"),
+        ErrorKind::ValueOutOfRange(b'Q')
+    );
+    assert_eq!(
+        err(&mut it, "G81 X3 Z2 R1"),
+        ErrorKind::ValueOutOfRange(b'R')
+    );
     assert_eq!(err(&mut it, "G81 X3 L0"), ErrorKind::ValueOutOfRange(b'L'));
     assert_eq!(err(&mut it, "G81 X3 L1.5"), ErrorKind::NotInteger(b'L'));
     assert_eq!(err(&mut it, "G81 X3 A1"), ErrorKind::AxisWordsUnused);
