@@ -74,9 +74,9 @@ impl<const N: usize> Machine<N> {
                 ToolStep::Cmd(Command::Rapid { end: at })
             }
             2 if tc.axes & 0b011 != 0 => {
-                for i in 0..2 {
+                for (i, (a, p)) in at.iter_mut().zip(tc.position).take(2).enumerate() {
                     if tc.axes & (1 << i) != 0 {
-                        at[i] = tc.position[i];
+                        *a = p;
                     }
                 }
                 ToolStep::Cmd(Command::Rapid { end: at })
