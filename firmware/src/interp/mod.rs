@@ -309,21 +309,6 @@ impl Interpreter {
         core::mem::take(&mut self.state.offsets_changed)
     }
 
-    /// Once after a line that named a tool without a table entry (G43 H,
-    /// M6): the device tells the operator that tool has no offset.
-    pub fn take_tool_warning(&mut self) -> Option<u32> {
-        self.state.tool_warning.take()
-    }
-
-    /// A tool setter measured the new tool: its length offset along Z
-    /// becomes `z` mm (as `G43.1 Z` would set it, in mm).
-    pub fn set_tool_length(&mut self, z: f32) {
-        if z.is_finite() {
-            self.state.tlo = [0.0; crate::AXES];
-            self.state.tlo[2] = z;
-        }
-    }
-
     /// Block delete switch (`/` lines skipped while on; on by default).
     pub fn set_block_delete(&mut self, on: bool) {
         self.state.block_delete = on;

@@ -221,6 +221,23 @@ pub(super) fn g10_tool(
     Ok(())
 }
 
+impl super::Interpreter {
+    /// Once after a line that named a tool without a table entry (G43 H,
+    /// M6): the device tells the operator that tool has no offset.
+    pub fn take_tool_warning(&mut self) -> Option<u32> {
+        self.state.tool_warning.take()
+    }
+
+    /// A tool setter measured the new tool: its length offset along Z
+    /// becomes `z` mm (as `G43.1 Z` would set it, in mm).
+    pub fn set_tool_length(&mut self, z: f32) {
+        if z.is_finite() {
+            self.state.tlo = [0.0; crate::AXES];
+            self.state.tlo[2] = z;
+        }
+    }
+}
+
 /// The table for `$#`: one `[T:n|length|diameter]` line per entry, in
 /// grblHAL's bracketed shape so GRBL senders skip what they do not know.
 pub(super) fn write_table(
