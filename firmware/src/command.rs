@@ -177,10 +177,17 @@ pub enum Command {
     FeedOverride {
         percent: u16,
     },
-    /// T word (no tool changer; reported and remembered).
+    /// T word or M61 (reported and remembered; nothing moves).
     Tool {
         number: u32,
     },
+    /// M6: a manual tool change to `tool` (the executor stops the spindle,
+    /// goes to the tool-change position and holds; `$211`-`$219`).
+    ToolChange {
+        tool: u32,
+    },
+    /// G73, G81-G89: one canned-cycle block, expanded by the executor.
+    Cycle(crate::interp::Cycle),
     /// M500 / M501.
     SaveSettings,
     LoadSettings,

@@ -319,7 +319,7 @@ impl<Q: SegmentSink, const N: usize> MotionPort for Core<'_, Q, N> {
             .submit(self.rt, cmd, line, &mut |n| note(outputs, laser, obs, n))?;
         (self.obs)(Event::Accepted {
             line,
-            motion: cmd.end().is_some(),
+            motion: cmd.end().is_some() || matches!(cmd, Command::Cycle(_)),
         });
         Ok(())
     }
@@ -341,6 +341,9 @@ impl<Q: SegmentSink, const N: usize> MotionPort for Core<'_, Q, N> {
     }
     fn probe_result(&self) -> Option<(Pos, bool)> {
         self.machine.probe_result
+    }
+    fn take_tool_event(&mut self) -> Option<executor::ToolEvent> {
+        self.machine.take_tool_event()
     }
     /// Published by the stepper once per segment.
     fn feed_and_line(&self) -> (f32, u32) {

@@ -11,7 +11,7 @@ fn numbers_are_ascending_unique_and_all_readable() {
     let s = Settings::default();
     let nums: Vec<u16> = table::numbers().collect();
     assert!(nums.windows(2).all(|w| w[0] < w[1]));
-    assert_eq!(nums.len(), 23 + 16 + 10);
+    assert_eq!(nums.len(), 23 + 16 + 10 + 9);
     for n in &nums {
         let v = s.get(*n).unwrap_or_else(|| panic!("${n} unreadable"));
         let mut t = s;
@@ -123,7 +123,7 @@ fn settings_listing() {
     );
     let mut all = String::new();
     reply::settings(&mut all, &Settings::default()).expect("string sink");
-    assert_eq!(all.lines().count(), 49);
+    assert_eq!(all.lines().count(), 58);
     assert!(
         all.contains("$210=0\r\n"),
         "G28 meaning listed, RS274NGC by default"

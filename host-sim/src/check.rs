@@ -140,6 +140,12 @@ pub fn command_json(c: &Command) -> String {
             format!("\"kind\":\"feed_override\",\"percent\":{percent}")
         }
         Command::Tool { number } => format!("\"kind\":\"tool\",\"number\":{number}"),
+        Command::ToolChange { tool } => format!("\"kind\":\"tool_change\",\"tool\":{tool}"),
+        Command::Cycle(c) => format!(
+            "\"kind\":\"cycle\",\"code\":{},\"repeats\":{}",
+            c.kind.tenths(),
+            c.repeats
+        ),
         Command::SaveSettings => "\"kind\":\"save_settings\"".into(),
         Command::LoadSettings => "\"kind\":\"load_settings\"".into(),
         Command::ClearAlarm => "\"kind\":\"clear_alarm\"".into(),
@@ -162,11 +168,22 @@ pub fn check_file(
     for (i, line) in source.split('\n').enumerate() {
         let n = i + 1;
         let mut cmds: Vec<Command> = Vec::new();
+        let mut at = interp.state().pos;
         match interp.execute_line(line.as_bytes(), &mut |c| cmds.push(c)) {
             Ok(()) => {
                 if dump {
+                    // A canned cycle is dumped as the moves it expands to.
                     for c in &cmds {
-                        writeln!(out, "{{\"line\":{n},{}}}", command_json(c))?;
+                        let steps: Vec<Command> = match c {
+                            Command::Cycle(cy) => cy.steps(&at).collect(),
+                            c => vec![c.clone()],
+                        };
+                        for s in &steps {
+                            writeln!(out, "{{\"line\":{n},{}}}", command_json(s))?;
+                            if let Some(e) = s.end() {
+                                at = *e;
+                            }
+                        }
                     }
                 }
                 if interp.needs_sync() {

@@ -15,7 +15,7 @@ fn corpus_dir() -> Option<PathBuf> {
 }
 
 /// Interprets the whole job; `None` if any line fails or the job's end
-/// depends on the machine (homing, probing).
+/// depends on the machine (homing, probing, a tool change's moves).
 fn expected_end(src: &str) -> Option<([f32; 4], usize)> {
     let mut it = Interpreter::new();
     let mut end = [0.0f32; 4];
@@ -26,7 +26,10 @@ fn expected_end(src: &str) -> Option<([f32; 4], usize)> {
         it.execute_line(line.as_bytes(), &mut |c: Command| {
             if matches!(
                 c,
-                Command::Home { .. } | Command::VerifyHome { .. } | Command::Probe { .. }
+                Command::Home { .. }
+                    | Command::VerifyHome { .. }
+                    | Command::Probe { .. }
+                    | Command::ToolChange { .. }
             ) {
                 depends = true;
             }

@@ -8,10 +8,12 @@
 mod error;
 mod homing;
 mod pending;
+mod script;
 mod submit;
 
 pub use error::MachineError;
 pub use homing::Homing;
+pub use script::ToolEvent;
 
 use crate::arc::{ArcChords, SplineChords};
 use crate::command::{AxisMask, Command, Feed, Pos, ProbeKind};
@@ -126,6 +128,11 @@ pub struct Machine<const N: usize> {
     switches: Switches,
     /// Last G38.x result: position (mm) and whether contact happened.
     pub probe_result: Option<(Pos, bool)>,
+    /// A canned cycle or tool change being expanded, and its line.
+    script: Option<(script::Script, u32)>,
+    tool_event: Option<ToolEvent>,
+    /// Trip Z of the first tool the setter measured (`$211=2`).
+    tool_reference: Option<f32>,
 }
 
 impl<const N: usize> Machine<N> {
@@ -145,6 +152,9 @@ impl<const N: usize> Machine<N> {
             override_epoch: 0,
             switches: Switches::default(),
             probe_result: None,
+            script: None,
+            tool_event: None,
+            tool_reference: None,
         }
     }
 
@@ -156,7 +166,7 @@ impl<const N: usize> Machine<N> {
     }
     /// Ready for the next command (nothing left to feed to the planner).
     pub fn ready(&self) -> bool {
-        matches!(self.pending, Pending::None) && !self.planner.is_full()
+        matches!(self.pending, Pending::None) && self.script.is_none() && !self.planner.is_full()
     }
     pub fn alarm(&self) -> Option<MachineError> {
         self.alarm
@@ -277,6 +287,7 @@ impl<const N: usize> Machine<N> {
     ) {
         self.flush(rt);
         self.pending = Pending::None;
+        self.script = None;
         self.alarm = Some(e);
         obs(Note::Error { line, error: e });
     }
@@ -297,6 +308,7 @@ impl<const N: usize> Machine<N> {
             let moving = !self.motion_idle(rt, sink);
             self.flush(rt);
             self.pending = Pending::None;
+            self.script = None;
             rt.clear_hold();
             if moving {
                 self.position_lost = true;
@@ -380,6 +392,7 @@ impl<const N: usize> Machine<N> {
         {
             self.run_pending(rt, obs);
         }
+        self.run_script(rt, obs);
         // Before any new segment is queued: a homing move, which seeks the
         // switches, never runs armed.
         rt.set_limits_armed(self.limits_armed(rt));

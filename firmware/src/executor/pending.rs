@@ -9,8 +9,13 @@ impl<const N: usize> Machine<N> {
             // Finished by `poll` once the ramp-down has stopped.
             p @ Pending::ProbeStop { .. } => self.pending = p,
             Pending::Sync { command, line } => {
-                if let Command::Pause { .. } = command {
-                    rt.feed_hold();
+                match command {
+                    Command::Pause { .. } => rt.feed_hold(),
+                    Command::ToolChange { tool } => {
+                        rt.feed_hold();
+                        self.tool_event = Some(super::ToolEvent::Change { tool });
+                    }
+                    _ => {}
                 }
                 obs(Note::Executed {
                     line,

@@ -25,6 +25,17 @@ impl<const N: usize> Machine<N> {
         if rt.estop() && matches!(cmd, Command::Home { .. } | Command::ClearAlarm) {
             return Err(MachineError::EStop);
         }
+        self.accept(rt, cmd, line, obs)
+    }
+
+    /// Runs or queues one command (a submitted one or a script's step).
+    pub(super) fn accept(
+        &mut self,
+        rt: &Realtime,
+        cmd: &Command,
+        line: u32,
+        obs: &mut dyn FnMut(Note),
+    ) -> Result<(), MachineError> {
         let tol = self.planner.settings.arc_tolerance;
         match cmd {
             Command::Rapid { end } => {
@@ -110,6 +121,15 @@ impl<const N: usize> Machine<N> {
             Command::FeedOverride { percent } => {
                 rt.set_feed_override(*percent);
                 obs(Note::Executed { line, command: cmd });
+                Ok(())
+            }
+            Command::Cycle(c) => {
+                self.script = Some((script::Script::Cycle(c.steps(&self.commanded)), line));
+                Ok(())
+            }
+            // A script's own ToolChange step is the hold (`run_pending`).
+            Command::ToolChange { tool } if self.script.is_none() => {
+                self.start_tool_change(*tool, line, obs);
                 Ok(())
             }
             Command::ClearAlarm => {

@@ -130,6 +130,8 @@ pub enum ErrorKind {
     NoHeaters,
     /// An arc offset (I/J/K) off the active plane: `I` in G19, `J` in G18, `K` in G17.
     ArcWordOffPlane(u8),
+    /// G86/G88 with the spindle stopped (LinuxCNC refuses them too).
+    SpindleStopped,
 }
 
 impl ErrorKind {
@@ -186,6 +188,7 @@ impl ErrorKind {
             AmbiguousOrder => 340,
             NoHeaters => 341,
             ArcWordOffPlane(_) => 342,
+            SpindleStopped => 343,
         }
     }
 
@@ -217,6 +220,7 @@ impl ErrorKind {
             InvalidTarget => 33,
             ArcRadius => 34,
             NoOffsetsInPlane => 35,
+            SpindleStopped => 20,
             UnusedWord(_) | SplinePlane => 36,
             ValueOutOfRange(_) => 4,
             TooManyCommands => 11,
@@ -306,7 +310,7 @@ impl fmt::Display for ErrorKind {
             DomainError => f.write_str("argument outside the function's domain"),
             UnknownOperation => f.write_str("unknown operation in expression"),
             ExpressionTooDeep => f.write_str("expression nested too deeply"),
-            ParamOutOfRange => f.write_str("parameter number outside 1-5399"),
+            ParamOutOfRange => f.write_str("parameter number outside 1-5399 (5400-5410 read-only)"),
             ParamReadOnly => f.write_str("parameter is read-only"),
             UndefinedParam => f.write_str("named parameter used before it was set"),
             ParamTableFull => f.write_str("parameter table full"),
@@ -358,6 +362,7 @@ impl fmt::Display for ErrorKind {
             ),
             NoHeaters => f.write_str("this controller has no heaters (M104/M105/M109/M116)"),
             ArcWordOffPlane(c) => write!(f, "arc offset {} is not in the active plane", letter(c)),
+            SpindleStopped => f.write_str("G86/G88 need the spindle turning"),
         }
     }
 }

@@ -11,7 +11,7 @@
 
 use super::error::{ErrorKind, Unsupported};
 use super::lexer::{blank, Cursor, LexResult};
-use super::params::{Name, ParamStore, PARAM_MAX};
+use super::params::{Name, ParamStore, PARAM_READ_MAX};
 use crate::num::Decimal;
 use libm::{atan2f, ceilf, cosf, expf, floorf, fmodf, logf, powf, roundf, sinf, sqrtf, tanf};
 
@@ -171,7 +171,7 @@ impl Cursor<'_> {
 
     /// After `#`: which parameter. `#<name>` and BeagleG's bare `#name`
     /// (letters, digits, `_`; ends at a space or any other byte) are names,
-    /// anything else is a real value that must be an integer 0..=5399.
+    /// anything else is a real value that must be an integer 0..=5410.
     pub(crate) fn param_ref(&mut self, p: &mut dyn ParamStore, depth: u8) -> LexResult<ParamRef> {
         let col = self.pos;
         match self.peek() {
@@ -220,7 +220,7 @@ impl Cursor<'_> {
                 if (v - n).abs() > 1e-4 {
                     return Err(self.err_at(ErrorKind::NotInteger(b'#'), col));
                 }
-                if !(0.0..=PARAM_MAX as f32).contains(&n) {
+                if !(0.0..=PARAM_READ_MAX as f32).contains(&n) {
                     return Err(self.err_at(ErrorKind::ParamOutOfRange, col));
                 }
                 Ok(ParamRef::Num(n as u16))

@@ -22,6 +22,9 @@ pub const NAME_MAX: usize = 23;
 pub const UNDO_CAP: usize = 16;
 /// Highest parameter number.
 pub const PARAM_MAX: u16 = 5399;
+/// The highest number a `#n` may name: #5400-#5410 are the current tool's,
+/// computed by the interpreter (read-only, not in the table).
+pub const PARAM_READ_MAX: u16 = 5410;
 
 /// A parameter name, lowercased, without spaces (LinuxCNC's rules).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -21,8 +21,10 @@ pub(crate) enum GGroup {
     ToolLength,
     Wcs,
     Path,
+    /// G98/G99: where canned cycles retract to.
+    Retract,
 }
-const G_GROUPS: usize = 11;
+const G_GROUPS: usize = 12;
 
 /// The groups that only set a mode ([`Block::gmask`] bits).
 pub(crate) const MODE_GROUPS: u16 = 1 << GGroup::Plane as u16
@@ -31,7 +33,8 @@ pub(crate) const MODE_GROUPS: u16 = 1 << GGroup::Plane as u16
     | 1 << GGroup::FeedMode as u16
     | 1 << GGroup::Units as u16
     | 1 << GGroup::Wcs as u16
-    | 1 << GGroup::Path as u16;
+    | 1 << GGroup::Path as u16
+    | 1 << GGroup::Retract as u16;
 
 /// M-word groups (index into [`Block::m`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -40,23 +43,41 @@ pub(crate) enum MGroup {
     Spindle,
     Coolant,
     Misc,
+    /// M6, M61: tool change, set the current tool.
+    Tool,
 }
-const M_GROUPS: usize = 4;
+const M_GROUPS: usize = 5;
 
 fn g_group(tenths: u16) -> Option<GGroup> {
     use GGroup::*;
     Some(match tenths {
         80 | 40 | 100 | 270 | 280 | 281 | 300 | 301 | 530 | 920..=923 => NonModal,
-        0 | 10 | 20 | 30 | 50 | 51 | 382..=385 | 800 => Motion,
+        0
+        | 10
+        | 20
+        | 30
+        | 50
+        | 51
+        | 382..=385
+        | 800
+        | 730
+        | 810
+        | 820
+        | 830
+        | 850
+        | 860
+        | 880
+        | 890 => Motion,
         170 | 180 | 190 => Plane,
         900 | 910 => Distance,
         901 | 911 => ArcDistance,
         930 | 940 => FeedMode,
         200 | 210 | 700 | 710 => Units,
         400 => Cutter,
-        490 => ToolLength,
+        430..=432 | 490 => ToolLength,
         540 | 550 | 560 | 570 | 580 | 590..=593 => Wcs,
         610 | 611 | 640 => Path,
+        980 | 990 => Retract,
         _ => return None,
     })
 }
@@ -68,6 +89,7 @@ fn m_group(n: u16) -> Option<MGroup> {
         3..=5 => Spindle,
         7..=9 => Coolant,
         10 | 11 | 24 | 80..=83 | 104 | 105 | 109 | 111 | 116 | 120 | 121 | 245 | 246 | 355 => Misc,
+        6 | 61 => Tool,
         17
         | 18
         | 84
@@ -117,8 +139,9 @@ pub(crate) struct Block<'a> {
     pub bare_col: u16,
 }
 
-/// Letters that carry values: the axes and F I J K L P Q R S T.
+/// Letters that carry values: the axes and F H I J K L P Q R S T.
 const VALUE_LETTERS: u32 = bit(b'X')
+    | bit(b'H')
     | bit(b'Y')
     | bit(b'Z')
     | bit(b'A')

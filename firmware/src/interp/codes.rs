@@ -130,6 +130,10 @@ pub(super) fn non_modal_g(
         }
         100 => {
             let l = cx.int(b'L', 0.0, 100.0)?;
+            if matches!(l, 1 | 10 | 11) {
+                super::tools::g10_tool(cx, st, tb, l, col)?;
+                return Ok(false);
+            }
             if l != 2 && l != 20 {
                 return Err(GcodeError::new(
                     ErrorKind::Unsupported(Unsupported::Code {
@@ -147,7 +151,12 @@ pub(super) fn non_modal_g(
             st.offsets_changed = true;
             let vals = axis_vals(cx);
             let pos = st.pos;
-            let g92 = if st.g92_active { st.g92 } else { [0.0; AXES] };
+            let mut g92 = if st.g92_active { st.g92 } else { [0.0; AXES] };
+            // L20 sets the offset so the current point, tool offset
+            // included, becomes the value: the tool offset counts like G92.
+            for (g, t) in g92.iter_mut().zip(st.tlo.iter()) {
+                *g += t;
+            }
             let inc = st.incremental;
             let Some(off) = tb.edit().wcs.get_mut(k) else {
                 return Ok(false);
@@ -247,8 +256,11 @@ pub(super) fn non_modal_g(
                 let (Some(Some(v)), Some(g)) = (vals.get(i), st.g92.get_mut(i)) else {
                     continue;
                 };
-                *g =
-                    st.pos.get(i).copied().unwrap_or(0.0) - base.get(i).copied().unwrap_or(0.0) - v;
+                let t = st.tlo.get(i).copied().unwrap_or(0.0);
+                *g = st.pos.get(i).copied().unwrap_or(0.0)
+                    - base.get(i).copied().unwrap_or(0.0)
+                    - t
+                    - v;
             }
             st.g92_active = true;
         }

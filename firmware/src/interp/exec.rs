@@ -12,9 +12,10 @@
 //!   probes down along Z by [`G30_PROBE_TRAVEL`], an optional Z word being
 //!   the touch plate's thickness, which becomes work Z on contact;
 //! - G27 seeks the switches of the named (or all) axes to verify home;
-//! - G40, G49, G61, G61.1 and G64 (with its P/Q tolerances) are accepted as
-//!   no-ops: they select the only modes burin has (no cutter or tool-length
-//!   compensation; blending is the planner's junction deviation);
+//! - G40, G61, G61.1 and G64 (with its P/Q tolerances) are accepted as
+//!   no-ops: they select the only modes burin has (no cutter compensation;
+//!   blending is the planner's junction deviation); tools and tool length
+//!   offsets are `tools`, canned cycles `cycles`;
 //! - M2/M30 stop spindle and coolant, and reset G1 G17 G90 G94 G54 and
 //!   suspend G92 (LinuxCNC), keeping units;
 //! - axis letters without a number (`G28 X Y`, `M18 Z`) are accepted only
@@ -192,6 +193,9 @@ pub(crate) fn execute(
                 _ => (t - 591 + 6) as u8,
             };
         }
+        if let Some((t, _)) = b.g_of(GGroup::Retract) {
+            st.retract_r = t == 990;
+        }
         if let Some((640, _)) = b.g_of(GGroup::Path) {
             cx.take(b'P');
             cx.take(b'Q');
@@ -220,11 +224,7 @@ pub(crate) fn execute(
             }
         }
     }
-    if b.has(b'T') {
-        let t = cx.int(b'T', 0.0, 99_999_999.0)?;
-        st.tool = t;
-        push(out, Command::Tool { number: t }, b.col_of(b'T'))?;
-    }
+    super::tools::tool_words(&mut cx, st, tb, out)?;
     if let Some((m, col)) = spindle_m {
         st.spindle = match m {
             3 => SpindleDir::Cw,
@@ -260,7 +260,7 @@ pub(crate) fn execute(
     // Which command owns the axis words.
     let non_modal = b.g_of(GGroup::NonModal);
     let nm = non_modal.map(|x| x.0);
-    let axis_nm = matches!(nm, Some(100 | 270 | 280 | 300 | 920));
+    let axis_nm = matches!(nm, Some(100 | 270 | 280 | 300 | 920)) || super::tools::owns_axes(b);
     let motion_word = b.g_of(GGroup::Motion);
     if axis_nm && motion_word.is_some() {
         return Err(GcodeError::new(

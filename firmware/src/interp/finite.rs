@@ -25,6 +25,11 @@ pub(super) fn cmd_finite(c: &Command) -> bool {
             non_finite(&s.end) | non_finite(&s.p1) | non_finite(&s.p2) | feed(&s.feed)
         }
         Command::Dwell { seconds } => non_finite(&[*seconds]),
+        Command::Cycle(c) => {
+            non_finite(&c.hole)
+                | non_finite(&c.step)
+                | non_finite(&[c.r, c.bottom, c.clear, c.q, c.p, c.feed, c.speed])
+        }
         Command::Spindle { speed, .. } => non_finite(&[*speed]),
         Command::Aux { value, .. } => non_finite(&[*value]),
         _ => 0,

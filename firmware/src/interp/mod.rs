@@ -16,6 +16,7 @@
 
 mod block;
 mod codes;
+pub mod cycles;
 mod exec;
 mod finite;
 mod geom;
@@ -23,9 +24,12 @@ mod homes;
 mod mcodes;
 mod motion;
 mod state;
+pub mod tools;
 
+pub use cycles::{Cycle, CycleKind, CycleSteps};
 pub use exec::{G30_PROBE_TRAVEL, LINE_COMMANDS};
 pub use state::{Motion, Offsets, State, WCS_COUNT};
+pub use tools::{ToolEntry, TOOLS};
 
 use crate::command::{Command, Plane, Pos};
 use crate::gcode::{ErrorKind, GcodeError, Lexer, Name, ParamStore, Params, Token};
@@ -59,6 +63,8 @@ impl ParamStore for Env<'_, '_> {
     fn get(&self, n: u16) -> Result<f32, ErrorKind> {
         match n {
             0 => Ok(0.0),
+            // The current tool (above the numbered table): `tools::param`.
+            5400..=5410 => Ok(self.state.param(self.tables.get(), n).unwrap_or(0.0)),
             1..=crate::gcode::params::PARAM_MAX => Ok(self
                 .state
                 .param(self.tables.get(), n)
@@ -68,7 +74,7 @@ impl ParamStore for Env<'_, '_> {
     }
     fn set(&mut self, n: u16, v: f32) -> Result<(), ErrorKind> {
         match n {
-            0 => Err(ErrorKind::ParamReadOnly),
+            0 | 5400..=5410 => Err(ErrorKind::ParamReadOnly),
             1..=crate::gcode::params::PARAM_MAX => {
                 if self.state.set_param(self.tables, n, v)? {
                     Ok(())
@@ -95,6 +101,7 @@ impl Interpreter {
                 wcs: [[0.0; crate::AXES]; WCS_COUNT],
                 g28: [0.0; crate::AXES],
                 g30: [0.0; crate::AXES],
+                tools: [ToolEntry::EMPTY; TOOLS],
             },
             params: Params::new(),
         }
@@ -169,8 +176,12 @@ impl Interpreter {
         let tables_bad = saved.is_some()
             && (o.wcs.iter().any(|w| non_finite(w) != 0)
                 || non_finite(&o.g28) != 0
-                || non_finite(&o.g30) != 0);
-        if bad || tables_bad || non_finite(&self.state.pos) != 0 {
+                || non_finite(&o.g30) != 0
+                || o.tools
+                    .iter()
+                    .any(|t| non_finite(&[t.length, t.diameter]) != 0));
+        let pos_bad = non_finite(&self.state.pos) | non_finite(&self.state.tlo) != 0;
+        if bad || tables_bad || pos_bad {
             return Err(GcodeError::new(ErrorKind::NotFinite, b.first_col));
         }
         Ok(())
@@ -272,7 +283,7 @@ impl Interpreter {
                 if !self.state.g92_active {
                     self.state.g92 = [0.0; crate::AXES];
                 }
-                self.state.g92[2] = pos[2] - base - t;
+                self.state.g92[2] = pos[2] - base - self.state.tlo[2] - t;
                 self.state.g92_active = true;
             }
         }
@@ -312,7 +323,8 @@ impl Interpreter {
     }
 
     /// GRBL's soft reset: modal state back to defaults; offsets, stored
-    /// positions, parameters and the position survive.
+    /// positions, parameters, the position, the current tool and its
+    /// length offset survive.
     pub fn reset(&mut self) {
         let s = self.state;
         self.state = State {
@@ -322,6 +334,8 @@ impl Interpreter {
             probe: s.probe,
             probe_ok: s.probe_ok,
             tool: s.tool,
+            loaded: s.loaded,
+            tlo: s.tlo,
             block_delete: s.block_delete,
             g28_homes: s.g28_homes,
             ..State::new()
@@ -374,8 +388,9 @@ impl Interpreter {
         crate::num::write_short(w, s.speed, 3)
     }
 
-    /// GRBL's `$#` report lines (G54..G59.3, G28, G30, G92, TLO, PRB), all
-    /// axes, machine mm with three decimals, each followed by `eol`.
+    /// GRBL's `$#` report lines (G54..G59.3, G28, G30, G92, TLO, the tool
+    /// table as `[T:n|length|diameter]`, PRB), all axes, machine mm with
+    /// three decimals, each followed by `eol`.
     pub fn write_offsets(&self, w: &mut dyn Write, eol: &str, axes: usize) -> fmt::Result {
         let s = &self.state;
         let pos = |w: &mut dyn Write, p: &Pos| -> fmt::Result {
@@ -405,7 +420,11 @@ impl Interpreter {
             pos(w, p)?;
             write!(w, "]{eol}")?;
         }
-        write!(w, "[TLO:0.000]{eol}[PRB:")?;
+        w.write_str("[TLO:")?;
+        crate::num::write_fixed(w, s.tlo[2], 3)?;
+        write!(w, "]{eol}")?;
+        tools::write_table(w, &o.tools, eol)?;
+        w.write_str("[PRB:")?;
         pos(w, &s.probe)?;
         write!(w, ":{}]{eol}", u8::from(s.probe_ok))
     }

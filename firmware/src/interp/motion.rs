@@ -40,6 +40,10 @@ pub(super) fn motion(
 ) -> Result<(), GcodeError> {
     let col = explicit.unwrap_or(cx.b.first_col);
     let e = |k| GcodeError::new(k, col);
+    // Cycle words carry over only while cycles follow each other.
+    if !matches!(st.motion, Motion::Cycle(_)) {
+        st.cycle = super::cycles::Sticky::NONE;
+    }
     let arc_mode = matches!(st.motion, Motion::ArcCw | Motion::ArcCcw);
     // LinuxCNC: offsets without axis words are a full circle where the tool is.
     let (p0, p1, _) = st.plane.axes();
@@ -64,6 +68,7 @@ pub(super) fn motion(
     let start = st.pos;
     let cmd = match st.motion {
         Motion::Cancel => return Err(e(ErrorKind::AxisWordsUnused)),
+        Motion::Cycle(k) => return super::cycles::cycle(cx, st, k, col, out),
         Motion::Rapid => Command::Rapid {
             end: target(cx, st, g53),
         },

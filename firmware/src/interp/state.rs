@@ -7,6 +7,8 @@
 //! [`State::param`]). All of them stay in mm whatever G20/G21 say, like
 //! LinuxCNC's parameters in a metric machine's units.
 
+use super::cycles::{CycleKind, Sticky};
+use super::tools::{ToolEntry, TOOLS};
 use crate::command::{Plane, Pos, ProbeKind, SpindleDir};
 use crate::gcode::ErrorKind;
 use crate::AXES;
@@ -28,6 +30,8 @@ pub enum Motion {
     Probe(ProbeKind),
     /// G80: axis words without a motion word are an error.
     Cancel,
+    /// G73, G81-G89: a canned cycle (`interp::cycles`).
+    Cycle(CycleKind),
 }
 
 impl Motion {
@@ -45,6 +49,7 @@ impl Motion {
             Motion::Probe(ProbeKind::Away) => 384,
             Motion::Probe(ProbeKind::AwayNoError) => 385,
             Motion::Cancel => 800,
+            Motion::Cycle(k) => k.tenths(),
         }
     }
     pub(crate) const fn from_tenths(t: u16) -> Option<Motion> {
@@ -60,7 +65,10 @@ impl Motion {
             384 => Motion::Probe(ProbeKind::Away),
             385 => Motion::Probe(ProbeKind::AwayNoError),
             800 => Motion::Cancel,
-            _ => return None,
+            t => match CycleKind::from_tenths(t) {
+                Some(k) => Motion::Cycle(k),
+                None => return None,
+            },
         })
     }
 }
@@ -90,7 +98,19 @@ pub struct State {
     pub spindle: SpindleDir,
     pub mist: bool,
     pub flood: bool,
+    /// The last T word (GRBL's `$G` T), or the tool M6/M61 made current.
     pub tool: u32,
+    /// The tool in the spindle (M6, M61): G43 without H uses its length.
+    pub loaded: u32,
+    /// Tool length offset (G43, G43.1, G43.2; 0 after G49), machine mm per
+    /// axis; part of the work offset ([`State::wco`]).
+    pub tlo: Pos,
+    /// A G43/M6 named a tool without a table entry: the device says so.
+    pub tool_warning: Option<u32>,
+    /// G99 (true): canned cycles retract to R; G98: to where they began.
+    pub retract_r: bool,
+    /// Canned-cycle words that carry over to the next cycle block.
+    pub cycle: Sticky,
     /// Last probe contact (machine mm) and whether it succeeded.
     pub probe: Pos,
     pub probe_ok: bool,
@@ -137,6 +157,11 @@ impl State {
             mist: false,
             flood: false,
             tool: 0,
+            loaded: 0,
+            tlo: [0.0; AXES],
+            tool_warning: None,
+            retract_r: false,
+            cycle: Sticky::NONE,
             probe: [0.0; AXES],
             probe_ok: false,
             last_g5: None,
@@ -149,8 +174,18 @@ impl State {
         }
     }
 
-    /// Work coordinate offset: active G54.. plus G92 when active (GRBL's WCO).
+    /// Work coordinate offset: active G54.., G92 when active, and the tool
+    /// length offset (GRBL's WCO includes it too).
     pub fn wco(&self, o: &Offsets) -> Pos {
+        let mut w = self.wco_no_tool(o);
+        for (a, t) in w.iter_mut().zip(self.tlo.iter()) {
+            *a += t;
+        }
+        w
+    }
+
+    /// The work offset without the tool length offset (G10 L10, G92).
+    pub fn wco_no_tool(&self, o: &Offsets) -> Pos {
         let base = o
             .wcs
             .get(usize::from(self.wcs))
@@ -183,6 +218,7 @@ impl State {
             5070 => Some(f32::from(u8::from(self.probe_ok))),
             5210 => Some(f32::from(u8::from(self.g92_active))),
             5220 => Some(f32::from(self.wcs + 1)),
+            5400..=5410 => super::tools::param(self, o, n),
             _ => match slot_of(n)? {
                 Slot::G28(a) => o.g28.get(a).copied(),
                 Slot::G30(a) => o.g30.get(a).copied(),
@@ -195,7 +231,7 @@ impl State {
     /// Writes a typed parameter. `Ok(false)`: not one of ours (use the table).
     pub(crate) fn set_param(&mut self, t: &mut Tables, n: u16, v: f32) -> Result<bool, ErrorKind> {
         let slot = match n {
-            5061..=5064 | 5070 | 5220 => return Err(ErrorKind::ParamReadOnly),
+            5061..=5064 | 5070 | 5220 | 5400..=5410 => return Err(ErrorKind::ParamReadOnly),
             5210 => {
                 self.g92_active = v != 0.0;
                 return Ok(true);
@@ -216,13 +252,15 @@ impl State {
 }
 
 /// What survives a power cycle (GRBL's EEPROM coordinate data): the nine
-/// work offsets G54..G59.3 and the G28/G30 positions, machine mm. G92 and
-/// the modal state do not.
+/// work offsets G54..G59.3 and the G28/G30 positions, machine mm, and the
+/// tool table. G92 and the modal state do not.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Offsets {
     pub wcs: [Pos; WCS_COUNT],
     pub g28: Pos,
     pub g30: Pos,
+    /// The tool table (G10 L1/L10/L11), keyed by tool number.
+    pub tools: [ToolEntry; TOOLS],
 }
 
 /// The offset tables as one line sees them. They are most of the

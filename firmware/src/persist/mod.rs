@@ -1,4 +1,4 @@
-//! Settings and work offsets that survive a reset, over the [`Storage`]
+//! Settings, work offsets and the tool table that survive a reset, over the [`Storage`]
 //! seam (a record log, [`FlashMap`], in two 16 KiB flash sectors on the
 //! boards, RAM on QEMU and in host-sim).
 //!
@@ -27,14 +27,14 @@ pub mod ram;
 pub use flash::FlashMap;
 pub use ram::RamFlash;
 
-use crate::interp::Offsets;
+use crate::interp::{Offsets, ToolEntry, TOOLS};
 use crate::seams::Storage;
 use crate::settings::{table, Settings};
 use crate::AXES;
-use record::{MAX_RECORD, OFFSETS_KEY, OFFSET_RECORDS};
+use record::{MAX_RECORD, OFFSETS_KEY, OFFSET_RECORDS, TOOLS_KEY, TOOL_VALUES};
 
 /// Number of `$n` settings (`table::numbers()`; a test keeps them equal).
-pub const SETTINGS: usize = 49;
+pub const SETTINGS: usize = 58;
 
 /// What a load found.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -90,6 +90,24 @@ pub struct Persist<S: Storage> {
     saved: [f32; SETTINGS],
     /// Offset vectors as stored (G54..G59.3, G28, G30); NaN: unknown.
     saved_offsets: [[f32; AXES]; OFFSET_RECORDS],
+    /// Tool records as stored; NaN: unknown.
+    saved_tools: [[f32; TOOL_VALUES]; TOOLS],
+}
+
+fn tool_record(e: &ToolEntry) -> [f32; TOOL_VALUES] {
+    [e.number as f32, e.length, e.diameter]
+}
+
+/// A stored tool record back to an entry; `None` if its number is not a
+/// valid tool number (a damaged record).
+fn tool_entry(v: &[f32; TOOL_VALUES]) -> Option<ToolEntry> {
+    let n = v[0];
+    let valid = n >= 0.0 && n <= crate::interp::tools::TOOL_MAX as f32 && libm::truncf(n) == n;
+    valid.then_some(ToolEntry {
+        number: n as u32,
+        length: v[1],
+        diameter: v[2],
+    })
 }
 
 fn vectors(o: &Offsets) -> impl Iterator<Item = &[f32; AXES]> {
@@ -112,6 +130,7 @@ impl<S: Storage> Persist<S> {
             defaults,
             saved: [f32::NAN; SETTINGS],
             saved_offsets: [[f32::NAN; AXES]; OFFSET_RECORDS],
+            saved_tools: [[f32::NAN; TOOL_VALUES]; TOOLS],
         }
     }
 
@@ -174,6 +193,29 @@ impl<S: Storage> Persist<S> {
             }
             report.defaulted += u16::from(!ok);
         }
+        for (k, e) in offsets.tools.iter_mut().enumerate() {
+            let mut v = [0.0; TOOL_VALUES];
+            // k < TOOLS (16): the key stays below 1116.
+            let entry = match self.read(TOOLS_KEY + k as u16, &mut v) {
+                Ok(true) => tool_entry(&v),
+                Ok(false) => None,
+                Err(_) => {
+                    report.failed = true;
+                    None
+                }
+            };
+            if let Some(t) = entry {
+                *e = t;
+            }
+            if let Some(s) = self.saved_tools.get_mut(k) {
+                *s = if entry.is_some() {
+                    v
+                } else {
+                    [f32::NAN; TOOL_VALUES]
+                };
+            }
+            report.defaulted += u16::from(entry.is_none());
+        }
         if report.defaulted > 0 {
             let wrote = self
                 .save_settings(&settings)
@@ -208,9 +250,22 @@ impl<S: Storage> Persist<S> {
         Ok(written)
     }
 
-    /// Writes the offset vectors that differ from the stored ones.
+    /// Writes the offset vectors and tool entries that differ from the
+    /// stored ones.
     pub fn save_offsets(&mut self, o: &Offsets) -> Result<u16, S::Error> {
         let mut written = 0;
+        for (k, (e, saved)) in o.tools.iter().zip(self.saved_tools.iter_mut()).enumerate() {
+            let v = tool_record(e);
+            if v.iter().zip(saved.iter()).all(|(a, b)| same(*a, *b)) {
+                continue;
+            }
+            let mut buf = [0u8; MAX_RECORD];
+            let rec = record::encode(&v, &mut buf);
+            *saved = [f32::NAN; TOOL_VALUES];
+            self.store.store(TOOLS_KEY + k as u16, rec)?;
+            *saved = v;
+            written += 1;
+        }
         for (k, (v, saved)) in vectors(o).zip(self.saved_offsets.iter_mut()).enumerate() {
             if v.iter().zip(saved.iter()).all(|(a, b)| same(*a, *b)) {
                 continue;

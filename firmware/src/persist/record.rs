@@ -22,6 +22,12 @@ pub const OFFSETS_KEY: u16 = 1000;
 /// How many offset vectors are stored.
 pub const OFFSET_RECORDS: usize = crate::interp::WCS_COUNT + 2;
 
+/// Tool table entries: `TOOLS_KEY + 0..TOOLS`, each `[number, length,
+/// diameter]` (the number is exact in `f32` up to `TOOL_MAX`).
+pub const TOOLS_KEY: u16 = 1100;
+/// Values in one tool record.
+pub const TOOL_VALUES: usize = 3;
+
 /// Bytes of the longest record (an offset vector).
 pub const MAX_RECORD: usize = 1 + 4 * AXES;
 

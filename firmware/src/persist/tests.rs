@@ -9,7 +9,7 @@ type Board = RamFlash<{ 2 * 16384 }, 16384>;
 /// Small pages so that a few hundred writes wrap the map many times.
 type Small = RamFlash<4096, 2048>;
 
-const ITEMS: u16 = (SETTINGS + OFFSET_RECORDS) as u16;
+const ITEMS: u16 = (SETTINGS + OFFSET_RECORDS + TOOLS) as u16;
 
 fn persist<F: embedded_storage::nor_flash::NorFlash>(flash: F) -> Persist<FlashMap<F>> {
     Persist::new(FlashMap::new(flash), Settings::default())
@@ -60,6 +60,46 @@ fn saves_only_what_changed_and_reads_it_back() {
     assert_eq!(back.settings.axes[0].max_rate, 1234.0);
     assert!(back.settings.homing_enable);
     assert_eq!(back.offsets, o);
+}
+
+#[test]
+fn tool_table_round_trips_and_rejects_a_bad_number() {
+    let mut p = persist(Board::new());
+    let mut o = p.load().offsets;
+    o.tools[0] = ToolEntry {
+        number: 102,
+        length: 31.25,
+        diameter: 6.35,
+    };
+    o.tools[15] = ToolEntry {
+        number: crate::interp::tools::TOOL_MAX,
+        length: -2.5,
+        diameter: 0.0,
+    };
+    assert_eq!(p.save_offsets(&o).ok(), Some(2));
+    assert_eq!(
+        p.save_offsets(&o).ok(),
+        Some(0),
+        "unchanged: nothing written"
+    );
+    let mut rebooted = persist(flash_of(&mut p));
+    let back = rebooted.load();
+    assert!(back.report.is_clean(), "{:?}", back.report);
+    assert_eq!(back.offsets.tools, o.tools);
+    // A record whose tool number is not a whole number in range is damaged.
+    let mut buf = [0u8; MAX_RECORD];
+    rebooted
+        .storage()
+        .store(
+            record::TOOLS_KEY,
+            record::encode(&[1.5, 1.0, 1.0], &mut buf),
+        )
+        .expect("store");
+    let mut again = persist(flash_of(&mut rebooted));
+    let third = again.load();
+    assert_eq!(third.report.defaulted, 1);
+    assert_eq!(third.offsets.tools[0], ToolEntry::EMPTY);
+    assert_eq!(third.offsets.tools[15], o.tools[15]);
 }
 
 #[test]

@@ -266,6 +266,9 @@ impl<S: Storage> Device<S> {
                 }
             }
         }
+        if let Some(ev) = m.take_tool_event() {
+            self.tool_event(ev, o);
+        }
         if self.jog_cancel && m.state() == executor::State::Hold && m.rt().stepper_idle() {
             self.jog_cancel = false;
             self.quiet_alarm = true;
@@ -450,6 +453,9 @@ impl<S: Storage> Device<S> {
         });
         match r {
             Ok(()) => {
+                if let Some(t) = self.interp.take_tool_warning() {
+                    sys::no_tool_entry(t, o);
+                }
                 if !check && self.interp.needs_sync() {
                     self.sync = true;
                     self.probe_sync = probe;

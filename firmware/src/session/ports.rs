@@ -42,6 +42,8 @@ pub trait MotionPort {
     fn commanded_position(&self) -> Pos;
     /// Last probe result (machine mm, contact).
     fn probe_result(&self) -> Option<(Pos, bool)>;
+    /// M6 reached its hold, or the tool setter measured the new tool.
+    fn take_tool_event(&mut self) -> Option<executor::ToolEvent>;
     /// Current feed, mm/min, and the machine line number executing.
     fn feed_and_line(&self) -> (f32, u32);
     /// Spindle speed as executed (0 after M5), rpm.

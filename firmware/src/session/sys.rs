@@ -68,6 +68,14 @@ pub(super) fn report_late(e: MachineError, line: u32, o: &mut Out<'_, impl Tx>) 
     });
 }
 
+/// G43 H or M6 named a tool the table does not have: it gets no offset.
+pub(super) fn no_tool_entry(tool: u32, o: &mut Out<'_, impl Tx>) {
+    let _ = write!(
+        o,
+        "[MSG:T{tool} has no tool table entry: no length offset]\r\n"
+    );
+}
+
 impl<S: crate::seams::Storage> Device<S> {
     /// The realtime half of [`Device::poll`], which the shell runs on its
     /// own while the reply ring is too full to read new input: hold, cycle
@@ -90,6 +98,23 @@ impl<S: crate::seams::Storage> Device<S> {
             let framed = link.framed();
             let rx_free = protocol::RX_WINDOW.saturating_sub(link.rx_pending()) as u16;
             self.realtime(r, rx_free, m, &mut Out::new(tx, framed));
+        }
+    }
+
+    /// M6 is held at the tool-change position, or the setter measured
+    /// the new tool (its offset goes to the interpreter, which is waiting
+    /// for the change to end before it reads the next line).
+    pub(super) fn tool_event(&mut self, ev: executor::ToolEvent, o: &mut Out<'_, impl Tx>) {
+        match ev {
+            executor::ToolEvent::Change { tool } => {
+                let _ = write!(o, "[MSG:Tool change: load T{tool}, then cycle start]\r\n");
+            }
+            executor::ToolEvent::Length { tool, z } => {
+                self.interp.set_tool_length(z);
+                let _ = write!(o, "[MSG:T{tool} length offset ");
+                let _ = crate::num::write_fixed(o, z, 3);
+                let _ = o.write_str("]\r\n");
+            }
         }
     }
 

@@ -124,6 +124,40 @@ pub struct Settings {
     /// GRBL assume; 1 BeagleG's: G28 homes, G30 probes Z
     /// (`interp/homes.rs`).
     pub g28_homes: bool,
+    /// `$211`-`$219`: the manual tool change (M6).
+    pub tool_change: ToolChange,
+}
+
+/// What M6 does (`$211`-`$219`). Positions are machine mm.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ToolChange {
+    /// `$211` 0: M6 only sets the current tool (GRBL 1.1; the sender
+    /// runs its own tool-change macro); 1: spindle off, move to the
+    /// tool-change position, hold until cycle start; 2: as 1, then measure
+    /// the new tool on the tool setter and apply the difference to the
+    /// first tool measured since power-up as its length offset.
+    pub mode: u8,
+    /// `$212`, `$213`, `$214` the tool-change position X, Y, Z.
+    pub position: [f32; 3],
+    /// `$215` which axes go there (mask, Z first, then X/Y); 4 = Z only.
+    pub axes: u8,
+    /// `$216`, `$217` the tool setter's X, Y.
+    pub setter: [f32; 2],
+    /// `$218` the probing feed on the tool setter, mm/min.
+    pub feed: f32,
+    /// `$219` how far down the setter probe searches from the change Z, mm.
+    pub travel: f32,
+}
+
+impl ToolChange {
+    pub const DEFAULT: ToolChange = ToolChange {
+        mode: 1,
+        position: [0.0; 3],
+        axes: 0b100,
+        setter: [0.0; 2],
+        feed: 100.0,
+        travel: 50.0,
+    };
 }
 
 impl Default for Settings {
@@ -174,6 +208,7 @@ impl Default for Settings {
             enable_delay_us: 0.0,
             report_axes: AXES as u8,
             g28_homes: false,
+            tool_change: ToolChange::DEFAULT,
         }
     }
 }

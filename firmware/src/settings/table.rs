@@ -196,9 +196,27 @@ const BURIN: [(u16, Kind); 10] = [
     (210, Kind::Bool),
 ];
 
+/// `$211`-`$219`: the tool change (`$210` belongs to the G28 meaning).
+const TOOL: [(u16, Kind); 9] = [
+    (211, Kind::Int { min: 0, max: 2 }),
+    (212, POSITION),
+    (213, POSITION),
+    (214, POSITION),
+    (215, Kind::Mask { bits: 0b111 }),
+    (216, POSITION),
+    (217, POSITION),
+    (218, Kind::Real { min: 1.0, max: BIG }),
+    (219, Kind::Real { min: 0.1, max: BIG }),
+];
+const POSITION: Kind = Kind::Real {
+    min: -BIG,
+    max: BIG,
+};
+
 /// The kind of setting `n`, or `None` if there is no such setting.
 pub fn kind(n: u16) -> Option<Kind> {
-    if let Some(&(_, k)) = GLOBAL.iter().chain(BURIN.iter()).find(|(m, _)| *m == n) {
+    let mut own = GLOBAL.iter().chain(BURIN.iter()).chain(TOOL.iter());
+    if let Some(&(_, k)) = own.find(|(m, _)| *m == n) {
         return Some(k);
     }
     AXIS_GROUPS
@@ -222,6 +240,7 @@ pub fn numbers() -> impl Iterator<Item = u16> {
         .map(|(n, _)| *n)
         .chain(axes)
         .chain(BURIN.iter().map(|(n, _)| *n))
+        .chain(TOOL.iter().map(|(n, _)| *n))
 }
 
 fn check(k: Kind, v: f32) -> Result<(), SettingError> {
@@ -313,6 +332,12 @@ impl Settings {
             207 => self.enable_delay_us,
             208 => f32::from(self.report_axes),
             210 => b(self.g28_homes),
+            211 => f32::from(self.tool_change.mode),
+            212..=214 => *self.tool_change.position.get(usize::from(n - 212))?,
+            215 => f32::from(self.tool_change.axes),
+            216 | 217 => *self.tool_change.setter.get(usize::from(n - 216))?,
+            218 => self.tool_change.feed,
+            219 => self.tool_change.travel,
             _ => return None,
         })
     }
@@ -380,6 +405,20 @@ impl Settings {
             207 => self.enable_delay_us = v,
             208 => self.report_axes = u8v,
             210 => self.g28_homes = on,
+            211 => self.tool_change.mode = u8v,
+            212..=214 => {
+                if let Some(p) = self.tool_change.position.get_mut(usize::from(n - 212)) {
+                    *p = v;
+                }
+            }
+            215 => self.tool_change.axes = u8v,
+            216 | 217 => {
+                if let Some(p) = self.tool_change.setter.get_mut(usize::from(n - 216)) {
+                    *p = v;
+                }
+            }
+            218 => self.tool_change.feed = v,
+            219 => self.tool_change.travel = v,
             _ => return Err(SettingError::Unknown),
         }
         Ok(())

@@ -61,10 +61,21 @@ pub fn run(src: &str) -> String {
     for (i, line) in src.split('\n').enumerate() {
         let n = i + 1;
         let mut cmds = Vec::new();
+        let mut at = it.state().pos;
         match it.execute_line(line.as_bytes(), &mut |c| cmds.push(c)) {
             Ok(()) => {
                 for c in &cmds {
-                    out.push_str(&format!("{n}: {}\n", canon(c)));
+                    // A canned cycle prints as the moves it expands to.
+                    let steps: Vec<Command> = match c {
+                        Command::Cycle(cy) => cy.steps(&at).collect(),
+                        c => vec![c.clone()],
+                    };
+                    for s in &steps {
+                        out.push_str(&format!("{n}: {}\n", canon(s)));
+                        if let Some(e) = s.end() {
+                            at = *e;
+                        }
+                    }
                 }
                 if it.needs_sync() {
                     match cmds

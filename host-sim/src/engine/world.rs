@@ -79,6 +79,16 @@ impl World {
         w
     }
 
+    /// Moves the probe surface by `steps` along its axis (a test's way to
+    /// put a longer or shorter tool in the spindle: a tool-setter then
+    /// trips that much earlier or later).
+    pub fn shift_probe(&mut self, steps: i64) {
+        if let Some((_, trip, _)) = &mut self.probe {
+            *trip += steps;
+        }
+        self.update();
+    }
+
     /// Pin levels as the firmware would read them (inversion applied).
     pub fn switches(&self) -> Switches {
         self.pins

@@ -18,6 +18,8 @@ const PRELUDES: &[&str] = &[
     "G10 L20 P1 X0\nG0 X1\nG91.1",
     "G28.1\nG30.1\nG94\nG64",
     "#<_g>=7\n#5221=2\nG54\nG1 X-1 F200",
+    "G10 L1 P3 Z-2 R1\nT3 M6\nG43\nM3 S100\nG98 G81 X1 Y1 Z-1 R1 F100",
+    "G43.1 Z1\nG19 G99 G83 Y1 Z1 X-1 R2 Q0.5 F60\nG91",
 ];
 
 fn finite(v: &[f32]) -> bool {
@@ -42,13 +44,23 @@ fn command_finite(c: &Command) -> bool {
         Command::Dwell { seconds } => seconds.is_finite(),
         Command::Spindle { speed, .. } => speed.is_finite(),
         Command::Aux { value, .. } => value.is_finite(),
+        Command::Cycle(c) => {
+            let start = [0.0; burin::AXES];
+            finite(&c.hole)
+                && finite(&c.step)
+                && finite(&[c.r, c.bottom, c.clear, c.q, c.p, c.feed, c.speed])
+                && c.steps(&start).take(100_000).all(|s| command_finite(&s))
+        }
         _ => true,
     }
 }
 
 fn offsets_finite(it: &Interpreter) -> bool {
     let o = it.offsets();
-    o.wcs.iter().all(|w| finite(w)) && finite(&o.g28) && finite(&o.g30)
+    o.wcs.iter().all(|w| finite(w))
+        && finite(&o.g28)
+        && finite(&o.g30)
+        && o.tools.iter().all(|t| finite(&[t.length, t.diameter]))
 }
 
 /// One line; panics on a broken invariant. `n` is the line's index.
