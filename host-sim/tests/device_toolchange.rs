@@ -160,7 +160,7 @@ fn a_peck_cycle_runs_to_its_end_point_on_the_board() {
     let mut rec = Discard;
     let mut r = Rig::new(&origin(), &mut rec);
     r.lines();
-    ok_all(&mut r, &["G0 Z5", "G99 G83 X3 Y4 Z-6 R1 Q0.5 F600 L2 G91"]);
+    ok_all(&mut r, &["G0 Z5", "G91 G99 G83 X3 Y4 Z-6 R1 Q0.5 F600 L2"]);
     let end = r.until_idle();
     // G91: holes at +3/+4 twice, R 1 above the start level, Z 6 below R.
     assert_eq!(end.mpos, Some(vec![6.0, 8.0, 6.0, 0.0]), "{end:?}");
