@@ -4,6 +4,7 @@
 //! the firmware library's job. host-sim supplies a virtual clock, recording
 //! pins, simulated switches and files.
 
+pub mod bench;
 pub mod check;
 pub mod config;
 pub mod device_sim;

@@ -41,8 +41,18 @@ pub enum PathKind {
 /// Things the executor reports as they happen.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Note<'a> {
-    /// A straight piece of commanded path was planned, ending here (mm).
-    Path { line: u32, kind: PathKind, end: Pos },
+    /// A straight piece of commanded path was planned, ending here (mm),
+    /// at this requested speed (references such as bench-motion's time
+    /// bound replan the job from these).
+    Path {
+        line: u32,
+        kind: PathKind,
+        end: Pos,
+        speed: Speed,
+    },
+    /// Motion comes to a standstill here, in order with the path: a dwell
+    /// (its length, s) or a command that waits for motion to end (0).
+    Stop { line: u32, seconds: f32 },
     /// A command failed or an alarm went off while running.
     Error { line: u32, error: MachineError },
     /// A non-motion command ran, in order with motion.
@@ -254,6 +264,7 @@ impl<const N: usize> Machine<N> {
             line,
             kind,
             end: *end,
+            speed,
         });
         Ok(())
     }

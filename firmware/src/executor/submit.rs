@@ -81,7 +81,12 @@ impl<const N: usize> Machine<N> {
                     return Err(MachineError::InvalidNumber);
                 }
                 let ticks = (*seconds as f64 * self.cfg.tick_hz as f64) as u64;
-                Ok(self.planner.push_dwell(ticks, line)?)
+                self.planner.push_dwell(ticks, line)?;
+                obs(Note::Stop {
+                    line,
+                    seconds: *seconds,
+                });
+                Ok(())
             }
             Command::Probe { end, feed, kind } => {
                 self.check_soft(end, end)?;
@@ -122,6 +127,7 @@ impl<const N: usize> Machine<N> {
                 Ok(())
             }
             _ => {
+                obs(Note::Stop { line, seconds: 0.0 });
                 self.pending = Pending::Sync {
                     command: cmd.clone(),
                     line,
@@ -238,7 +244,12 @@ impl<const N: usize> Machine<N> {
                 return Err(e.into());
             }
             self.commanded = p;
-            obs(Note::Path { line, kind, end: p });
+            obs(Note::Path {
+                line,
+                kind,
+                end: p,
+                speed,
+            });
         }
         Ok(())
     }
