@@ -15,7 +15,7 @@ pub use homing::Homing;
 
 use crate::arc::{ArcChords, SplineChords};
 use crate::command::{AxisMask, Command, Feed, Pos, ProbeKind};
-use crate::planner::{Planner, Speed, Watch};
+use crate::planner::{Curve, Planner, Speed, Watch};
 use crate::realtime::{Realtime, Trip};
 use crate::settings::{RapidMode, Settings};
 use crate::stepper::prep::{Preparer, SegmentSink};
@@ -257,8 +257,7 @@ impl<const N: usize> Machine<N> {
         kind: PathKind,
         obs: &mut dyn FnMut(Note),
     ) -> Result<(), MachineError> {
-        let steps = self.planner.to_steps(end)?;
-        self.planner.push_line(steps, speed, watch, line)?;
+        self.planner.push_line_mm(end, speed, watch, line)?;
         self.commanded = *end;
         obs(Note::Path {
             line,

@@ -219,8 +219,12 @@ impl<const N: usize> Machine<N> {
                 return Ok(());
             };
             let (speed, line) = (*speed, *line);
+            let mut curve = Curve::default();
             let (next, kind) = match chords {
-                Chords::Arc(c) => (c.next(), PathKind::Arc),
+                Chords::Arc(c) => {
+                    curve = c.curve();
+                    (c.next(), PathKind::Arc)
+                }
                 Chords::Spline(c) => (c.next(), PathKind::Spline),
                 Chords::Legs { pts, n, i } => {
                     let p = if *i < *n { pts.get(*i).copied() } else { None };
@@ -232,13 +236,11 @@ impl<const N: usize> Machine<N> {
                 self.pending = Pending::None;
                 return Ok(());
             };
-            let pushed = self.planner.to_steps(&p).and_then(|t| {
-                if kind == PathKind::Rapid {
-                    self.planner.push_line(t, speed, Watch::default(), line)
-                } else {
-                    self.planner.push_chord(t, speed, line)
-                }
-            });
+            let pushed = if kind == PathKind::Rapid {
+                self.planner.push_line_mm(&p, speed, Watch::default(), line)
+            } else {
+                self.planner.push_chord(&p, speed, line, curve)
+            };
             if let Err(e) = pushed {
                 self.pending = Pending::None;
                 return Err(e.into());

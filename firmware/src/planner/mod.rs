@@ -8,12 +8,14 @@
 //! appended later can change them. The backward pass stops as soon as an
 //! entry speed stops changing; the forward pass starts at `planned`.
 
+mod curve;
 mod passes;
 pub mod ramp;
 
 use crate::command::Pos;
 use crate::settings::Settings;
 use crate::AXES;
+pub use curve::Curve;
 pub use ramp::{Phase, Profile, Shape};
 
 /// Why a block was not queued. The executor maps `Full` onto its `Busy` and
@@ -90,6 +92,13 @@ pub struct Block {
     pub nominal: f32,
     /// Path acceleration the axes allow, mm/s².
     pub accel: f32,
+    /// The same along a straight line (a chord of a curve shares it with
+    /// the centripetal acceleration: `accel` is less).
+    pub line_accel: f32,
+    /// Chord of an arc: `A·r` and `A` of the arc's plane (see
+    /// `planner::curve`); 0 otherwise.
+    pub curve_ar: f32,
+    pub curve_a: f32,
     /// Slowest path speed the step timer can time, mm/s: the feed override
     /// never takes `nominal` below it.
     pub floor: f32,
@@ -115,6 +124,9 @@ impl Block {
         cap: 0.0,
         nominal: 0.0,
         accel: 1.0,
+        line_accel: 1.0,
+        curve_ar: 0.0,
+        curve_a: 0.0,
         floor: 0.0,
         junction: 0.0,
         max_entry: 0.0,
@@ -153,6 +165,10 @@ pub struct Planner<const N: usize> {
     /// Step position at the end of the last block pushed.
     position: [i32; AXES],
     prev_unit: [f32; AXES],
+    /// Commanded end of the last block pushed, mm: corners are judged on
+    /// the commanded geometry, not on the step-rounded one (a chord of a
+    /// step or two can look like a 45° corner in steps).
+    position_mm: [f32; AXES],
     /// Path speed the previous block's junction may carry (0 after a stop).
     prev_nominal: f32,
     prev_length: f32,
@@ -173,6 +189,7 @@ impl<const N: usize> Planner<N> {
             planned: 0,
             position: [0; AXES],
             prev_unit: [0.0; AXES],
+            position_mm: [0.0; AXES],
             prev_nominal: 0.0,
             prev_length: 0.0,
             feed_pct: 1.0,
@@ -225,7 +242,12 @@ impl<const N: usize> Planner<N> {
         self.len = 0;
         self.planned = 0;
         self.position = position;
+        self.position_mm = self.steps_mm(&position);
         self.stop_junction();
+    }
+
+    fn steps_mm(&self, steps: &[i32; AXES]) -> [f32; AXES] {
+        core::array::from_fn(|i| steps[i] as f32 / self.settings.axes[i].steps_per_mm)
     }
     /// Step position at the end of everything planned.
     pub fn position(&self) -> [i32; AXES] {
@@ -260,28 +282,45 @@ impl<const N: usize> Planner<N> {
         watch: Watch,
         line: u32,
     ) -> Result<(), PlanError> {
-        self.push(target, speed, watch, line, false)
+        let mm = self.steps_mm(&target);
+        self.push(target, &mm, speed, watch, line, None)
     }
 
-    /// Queue one chord of an arc or spline. On a curve the axes feel the
-    /// tangential and the centripetal acceleration at once, so each gets half
-    /// of the acceleration budget: the sum stays within every axis limit.
-    pub fn push_chord(
+    /// [`push_line`](Self::push_line) to a commanded position in mm (rounded
+    /// to steps here); its corners are judged on the mm geometry.
+    pub fn push_line_mm(
         &mut self,
-        target: [i32; AXES],
+        end: &Pos,
         speed: Speed,
+        watch: Watch,
         line: u32,
     ) -> Result<(), PlanError> {
-        self.push(target, speed, Watch::default(), line, true)
+        let target = self.to_steps(end)?;
+        self.push(target, end, speed, watch, line, None)
+    }
+
+    /// Queue one chord of an arc or spline, ending at `end` mm. On a curve
+    /// the axes feel the tangential and the centripetal acceleration at
+    /// once: `planner::curve` splits the budget between them.
+    pub fn push_chord(
+        &mut self,
+        end: &Pos,
+        speed: Speed,
+        line: u32,
+        curve: Curve,
+    ) -> Result<(), PlanError> {
+        let target = self.to_steps(end)?;
+        self.push(target, end, speed, Watch::default(), line, Some(curve))
     }
 
     fn push(
         &mut self,
         target: [i32; AXES],
+        end_mm: &Pos,
         speed: Speed,
         watch: Watch,
         line: u32,
-        curve: bool,
+        curve: Option<Curve>,
     ) -> Result<(), PlanError> {
         if self.is_full() {
             return Err(PlanError::Full);
@@ -337,7 +376,15 @@ impl<const N: usize> Planner<N> {
             accel = accel.min(ax.max_accel / u);
         }
         b.cap = cap;
-        b.accel = if curve { accel * 0.5 } else { accel };
+        b.line_accel = accel;
+        b.accel = accel;
+        match curve.map(|c| c.budget(s)) {
+            Some(Some((ar, a))) => (b.curve_ar, b.curve_a) = (ar, a),
+            // Unknown radius: half the budget each way (the sum stays
+            // within every axis limit).
+            Some(None) => b.accel = accel * 0.5,
+            None => {}
+        }
         match speed {
             Speed::Feed(v) if v > 0.0 && v.is_finite() => b.programmed = v,
             Speed::Time(t) if t > 0.0 && t.is_finite() => b.programmed = b.length / t,
@@ -357,13 +404,27 @@ impl<const N: usize> Planner<N> {
             return Err(PlanError::FeedTooSlow);
         }
         b.nominal = self.nominal(&b);
-        b.junction = self.junction_speed(&unit, b.length, curve);
+        Self::curve_limits(&mut b);
+        // Corners on the commanded geometry (a zero-length commanded move
+        // that still rounds to a step keeps the step direction).
+        let d: [f32; AXES] = core::array::from_fn(|i| end_mm[i] - self.position_mm[i]);
+        let len_mm = libm::sqrtf(d.iter().map(|v| v * v).sum());
+        if len_mm.is_finite() && len_mm > 1e-6 {
+            unit = d.map(|v| v / len_mm);
+        }
+        let len_mm = if len_mm.is_finite() && len_mm > 1e-6 {
+            len_mm
+        } else {
+            b.length
+        };
+        b.junction = self.junction_speed(&unit, len_mm, curve.is_some());
         b.max_entry = b.junction.min(b.nominal).min(self.prev_nominal);
         b.entry = if self.len == 0 { 0.0 } else { b.max_entry };
         self.prev_unit = unit;
         self.prev_nominal = b.nominal;
-        self.prev_length = b.length;
+        self.prev_length = len_mm;
         self.position = target;
+        self.position_mm = *end_mm;
         let k = self.len;
         *self.at(k) = b;
         self.len += 1;
