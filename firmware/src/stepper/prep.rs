@@ -21,6 +21,7 @@ pub(super) const DWELL_CHUNK_S: f32 = 0.01;
 pub use super::sink::SegmentSink;
 
 mod hold;
+mod rate;
 mod walk;
 
 use walk::MAX_SEGMENT_TICKS;
@@ -417,7 +418,7 @@ impl Preparer {
         let events = n << amass;
         let ticks = (dominant * n as f32).min(MAX_SEGMENT_TICKS) + self.tick_carry;
         let period_f = ticks / events as f32;
-        let period = if period_f >= self.cfg.min_period as f32 {
+        let mut period = if period_f >= self.cfg.min_period as f32 {
             let p = (period_f.min(u32::MAX as f32) as u32).max(self.cfg.min_period);
             let rest = ticks - p as f32 * events as f32;
             if period_f > u32::MAX as f32 {
@@ -434,6 +435,12 @@ impl Preparer {
             self.tick_carry = 0.0;
             self.cfg.min_period
         };
+        let floor = self.rate_floor(&b, amass);
+        if period < floor {
+            // Within an event of an axis limit: hold it (see `prep::rate`).
+            period = floor;
+            self.tick_carry = 0.0;
+        }
         let speed_mm_min = rate / b.count as f32 * b.length * 60.0;
         self.max_speed_mm_min = self.max_speed_mm_min.max(speed_mm_min);
         let first = core::mem::replace(&mut self.new_block, false);
