@@ -92,7 +92,8 @@ struct Stats {
     last_path: Option<[f32; AXES]>,
     errors: Vec<RunError>,
     last_speed: f32,
-    max_speed: f32,
+    /// The summary's max feed, from the steps (see `crate::feed`).
+    feed: crate::feed::FeedMeter,
     dir: u8,
     dir_changed: u64,
     /// Step pin levels after the last store.
@@ -152,6 +153,11 @@ impl<'r> Sim<'r> {
         rec.start(&info);
         let stats = Stats {
             last_path: Some(machine.commanded_position()),
+            feed: crate::feed::FeedMeter::new(
+                cfg.tick_hz,
+                s.axes.map(|a| a.steps_per_mm),
+                s.axes.map(|a| a.max_rate),
+            ),
             ..Stats::default()
         };
         Sim {
@@ -335,7 +341,7 @@ impl<'r> Sim<'r> {
             moves: self.stats.moves,
             job_time_s: self.now as f64 / self.cfg.tick_hz as f64,
             distance_mm: self.stats.distance,
-            max_feed_mm_min: self.stats.max_speed as f64,
+            max_feed_mm_min: self.stats.feed.max_mm_min,
             steps: self.stats.steps,
             final_position_steps: std::array::from_fn(|i| pos[i] as i64),
             final_position_mm: mm,

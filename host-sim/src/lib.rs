@@ -9,6 +9,7 @@ pub mod check;
 pub mod config;
 pub mod device_sim;
 pub mod engine;
+pub mod feed;
 pub mod fuzz;
 pub mod offline;
 pub mod outputs;
