@@ -119,6 +119,11 @@ impl Bound {
         }
     }
 
+    /// The commanded end of the path, mm.
+    pub fn end_mm(&self) -> [f64; AXES] {
+        self.pos.unwrap_or([0.0; AXES])
+    }
+
     /// Corner limit between pieces `a` and `b` (mm/s).
     fn corner(&self, a: &Piece, b: &Piece) -> f64 {
         let cos = a.unit.iter().zip(&b.unit).map(|(x, y)| x * y).sum::<f64>();

@@ -129,6 +129,8 @@ impl Recorder for LimitMeter {
         if self.out.first_tick.is_none() {
             self.out.first_tick = Some(ev.tick);
             self.next_grid = ev.tick;
+            // Where the machine stood (within this one step) before it.
+            self.pos = ev.pos;
         }
         while self.next_grid <= ev.tick {
             self.sample();

@@ -22,6 +22,8 @@ pub struct JobFigures {
     pub bound_s: f64,
     pub limits: TraceLimits,
     pub summary: Summary,
+    /// The commanded end of the path, rounded to steps.
+    pub bound_end_steps: [i64; AXES],
 }
 
 struct Both {
@@ -57,8 +59,11 @@ pub fn run_job(cfg: &MachineConfig, source: &str) -> JobFigures {
         Some(t0) => (l.last_tick - t0) as f64 / f64::from(cfg.tick_hz),
         None => 0.0,
     };
+    let end = both.bound.end_mm();
+    let spm = cfg.settings.axes.map(|a| f64::from(a.steps_per_mm));
     JobFigures {
         time_s,
+        bound_end_steps: std::array::from_fn(|i| (end[i] * spm[i]).round() as i64),
         bound_s: both.bound.time_s(),
         limits: l,
         summary,
