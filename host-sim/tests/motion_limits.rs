@@ -17,9 +17,17 @@ fn machine() -> MachineConfig {
 
 fn check(cfg: &MachineConfig, name: &str, src: &str, accel: bool) -> JobFigures {
     let f = run_job(cfg, src);
-    assert!(f.summary.errors.is_empty(), "{name}: {:?}", f.summary.errors);
+    assert!(
+        f.summary.errors.is_empty(),
+        "{name}: {:?}",
+        f.summary.errors
+    );
     let l = &f.limits;
-    assert_eq!(l.short_intervals, [0; 4], "{name}: min intervals {:?}", l.min_interval);
+    assert_eq!(
+        l.short_intervals, [0; 4],
+        "{name}: min intervals {:?}",
+        l.min_interval
+    );
     assert_eq!(l.end_steps, f.summary.final_position_steps, "{name}");
     let end = f.bound_end_steps;
     assert_eq!(l.end_steps, end, "{name}: trace ends off the commanded end");

@@ -165,6 +165,8 @@ pub struct Planner<const N: usize> {
     /// Step position at the end of the last block pushed.
     position: [i32; AXES],
     prev_unit: [f32; AXES],
+    /// The previous block's commanded direction (see `position_mm`).
+    prev_unit_mm: [f32; AXES],
     /// Commanded end of the last block pushed, mm: corners are judged on
     /// the commanded geometry, not on the step-rounded one (a chord of a
     /// step or two can look like a 45° corner in steps).
@@ -189,6 +191,7 @@ impl<const N: usize> Planner<N> {
             planned: 0,
             position: [0; AXES],
             prev_unit: [0.0; AXES],
+            prev_unit_mm: [0.0; AXES],
             position_mm: [0.0; AXES],
             prev_nominal: 0.0,
             prev_length: 0.0,
@@ -257,6 +260,7 @@ impl<const N: usize> Planner<N> {
     pub fn stop_junction(&mut self) {
         self.prev_nominal = 0.0;
         self.prev_unit = [0.0; AXES];
+        self.prev_unit_mm = [0.0; AXES];
     }
 
     /// Steps for a machine position in mm: rounded from the absolute target,
@@ -405,22 +409,20 @@ impl<const N: usize> Planner<N> {
         }
         b.nominal = self.nominal(&b);
         Self::curve_limits(&mut b);
-        // Corners on the commanded geometry (a zero-length commanded move
+        // Curvature on the commanded geometry (a zero-length commanded move
         // that still rounds to a step keeps the step direction).
         let d: [f32; AXES] = core::array::from_fn(|i| end_mm[i] - self.position_mm[i]);
         let len_mm = libm::sqrtf(d.iter().map(|v| v * v).sum());
-        if len_mm.is_finite() && len_mm > 1e-6 {
-            unit = d.map(|v| v / len_mm);
-        }
-        let len_mm = if len_mm.is_finite() && len_mm > 1e-6 {
-            len_mm
+        let (unit_mm, len_mm) = if len_mm.is_finite() && len_mm > 1e-6 {
+            (d.map(|v| v / len_mm), len_mm)
         } else {
-            b.length
+            (unit, b.length)
         };
-        b.junction = self.junction_speed(&unit, len_mm, curve.is_some());
+        b.junction = self.junction_speed(&unit, &unit_mm, len_mm, curve.is_some());
         b.max_entry = b.junction.min(b.nominal).min(self.prev_nominal);
         b.entry = if self.len == 0 { 0.0 } else { b.max_entry };
         self.prev_unit = unit;
+        self.prev_unit_mm = unit_mm;
         self.prev_nominal = b.nominal;
         self.prev_length = len_mm;
         self.position = target;

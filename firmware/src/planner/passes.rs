@@ -9,31 +9,62 @@ impl<const N: usize> Planner<N> {
     /// whose closest approach to the corner is `δ`. With `c = sin(θ/2)` of the
     /// corner's half angle (θ = π when straight), the circle's radius is
     /// `R = δ·c/(1 − c)` and `v = sqrt(a·R)` keeps the centripetal
-    /// acceleration within `a`.
+    /// acceleration within `a`. It bounds the velocity jump the motors make
+    /// at the corner, so it is judged on the directions the steps take
+    /// (`unit`, from the step counts).
     ///
     /// Chords of a curve turn by a small angle φ every chord length `l`, so
     /// the tool really follows a curve of radius about `l/φ`. Junction
     /// deviation alone allows `a·δ/tol` there (5× the limit with GRBL's
-    /// defaults); the second limit `v² ≤ a·l/φ` keeps curves honest.
+    /// defaults); the second limit `v² ≤ a·l/φ` keeps curves honest. That
+    /// one is judged on the commanded geometry (`unit_mm`, `length` in mm):
+    /// a G1 chord of a step or two can look like a 45° corner in steps
+    /// (a radius of 0.016 mm on a 25 mm circle), which it is not.
     ///
     /// `a` is the acceleration the axes allow along the direction change
     /// (the difference of the two unit vectors), not along either move.
-    pub(super) fn junction_speed(&self, unit: &[f32; AXES], length: f32, curve: bool) -> f32 {
+    pub(super) fn junction_speed(
+        &self,
+        unit: &[f32; AXES],
+        unit_mm: &[f32; AXES],
+        length: f32,
+        curve: bool,
+    ) -> f32 {
         if self.prev_nominal <= 0.0 {
             return 0.0;
         }
-        let cos = -unit
-            .iter()
-            .zip(&self.prev_unit)
-            .map(|(a, b)| a * b)
-            .sum::<f32>();
+        let (cos, a) = self.turn(unit, &self.prev_unit);
         if cos > 0.999_999 {
             return 0.0;
         }
-        if cos < -0.999_999 {
-            return f32::INFINITY;
+        let v_jd = if cos < -0.999_999 {
+            f32::INFINITY
+        } else {
+            let sin_half = libm::sqrtf(0.5 * (1.0 - cos));
+            let r = self.settings.junction_deviation * sin_half / (1.0 - sin_half);
+            libm::sqrtf(a * r)
+        };
+        let (cos_mm, a_mm) = self.turn(unit_mm, &self.prev_unit_mm);
+        if cos_mm < -0.999_999 {
+            return v_jd;
         }
-        let d: [f32; AXES] = core::array::from_fn(|i| unit[i] - self.prev_unit[i]);
+        let phi = libm::acosf(crate::num::clamp(-cos_mm, -1.0, 1.0)).max(1e-9);
+        let l = length.min(self.prev_length);
+        let a_curve = if curve {
+            super::curve::C_MAX * a_mm
+        } else {
+            a_mm
+        };
+        let v_curve = libm::sqrtf(a_curve * l / phi);
+        v_jd.min(v_curve)
+    }
+
+    /// Cosine of the corner between the reversed previous direction and
+    /// `unit` (-1: straight on), and the acceleration the axes allow along
+    /// the direction change.
+    fn turn(&self, unit: &[f32; AXES], prev: &[f32; AXES]) -> (f32, f32) {
+        let cos = -unit.iter().zip(prev).map(|(a, b)| a * b).sum::<f32>();
+        let d: [f32; AXES] = core::array::from_fn(|i| unit[i] - prev[i]);
         let dn = libm::sqrtf(d.iter().map(|v| v * v).sum());
         let mut a = f32::INFINITY;
         for (di, ax) in d.iter().zip(&self.settings.axes) {
@@ -42,14 +73,7 @@ impl<const N: usize> Planner<N> {
                 a = a.min(ax.max_accel / c);
             }
         }
-        let sin_half = libm::sqrtf(0.5 * (1.0 - cos));
-        let r = self.settings.junction_deviation * sin_half / (1.0 - sin_half);
-        let v_jd = libm::sqrtf(a * r);
-        let phi = libm::acosf(crate::num::clamp(-cos, -1.0, 1.0)).max(1e-9);
-        let l = length.min(self.prev_length);
-        let a_curve = if curve { super::curve::C_MAX * a } else { a };
-        let v_curve = libm::sqrtf(a_curve * l / phi);
-        v_jd.min(v_curve)
+        (cos, a)
     }
 
     /// Apply new override percentages: every block's nominal speed and
