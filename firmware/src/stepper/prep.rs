@@ -55,8 +55,9 @@ pub struct Preparer {
     profile_exit: f32,
     profile_nominal: f32,
     tick_carry: f32,
-    /// Fractional dominant steps covered at the end of the last segment.
-    frac_prev: f32,
+    /// Profile time walked past the last step handed out, s: the next
+    /// segment's steps are timed from that step's instant.
+    since_step: f32,
     dwell_left: u64,
     /// Ticks still to wait before the next segment: the part of a step
     /// interval beyond the timer's range, or time walked without a step.
@@ -97,7 +98,7 @@ impl Preparer {
             profile_exit: 0.0,
             profile_nominal: 0.0,
             tick_carry: 0.0,
-            frac_prev: 0.0,
+            since_step: 0.0,
             dwell_left: 0,
             wait_left: 0,
             wait_end: false,
@@ -120,6 +121,7 @@ impl Preparer {
         self.block = None;
         self.v = 0.0;
         self.tick_carry = 0.0;
+        self.since_step = 0.0;
         self.wait_left = 0;
         self.hold = Hold::Running;
         self.cancel = false;
@@ -234,7 +236,6 @@ impl Preparer {
         self.new_block = true;
         self.steps_done = 0;
         self.s_done = 0.0;
-        self.frac_prev = 0.0;
         match b.kind {
             BlockKind::Dwell { ticks } => {
                 self.dwell_left = ticks;
@@ -343,7 +344,8 @@ impl Preparer {
             // No whole step yet (a slow ramp): hand the time walked so far
             // to the stepper as a wait, so this call stays bounded.
             if walks >= MAX_WALKS_PER_SEGMENT {
-                return Some(self.begin_wait(time * self.cfg.tick_hz as f32, false, rt));
+                let wait = (time + core::mem::take(&mut self.since_step)) * self.cfg.tick_hz as f32;
+                return Some(self.begin_wait(wait, false, rt));
             }
         };
         let n = target.saturating_sub(self.steps_done);
@@ -353,6 +355,20 @@ impl Preparer {
         } else {
             self.s_done / b.length * b.count as f32
         };
+        // The segment ends at its last step's instant, not where the walk
+        // stopped: the walk went `s_steps - target` steps further, at about
+        // the speed it has now. Timing steps from walk ends instead cost a
+        // block of a few steps up to 0.7 ms (its last segment had to run a
+        // whole step in the time of half a step's walk).
+        let elapsed = time + self.since_step;
+        let step_hz = self.v / b.length * b.count as f32;
+        let back = if block_end || stopped || step_hz <= 0.0 {
+            0.0
+        } else {
+            crate::num::clamp((s_steps - target as f32) / step_hz, 0.0, elapsed)
+        };
+        self.since_step = back;
+        let time = elapsed - back;
         // Past the last known line the profile stops (exit speed 0), even if
         // the last segment ends a hair before the ramp's end.
         let next_line = matches!(pl.block(1), Some(n) if n.kind == BlockKind::Line);
@@ -393,13 +409,8 @@ impl Preparer {
             return None;
         }
         let minor = b.steps.iter().any(|&s| s != 0 && s != b.count);
-        // The step rate comes from the fractional steps the profile covered
-        // in this time, not from the whole steps handed out: otherwise a
-        // 2 ms segment at 3.4 steps would run 3 or 4 steps at 3/4.
-        let covered = (s_steps - self.frac_prev).max(1e-3);
-        self.frac_prev = s_steps;
         let rate = if time > 0.0 {
-            covered / time
+            n as f32 / time
         } else {
             self.v / b.length * b.count as f32
         };
