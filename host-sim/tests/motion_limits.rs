@@ -61,7 +61,8 @@ fn polyline(pts: impl Iterator<Item = (f64, f64)>, feed: f64) -> String {
 
 #[test]
 fn near_diagonal_moves_at_the_rate_limit_keep_every_step_interval() {
-    let src = "G21 G90\nG1 X100 Y95 F20000\nG1 X0 Y3\nG0 X-80 Y-76\nG0 X0 Y0 Z2\nG0 Z0\n";
+    let src =
+        "G21 G90\nG1 X100 Y95 F20000\nG1 X0 Y3\nG0 X-80 Y-76\nG0 X0 Y0\nG4 P0\nG0 Z2\nG0 Z0\n";
     check(&machine(), "diagonal", src, true);
 }
 
