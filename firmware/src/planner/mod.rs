@@ -9,6 +9,7 @@
 //! entry speed stops changing; the forward pass starts at `planned`.
 
 mod curve;
+mod merge;
 mod passes;
 pub mod ramp;
 
@@ -421,15 +422,22 @@ impl<const N: usize> Planner<N> {
         b.junction = self.junction_speed(&unit, &unit_mm, len_mm, curve.is_some());
         b.max_entry = b.junction.min(b.nominal).min(self.prev_nominal);
         b.entry = if self.len == 0 { 0.0 } else { b.max_entry };
+        let merged = b.junction.is_infinite() && self.merge(&b);
         self.prev_unit = unit;
         self.prev_unit_mm = unit_mm;
         self.prev_nominal = b.nominal;
-        self.prev_length = len_mm;
+        self.prev_length = if merged {
+            self.prev_length + len_mm
+        } else {
+            len_mm
+        };
         self.position = target;
         self.position_mm = *end_mm;
-        let k = self.len;
-        *self.at(k) = b;
-        self.len += 1;
+        if !merged {
+            let k = self.len;
+            *self.at(k) = b;
+            self.len += 1;
+        }
         self.replan(false);
         Ok(())
     }
