@@ -165,7 +165,6 @@ pub struct Planner<const N: usize> {
     planned: usize,
     /// Step position at the end of the last block pushed.
     position: [i32; AXES],
-    prev_unit: [f32; AXES],
     /// The previous block's commanded direction (see `position_mm`).
     prev_unit_mm: [f32; AXES],
     /// Commanded end of the last block pushed, mm: corners are judged on
@@ -191,7 +190,6 @@ impl<const N: usize> Planner<N> {
             len: 0,
             planned: 0,
             position: [0; AXES],
-            prev_unit: [0.0; AXES],
             prev_unit_mm: [0.0; AXES],
             position_mm: [0.0; AXES],
             prev_nominal: 0.0,
@@ -260,7 +258,6 @@ impl<const N: usize> Planner<N> {
     /// The next block must start from standstill (after dwell, sync, hold-flush).
     pub fn stop_junction(&mut self) {
         self.prev_nominal = 0.0;
-        self.prev_unit = [0.0; AXES];
         self.prev_unit_mm = [0.0; AXES];
     }
 
@@ -419,11 +416,10 @@ impl<const N: usize> Planner<N> {
         } else {
             (unit, b.length)
         };
-        b.junction = self.junction_speed(&unit, &unit_mm, len_mm, curve.is_some());
+        b.junction = self.junction_speed(&unit_mm, len_mm, curve.is_some());
         b.max_entry = b.junction.min(b.nominal).min(self.prev_nominal);
         b.entry = if self.len == 0 { 0.0 } else { b.max_entry };
         let merged = b.junction.is_infinite() && self.merge(&b);
-        self.prev_unit = unit;
         self.prev_unit_mm = unit_mm;
         self.prev_nominal = b.nominal;
         self.prev_length = if merged {

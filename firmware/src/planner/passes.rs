@@ -9,31 +9,26 @@ impl<const N: usize> Planner<N> {
     /// whose closest approach to the corner is `δ`. With `c = sin(θ/2)` of the
     /// corner's half angle (θ = π when straight), the circle's radius is
     /// `R = δ·c/(1 − c)` and `v = sqrt(a·R)` keeps the centripetal
-    /// acceleration within `a`. It bounds the velocity jump the motors make
-    /// at the corner, so it is judged on the directions the steps take
-    /// (`unit`, from the step counts).
+    /// acceleration within `a`.
     ///
     /// Chords of a curve turn by a small angle φ every chord length `l`, so
     /// the tool really follows a curve of radius about `l/φ`. Junction
     /// deviation alone allows `a·δ/tol` there (5× the limit with GRBL's
-    /// defaults); the second limit `v² ≤ a·l/φ` keeps curves honest. That
-    /// one is judged on the commanded geometry (`unit_mm`, `length` in mm):
-    /// a G1 chord of a step or two can look like a 45° corner in steps
-    /// (a radius of 0.016 mm on a 25 mm circle), which it is not.
+    /// defaults); the second limit `v² ≤ a·l/φ` keeps curves honest.
+    ///
+    /// Both judge the commanded geometry (`unit_mm`, `length` in mm), not
+    /// the step-rounded one: a G1 chord of a step or two can look like a
+    /// 45° corner in steps (a radius of 0.016 mm on a 25 mm circle), which
+    /// it is not; the motors' one-step jitter around the commanded line
+    /// averages out like that of any Bresenham line.
     ///
     /// `a` is the acceleration the axes allow along the direction change
     /// (the difference of the two unit vectors), not along either move.
-    pub(super) fn junction_speed(
-        &self,
-        unit: &[f32; AXES],
-        unit_mm: &[f32; AXES],
-        length: f32,
-        curve: bool,
-    ) -> f32 {
+    pub(super) fn junction_speed(&self, unit_mm: &[f32; AXES], length: f32, curve: bool) -> f32 {
         if self.prev_nominal <= 0.0 {
             return 0.0;
         }
-        let (cos, a) = self.turn(unit, &self.prev_unit);
+        let (cos, a) = self.turn(unit_mm, &self.prev_unit_mm);
         if cos > 0.999_999 {
             return 0.0;
         }
