@@ -17,9 +17,6 @@
 
 use super::*;
 
-/// Largest tangential share of the straight-line limit on a curve.
-pub const T_MAX: f32 = 0.5;
-
 /// Largest centripetal share of the budget on a curve: the rest
 /// (`sqrt(1 − 0.8²) = 0.6`) is left for the tangential ramps.
 pub const C_MAX: f32 = 0.8;
@@ -59,6 +56,8 @@ impl<const N: usize> Planner<N> {
         let vmax = libm::sqrtf(C_MAX * b.curve_ar);
         b.nominal = b.nominal.min(vmax);
         let c = (b.nominal * b.nominal / b.curve_ar).min(C_MAX);
-        b.accel = (T_MAX * b.line_accel).min(libm::sqrtf((1.0 - c * c).max(0.0)) * b.curve_a);
+        b.accel = b
+            .line_accel
+            .min(libm::sqrtf((1.0 - c * c).max(0.0)) * b.curve_a);
     }
 }
