@@ -1,4 +1,5 @@
-//! The summary's "max feed", measured on the step trace: path speed over
+//! The summary's "max feed" and the plot's speed panel, measured on the
+//! step trace: path speed over
 //! bins of [`BIN_S`] from one step event to the first one a bin later, as
 //! the steps actually went out (the speed the preparer asked for can be
 //! anything on a block of a step or two: 13,753 mm/min once, on axes that
@@ -37,14 +38,21 @@ impl FeedMeter {
         }
     }
 
-    /// A step event: the axes stand at `pos` after it.
-    pub fn step(&mut self, tick: u64, pos: [i64; AXES]) {
+    /// Motion stopped: the next bin starts at the next step, not across
+    /// the standstill.
+    pub fn stop(&mut self) {
+        self.start = None;
+    }
+
+    /// A step event: the axes stand at `pos` after it. Returns the path
+    /// speed (mm/min) of the bin this event closes, if it closes one.
+    pub fn step(&mut self, tick: u64, pos: [i64; AXES]) -> Option<f64> {
         let Some((t0, p0)) = self.start else {
             self.start = Some((tick, pos));
-            return;
+            return None;
         };
         if tick < t0 + self.bin_ticks {
-            return;
+            return None;
         }
         let dt = (tick - t0) as f64 / self.tick_hz;
         let v2: f64 = (0..AXES)
@@ -53,7 +61,9 @@ impl FeedMeter {
                 v * v
             })
             .sum();
-        self.max_mm_min = self.max_mm_min.max(v2.sqrt() * 60.0);
+        let v = v2.sqrt() * 60.0;
+        self.max_mm_min = self.max_mm_min.max(v);
         self.start = Some((tick, pos));
+        Some(v)
     }
 }
