@@ -123,6 +123,16 @@ impl ArcChords {
         self.n
     }
 
+    /// The arc for the planner's acceleration split: its smallest radius
+    /// and its plane.
+    pub fn curve(&self) -> crate::planner::Curve {
+        let (a, b, _) = self.plane;
+        crate::planner::Curve {
+            radius: self.r0.min(self.r1),
+            plane: (1 << a | 1 << b) as u8,
+        }
+    }
+
     /// Axis-aligned bounds of the whole arc (for soft limits before any step).
     pub fn bounds(&self) -> (Pos, Pos) {
         let mut lo = self.start;

@@ -22,6 +22,7 @@ use std::collections::VecDeque;
 
 use burin::command::Command;
 use burin::executor::{Machine, MachineError, Note, PathKind};
+use burin::planner::Speed;
 use burin::realtime::Realtime;
 use burin::stepper::driver::StepDriver;
 use burin::stepper::{Segment, Stepper};
@@ -29,7 +30,7 @@ use burin::AXES;
 use heapless::spsc::Queue;
 
 use crate::config::{MachineConfig, Masks};
-use crate::record::{AxisInfo, MoveKind, Recorder, RunError, RunInfo, Summary};
+use crate::record::{AxisInfo, MoveKind, PathEvent, Recorder, RunError, RunInfo, Summary};
 pub use job::run_job;
 pub use pins::{Edge, VirtualHw};
 pub use task::DeviceTask;
@@ -91,7 +92,8 @@ struct Stats {
     last_path: Option<[f32; AXES]>,
     errors: Vec<RunError>,
     last_speed: f32,
-    max_speed: f32,
+    /// The summary's max feed, from the steps (see `crate::feed`).
+    feed: crate::feed::FeedMeter,
     dir: u8,
     dir_changed: u64,
     /// Step pin levels after the last store.
@@ -151,6 +153,11 @@ impl<'r> Sim<'r> {
         rec.start(&info);
         let stats = Stats {
             last_path: Some(machine.commanded_position()),
+            feed: crate::feed::FeedMeter::new(
+                cfg.tick_hz,
+                s.axes.map(|a| a.steps_per_mm),
+                s.axes.map(|a| a.max_rate),
+            ),
             ..Stats::default()
         };
         Sim {
@@ -334,7 +341,7 @@ impl<'r> Sim<'r> {
             moves: self.stats.moves,
             job_time_s: self.now as f64 / self.cfg.tick_hz as f64,
             distance_mm: self.stats.distance,
-            max_feed_mm_min: self.stats.max_speed as f64,
+            max_feed_mm_min: self.stats.feed.max_mm_min,
             steps: self.stats.steps,
             final_position_steps: std::array::from_fn(|i| pos[i] as i64),
             final_position_mm: mm,
@@ -363,7 +370,12 @@ fn earliest(a: Option<u64>, b: Option<u64>) -> Option<u64> {
 
 fn note(stats: &mut Stats, rec: &mut dyn Recorder, n: Note) {
     match n {
-        Note::Path { line, kind: k, end } => {
+        Note::Path {
+            line,
+            kind: k,
+            end,
+            speed,
+        } => {
             if let Some(p) = stats.last_path {
                 let d2: f32 = p.iter().zip(&end).map(|(a, b)| (a - b) * (a - b)).sum();
                 stats.distance += (d2 as f64).sqrt();
@@ -371,7 +383,19 @@ fn note(stats: &mut Stats, rec: &mut dyn Recorder, n: Note) {
             stats.last_path = Some(end);
             stats.blocks += 1;
             rec.commanded(line, kind(k), end);
+            let (feed_mm_s, seconds) = match speed {
+                Speed::Feed(v) => (v, None),
+                Speed::Time(t) => (f32::INFINITY, Some(t)),
+                Speed::Rapid => (f32::INFINITY, None),
+            };
+            rec.path(&PathEvent::To {
+                kind: kind(k),
+                to_mm: end,
+                feed_mm_s,
+                seconds,
+            });
         }
+        Note::Stop { seconds, .. } => rec.path(&PathEvent::Stop { seconds }),
         Note::Error { line, error } => stats.errors.push(machine_error(line, error)),
         Note::Probed { position, .. } => {
             stats.last_path = Some(position);

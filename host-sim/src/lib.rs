@@ -4,10 +4,12 @@
 //! the firmware library's job. host-sim supplies a virtual clock, recording
 //! pins, simulated switches and files.
 
+pub mod bench;
 pub mod check;
 pub mod config;
 pub mod device_sim;
 pub mod engine;
+pub mod feed;
 pub mod fuzz;
 pub mod offline;
 pub mod outputs;

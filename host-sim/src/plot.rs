@@ -4,7 +4,8 @@
 //! (rapids dashed grey, feeds blue, arcs purple, splines pink, probing red,
 //! homing orange) drawn over a translucent orange band that is the path the
 //! steppers actually took. Where the two part, the band shows it.
-//! Bottom panel: the commanded path speed over time.
+//! Bottom panel: the path speed over time, from the steps (10 ms bins, the
+//! same figure as the summary's max feed, see `crate::feed`).
 //!
 //! A job can have millions of chords and tens of millions of steps, so the
 //! paths are simplified as they stream in (a point is dropped when it lies
@@ -17,6 +18,7 @@ mod svg;
 
 use std::io::{self, Write};
 
+use crate::feed::FeedMeter;
 use crate::record::{MoveKind, PinEvent, Recorder, RunInfo, Summary};
 
 /// Point budget per path; past it the tolerance doubles.
@@ -231,6 +233,9 @@ pub struct SvgPlot<W: Write> {
     commanded: Simplifier,
     stepped: Simplifier,
     velocity: Series,
+    /// The path speed the velocity panel draws: from the steps, in the
+    /// same bins as the summary's max feed (`crate::feed`).
+    feed: Option<FeedMeter>,
     z: Series,
     last_tick: u64,
     last_steps: Option<[i64; 3]>,
@@ -247,6 +252,7 @@ impl<W: Write> SvgPlot<W> {
             commanded: Simplifier::new(),
             stepped: Simplifier::new(),
             velocity: Series::default(),
+            feed: None,
             z: Series::default(),
             last_tick: 0,
             last_steps: None,
@@ -271,11 +277,19 @@ impl<W: Write> Recorder for SvgPlot<W> {
         // detail finer than one step is quantisation, not shape.
         let step = self.mm_per_step[0].max(self.mm_per_step[1]);
         self.stepped.tol = self.stepped.tol.max(step);
+        self.feed = Some(FeedMeter::new(
+            info.tick_hz,
+            info.axes.clone().map(|a| a.steps_per_mm),
+            info.axes.clone().map(|a| a.max_rate_mm_min),
+        ));
         self.info = Some(info.clone());
     }
 
     fn step_event(&mut self, ev: &PinEvent) {
         self.last_tick = self.last_tick.max(ev.tick);
+        if let Some(v) = self.feed.as_mut().and_then(|f| f.step(ev.tick, ev.pos)) {
+            self.velocity.push(ev.tick, v as f32);
+        }
         let now = [ev.pos[0], ev.pos[1], ev.pos[2]];
         let prev = match self.last_steps {
             Some(p) => p,
@@ -311,9 +325,17 @@ impl<W: Write> Recorder for SvgPlot<W> {
         self.commanded.push(p, kind_tag(kind));
     }
 
+    /// Only the stops of the planned speed: the panel draws the speed
+    /// measured on the steps, which learns of a standstill only at the
+    /// next step.
     fn velocity(&mut self, tick: u64, mm_per_min: f32) {
         self.last_tick = self.last_tick.max(tick);
-        self.velocity.push(tick, mm_per_min);
+        if mm_per_min <= 0.0 {
+            self.velocity.push(tick, 0.0);
+            if let Some(f) = self.feed.as_mut() {
+                f.stop();
+            }
+        }
     }
 
     fn finish(&mut self, summary: &Summary) -> io::Result<()> {

@@ -33,6 +33,23 @@ pub enum MoveKind {
     Home,
 }
 
+/// The commanded path with its requested speeds, for references that
+/// replan the job independently of the planner (bench-motion's time bound).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PathEvent {
+    /// A straight piece (arcs and splines arrive as their chords) ending at
+    /// `to_mm`, at most at `feed_mm_s` (infinite for rapids), or taking
+    /// `seconds` when the feed is given as a time (G93).
+    To {
+        kind: MoveKind,
+        to_mm: [f32; AXES],
+        feed_mm_s: f32,
+        seconds: Option<f32>,
+    },
+    /// Motion stops here: a dwell of `seconds`, or a synced command (0).
+    Stop { seconds: f32 },
+}
+
 /// Static facts about the run, known before the first event.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RunInfo {
@@ -88,6 +105,8 @@ pub trait Recorder {
     fn step_fall(&mut self, _tick: u64, _mask: u8) {}
     /// A commanded path vertex (arcs and splines arrive as their chords).
     fn commanded(&mut self, _line: u32, _kind: MoveKind, _to_mm: [f32; AXES]) {}
+    /// The same path as [`commanded`](Self::commanded), with speeds and stops.
+    fn path(&mut self, _ev: &PathEvent) {}
     /// Commanded path speed at `tick`, recorded whenever it changes.
     fn velocity(&mut self, _tick: u64, _mm_per_min: f32) {}
     fn finish(&mut self, _summary: &Summary) -> std::io::Result<()> {
@@ -116,6 +135,9 @@ impl Recorder for Tee<'_> {
         self.0
             .iter_mut()
             .for_each(|r| r.commanded(line, kind, to_mm));
+    }
+    fn path(&mut self, ev: &PathEvent) {
+        self.0.iter_mut().for_each(|r| r.path(ev));
     }
     fn velocity(&mut self, tick: u64, mm_per_min: f32) {
         self.0.iter_mut().for_each(|r| r.velocity(tick, mm_per_min));

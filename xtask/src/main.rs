@@ -1,6 +1,7 @@
 //! `cargo xtask …`: the project's one entry point for checks, images,
 //! flashing, simulation and streaming.
 
+mod bench_motion;
 mod bench_target;
 mod ci;
 mod flash;
@@ -42,6 +43,8 @@ enum Cmd {
     Qemu,
     /// Count the hot paths' Cortex-M4 instructions under QEMU (-icount shift=0).
     BenchTarget,
+    /// Motion benchmark: job time vs the time-optimal bound and the axis limits (simulated time).
+    BenchMotion(bench_motion::BenchMotionArgs),
     /// Real third-party senders (PyPI: grbl-streamer, printcore) against `sim --pty`.
     Senders,
     /// Coverage-guided fuzzing (cargo-fuzz, nightly): all targets or one.
@@ -64,6 +67,7 @@ fn main() {
         Cmd::Stream(a) => stream::run(a),
         Cmd::Qemu => qemu::run(),
         Cmd::BenchTarget => bench_target::run(),
+        Cmd::BenchMotion(a) => bench_motion::run(a),
         Cmd::Senders => senders::run(),
         Cmd::Fuzz(a) => fuzz::run(&a),
         Cmd::Rs274 { install } => rs274::run(install).map(|()| 0),

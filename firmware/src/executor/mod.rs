@@ -17,7 +17,7 @@ pub use script::ToolEvent;
 
 use crate::arc::{ArcChords, SplineChords};
 use crate::command::{AxisMask, Command, Feed, Pos, ProbeKind};
-use crate::planner::{Planner, Speed, Watch};
+use crate::planner::{Curve, Planner, Speed, Watch};
 use crate::realtime::{Realtime, Trip};
 use crate::settings::{RapidMode, Settings};
 use crate::stepper::prep::{Preparer, SegmentSink};
@@ -43,8 +43,18 @@ pub enum PathKind {
 /// Things the executor reports as they happen.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Note<'a> {
-    /// A straight piece of commanded path was planned, ending here (mm).
-    Path { line: u32, kind: PathKind, end: Pos },
+    /// A straight piece of commanded path was planned, ending here (mm),
+    /// at this requested speed (references such as bench-motion's time
+    /// bound replan the job from these).
+    Path {
+        line: u32,
+        kind: PathKind,
+        end: Pos,
+        speed: Speed,
+    },
+    /// Motion comes to a standstill here, in order with the path: a dwell
+    /// (its length, s) or a command that waits for motion to end (0).
+    Stop { line: u32, seconds: f32 },
     /// A command failed or an alarm went off while running.
     Error { line: u32, error: MachineError },
     /// A non-motion command ran, in order with motion.
@@ -257,13 +267,13 @@ impl<const N: usize> Machine<N> {
         kind: PathKind,
         obs: &mut dyn FnMut(Note),
     ) -> Result<(), MachineError> {
-        let steps = self.planner.to_steps(end)?;
-        self.planner.push_line(steps, speed, watch, line)?;
+        self.planner.push_line_mm(end, speed, watch, line)?;
         self.commanded = *end;
         obs(Note::Path {
             line,
             kind,
             end: *end,
+            speed,
         });
         Ok(())
     }

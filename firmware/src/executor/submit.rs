@@ -92,7 +92,12 @@ impl<const N: usize> Machine<N> {
                     return Err(MachineError::InvalidNumber);
                 }
                 let ticks = (*seconds as f64 * self.cfg.tick_hz as f64) as u64;
-                Ok(self.planner.push_dwell(ticks, line)?)
+                self.planner.push_dwell(ticks, line)?;
+                obs(Note::Stop {
+                    line,
+                    seconds: *seconds,
+                });
+                Ok(())
             }
             Command::Probe { end, feed, kind } => {
                 self.check_soft(end, end)?;
@@ -149,6 +154,7 @@ impl<const N: usize> Machine<N> {
                 Ok(())
             }
             _ => {
+                obs(Note::Stop { line, seconds: 0.0 });
                 self.pending = Pending::Sync {
                     command: cmd.clone(),
                     line,
@@ -240,8 +246,12 @@ impl<const N: usize> Machine<N> {
                 return Ok(());
             };
             let (speed, line) = (*speed, *line);
+            let mut curve = Curve::default();
             let (next, kind) = match chords {
-                Chords::Arc(c) => (c.next(), PathKind::Arc),
+                Chords::Arc(c) => {
+                    curve = c.curve();
+                    (c.next(), PathKind::Arc)
+                }
                 Chords::Spline(c) => (c.next(), PathKind::Spline),
                 Chords::Legs { pts, n, i } => {
                     let p = if *i < *n { pts.get(*i).copied() } else { None };
@@ -253,19 +263,22 @@ impl<const N: usize> Machine<N> {
                 self.pending = Pending::None;
                 return Ok(());
             };
-            let pushed = self.planner.to_steps(&p).and_then(|t| {
-                if kind == PathKind::Rapid {
-                    self.planner.push_line(t, speed, Watch::default(), line)
-                } else {
-                    self.planner.push_chord(t, speed, line)
-                }
-            });
+            let pushed = if kind == PathKind::Rapid {
+                self.planner.push_line_mm(&p, speed, Watch::default(), line)
+            } else {
+                self.planner.push_chord(&p, speed, line, curve)
+            };
             if let Err(e) = pushed {
                 self.pending = Pending::None;
                 return Err(e.into());
             }
             self.commanded = p;
-            obs(Note::Path { line, kind, end: p });
+            obs(Note::Path {
+                line,
+                kind,
+                end: p,
+                speed,
+            });
         }
         Ok(())
     }

@@ -8,12 +8,16 @@
 //! appended later can change them. The backward pass stops as soon as an
 //! entry speed stops changing; the forward pass starts at `planned`.
 
+mod curve;
+mod merge;
 mod passes;
+mod push;
 pub mod ramp;
 
 use crate::command::Pos;
 use crate::settings::Settings;
 use crate::AXES;
+pub use curve::Curve;
 pub use ramp::{Phase, Profile, Shape};
 
 /// Why a block was not queued. The executor maps `Full` onto its `Busy` and
@@ -90,6 +94,13 @@ pub struct Block {
     pub nominal: f32,
     /// Path acceleration the axes allow, mm/s².
     pub accel: f32,
+    /// The same along a straight line (a chord of a curve shares it with
+    /// the centripetal acceleration: `accel` is less).
+    pub line_accel: f32,
+    /// Chord of an arc: `A·r` and `A` of the arc's plane (see
+    /// `planner::curve`); 0 otherwise.
+    pub curve_ar: f32,
+    pub curve_a: f32,
     /// Slowest path speed the step timer can time, mm/s: the feed override
     /// never takes `nominal` below it.
     pub floor: f32,
@@ -115,6 +126,9 @@ impl Block {
         cap: 0.0,
         nominal: 0.0,
         accel: 1.0,
+        line_accel: 1.0,
+        curve_ar: 0.0,
+        curve_a: 0.0,
         floor: 0.0,
         junction: 0.0,
         max_entry: 0.0,
@@ -152,7 +166,12 @@ pub struct Planner<const N: usize> {
     planned: usize,
     /// Step position at the end of the last block pushed.
     position: [i32; AXES],
-    prev_unit: [f32; AXES],
+    /// The previous block's commanded direction (see `position_mm`).
+    prev_unit_mm: [f32; AXES],
+    /// Commanded end of the last block pushed, mm: corners are judged on
+    /// the commanded geometry, not on the step-rounded one (a chord of a
+    /// step or two can look like a 45° corner in steps).
+    position_mm: [f32; AXES],
     /// Path speed the previous block's junction may carry (0 after a stop).
     prev_nominal: f32,
     prev_length: f32,
@@ -172,7 +191,8 @@ impl<const N: usize> Planner<N> {
             len: 0,
             planned: 0,
             position: [0; AXES],
-            prev_unit: [0.0; AXES],
+            prev_unit_mm: [0.0; AXES],
+            position_mm: [0.0; AXES],
             prev_nominal: 0.0,
             prev_length: 0.0,
             feed_pct: 1.0,
@@ -225,7 +245,12 @@ impl<const N: usize> Planner<N> {
         self.len = 0;
         self.planned = 0;
         self.position = position;
+        self.position_mm = self.steps_mm(&position);
         self.stop_junction();
+    }
+
+    fn steps_mm(&self, steps: &[i32; AXES]) -> [f32; AXES] {
+        core::array::from_fn(|i| steps[i] as f32 / self.settings.axes[i].steps_per_mm)
     }
     /// Step position at the end of everything planned.
     pub fn position(&self) -> [i32; AXES] {
@@ -234,7 +259,7 @@ impl<const N: usize> Planner<N> {
     /// The next block must start from standstill (after dwell, sync, hold-flush).
     pub fn stop_junction(&mut self) {
         self.prev_nominal = 0.0;
-        self.prev_unit = [0.0; AXES];
+        self.prev_unit_mm = [0.0; AXES];
     }
 
     /// Steps for a machine position in mm: rounded from the absolute target,
@@ -260,115 +285,35 @@ impl<const N: usize> Planner<N> {
         watch: Watch,
         line: u32,
     ) -> Result<(), PlanError> {
-        self.push(target, speed, watch, line, false)
+        let mm = self.steps_mm(&target);
+        self.push(target, &mm, speed, watch, line, None)
     }
 
-    /// Queue one chord of an arc or spline. On a curve the axes feel the
-    /// tangential and the centripetal acceleration at once, so each gets half
-    /// of the acceleration budget: the sum stays within every axis limit.
-    pub fn push_chord(
+    /// [`push_line`](Self::push_line) to a commanded position in mm (rounded
+    /// to steps here); its corners are judged on the mm geometry.
+    pub fn push_line_mm(
         &mut self,
-        target: [i32; AXES],
-        speed: Speed,
-        line: u32,
-    ) -> Result<(), PlanError> {
-        self.push(target, speed, Watch::default(), line, true)
-    }
-
-    fn push(
-        &mut self,
-        target: [i32; AXES],
+        end: &Pos,
         speed: Speed,
         watch: Watch,
         line: u32,
-        curve: bool,
     ) -> Result<(), PlanError> {
-        if self.is_full() {
-            return Err(PlanError::Full);
-        }
-        let s = &self.settings;
-        let mut b = Block {
-            target,
-            watch,
-            line,
-            ..Block::EMPTY
-        };
-        let mut mm = [0.0f32; AXES];
-        let mut len2 = 0.0;
-        for i in 0..AXES {
-            let spm = s.axes[i].steps_per_mm;
-            if !(spm.is_finite() && spm > 0.0) {
-                return Err(PlanError::InvalidNumber);
-            }
-            let d = target[i] as i64 - self.position[i] as i64;
-            let ad = d.unsigned_abs();
-            if ad > MAX_BLOCK_STEPS as u64 {
-                return Err(PlanError::MoveTooLong);
-            }
-            b.steps[i] = ad as u32;
-            if d < 0 {
-                b.dir_mask |= 1 << i;
-            }
-            mm[i] = d as f32 / s.axes[i].steps_per_mm;
-            len2 += mm[i] * mm[i];
-        }
-        b.count = b.steps.iter().copied().max().unwrap_or(0);
-        if b.count == 0 {
-            return Ok(());
-        }
-        b.length = libm::sqrtf(len2);
-        let mut unit = [0.0f32; AXES];
-        let (mut cap, mut accel) = (f32::INFINITY, f32::INFINITY);
-        for i in 0..AXES {
-            unit[i] = mm[i] / b.length;
-            if b.steps[i] == 0 {
-                continue;
-            }
-            let ax = &s.axes[i];
-            let sane = |v: f32| v.is_finite() && v > 0.0;
-            if !(sane(ax.max_rate) && sane(ax.max_accel) && sane(ax.steps_per_mm)) {
-                return Err(PlanError::InvalidNumber);
-            }
-            if ax.max_rate / 60.0 * ax.steps_per_mm > s.max_step_rate_hz {
-                return Err(PlanError::StepRateTooHigh { axis: i as u8 });
-            }
-            let u = unit[i].abs();
-            cap = cap.min(ax.max_rate / 60.0 / u);
-            accel = accel.min(ax.max_accel / u);
-        }
-        b.cap = cap;
-        b.accel = if curve { accel * 0.5 } else { accel };
-        match speed {
-            Speed::Feed(v) if v > 0.0 && v.is_finite() => b.programmed = v,
-            Speed::Time(t) if t > 0.0 && t.is_finite() => b.programmed = b.length / t,
-            Speed::Rapid => {
-                b.programmed = f32::INFINITY;
-                b.rapid = true;
-            }
-            _ => return Err(PlanError::InvalidFeed),
-        }
-        // Steps further apart than the timer reaches cannot be timed by one
-        // period. Refused here, before anything moved, rather than run
-        // faster than programmed (see `FeedTooSlow`). At 100 % override:
-        // a lower override is floored at this speed instead, so a job that
-        // was accepted never fails halfway through.
-        b.floor = self.min_step_hz * b.length / b.count as f32;
-        if b.programmed.min(b.cap) < b.floor {
-            return Err(PlanError::FeedTooSlow);
-        }
-        b.nominal = self.nominal(&b);
-        b.junction = self.junction_speed(&unit, b.length, curve);
-        b.max_entry = b.junction.min(b.nominal).min(self.prev_nominal);
-        b.entry = if self.len == 0 { 0.0 } else { b.max_entry };
-        self.prev_unit = unit;
-        self.prev_nominal = b.nominal;
-        self.prev_length = b.length;
-        self.position = target;
-        let k = self.len;
-        *self.at(k) = b;
-        self.len += 1;
-        self.replan(false);
-        Ok(())
+        let target = self.to_steps(end)?;
+        self.push(target, end, speed, watch, line, None)
+    }
+
+    /// Queue one chord of an arc or spline, ending at `end` mm. On a curve
+    /// the axes feel the tangential and the centripetal acceleration at
+    /// once: `planner::curve` splits the budget between them.
+    pub fn push_chord(
+        &mut self,
+        end: &Pos,
+        speed: Speed,
+        line: u32,
+        curve: Curve,
+    ) -> Result<(), PlanError> {
+        let target = self.to_steps(end)?;
+        self.push(target, end, speed, Watch::default(), line, Some(curve))
     }
 
     /// Queue a dwell; motion stops before it.

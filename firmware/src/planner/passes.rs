@@ -16,24 +16,50 @@ impl<const N: usize> Planner<N> {
     /// deviation alone allows `a·δ/tol` there (5× the limit with GRBL's
     /// defaults); the second limit `v² ≤ a·l/φ` keeps curves honest.
     ///
+    /// Both judge the commanded geometry (`unit_mm`, `length` in mm), not
+    /// the step-rounded one: a G1 chord of a step or two can look like a
+    /// 45° corner in steps (a radius of 0.016 mm on a 25 mm circle), which
+    /// it is not; the motors' one-step jitter around the commanded line
+    /// averages out like that of any Bresenham line.
+    ///
     /// `a` is the acceleration the axes allow along the direction change
     /// (the difference of the two unit vectors), not along either move.
-    pub(super) fn junction_speed(&self, unit: &[f32; AXES], length: f32, curve: bool) -> f32 {
+    pub(super) fn junction_speed(&self, unit_mm: &[f32; AXES], length: f32, curve: bool) -> f32 {
         if self.prev_nominal <= 0.0 {
             return 0.0;
         }
-        let cos = -unit
-            .iter()
-            .zip(&self.prev_unit)
-            .map(|(a, b)| a * b)
-            .sum::<f32>();
+        let (cos, a) = self.turn(unit_mm, &self.prev_unit_mm);
         if cos > 0.999_999 {
             return 0.0;
         }
-        if cos < -0.999_999 {
-            return f32::INFINITY;
+        let v_jd = if cos < -0.999_999 {
+            f32::INFINITY
+        } else {
+            let sin_half = libm::sqrtf(0.5 * (1.0 - cos));
+            let r = self.settings.junction_deviation * sin_half / (1.0 - sin_half);
+            libm::sqrtf(a * r)
+        };
+        let (cos_mm, a_mm) = self.turn(unit_mm, &self.prev_unit_mm);
+        if cos_mm < -0.999_999 {
+            return v_jd;
         }
-        let d: [f32; AXES] = core::array::from_fn(|i| unit[i] - self.prev_unit[i]);
+        let phi = libm::acosf(crate::num::clamp(-cos_mm, -1.0, 1.0)).max(1e-9);
+        let l = length.min(self.prev_length);
+        let a_curve = if curve {
+            super::curve::C_MAX * a_mm
+        } else {
+            a_mm
+        };
+        let v_curve = libm::sqrtf(a_curve * l / phi);
+        v_jd.min(v_curve)
+    }
+
+    /// Cosine of the corner between the reversed previous direction and
+    /// `unit` (-1: straight on), and the acceleration the axes allow along
+    /// the direction change.
+    fn turn(&self, unit: &[f32; AXES], prev: &[f32; AXES]) -> (f32, f32) {
+        let cos = -unit.iter().zip(prev).map(|(a, b)| a * b).sum::<f32>();
+        let d: [f32; AXES] = core::array::from_fn(|i| unit[i] - prev[i]);
         let dn = libm::sqrtf(d.iter().map(|v| v * v).sum());
         let mut a = f32::INFINITY;
         for (di, ax) in d.iter().zip(&self.settings.axes) {
@@ -42,14 +68,7 @@ impl<const N: usize> Planner<N> {
                 a = a.min(ax.max_accel / c);
             }
         }
-        let sin_half = libm::sqrtf(0.5 * (1.0 - cos));
-        let r = self.settings.junction_deviation * sin_half / (1.0 - sin_half);
-        let v_jd = libm::sqrtf(a * r);
-        let phi = libm::acosf(crate::num::clamp(-cos, -1.0, 1.0)).max(1e-9);
-        let l = length.min(self.prev_length);
-        let a_curve = if curve { 0.5 * a } else { a };
-        let v_curve = libm::sqrtf(a_curve * l / phi);
-        v_jd.min(v_curve)
+        (cos, a)
     }
 
     /// Apply new override percentages: every block's nominal speed and
@@ -61,6 +80,7 @@ impl<const N: usize> Planner<N> {
         for k in 0..self.len {
             let mut b = *self.at(k);
             b.nominal = self.nominal(&b);
+            Self::curve_limits(&mut b);
             if b.kind == BlockKind::Line {
                 let pn = prev_nominal.unwrap_or(b.entry);
                 b.max_entry = b.junction.min(b.nominal).min(pn);

@@ -21,6 +21,7 @@ pub(super) const DWELL_CHUNK_S: f32 = 0.01;
 pub use super::sink::SegmentSink;
 
 mod hold;
+mod rate;
 mod walk;
 
 use walk::MAX_SEGMENT_TICKS;
@@ -54,8 +55,9 @@ pub struct Preparer {
     profile_exit: f32,
     profile_nominal: f32,
     tick_carry: f32,
-    /// Fractional dominant steps covered at the end of the last segment.
-    frac_prev: f32,
+    /// Profile time walked past the last step handed out, s: the next
+    /// segment's steps are timed from that step's instant.
+    since_step: f32,
     dwell_left: u64,
     /// Ticks still to wait before the next segment: the part of a step
     /// interval beyond the timer's range, or time walked without a step.
@@ -96,7 +98,7 @@ impl Preparer {
             profile_exit: 0.0,
             profile_nominal: 0.0,
             tick_carry: 0.0,
-            frac_prev: 0.0,
+            since_step: 0.0,
             dwell_left: 0,
             wait_left: 0,
             wait_end: false,
@@ -119,6 +121,7 @@ impl Preparer {
         self.block = None;
         self.v = 0.0;
         self.tick_carry = 0.0;
+        self.since_step = 0.0;
         self.wait_left = 0;
         self.hold = Hold::Running;
         self.cancel = false;
@@ -233,7 +236,6 @@ impl Preparer {
         self.new_block = true;
         self.steps_done = 0;
         self.s_done = 0.0;
-        self.frac_prev = 0.0;
         match b.kind {
             BlockKind::Dwell { ticks } => {
                 self.dwell_left = ticks;
@@ -342,7 +344,8 @@ impl Preparer {
             // No whole step yet (a slow ramp): hand the time walked so far
             // to the stepper as a wait, so this call stays bounded.
             if walks >= MAX_WALKS_PER_SEGMENT {
-                return Some(self.begin_wait(time * self.cfg.tick_hz as f32, false, rt));
+                let wait = (time + core::mem::take(&mut self.since_step)) * self.cfg.tick_hz as f32;
+                return Some(self.begin_wait(wait, false, rt));
             }
         };
         let n = target.saturating_sub(self.steps_done);
@@ -352,6 +355,20 @@ impl Preparer {
         } else {
             self.s_done / b.length * b.count as f32
         };
+        // The segment ends at its last step's instant, not where the walk
+        // stopped: the walk went `s_steps - target` steps further, at about
+        // the speed it has now. Timing steps from walk ends instead cost a
+        // block of a few steps up to 0.7 ms (its last segment had to run a
+        // whole step in the time of half a step's walk).
+        let elapsed = time + self.since_step;
+        let step_hz = self.v / b.length * b.count as f32;
+        let back = if block_end || stopped || step_hz <= 0.0 {
+            0.0
+        } else {
+            crate::num::clamp((s_steps - target as f32) / step_hz, 0.0, elapsed)
+        };
+        self.since_step = back;
+        let time = elapsed - back;
         // Past the last known line the profile stops (exit speed 0), even if
         // the last segment ends a hair before the ramp's end.
         let next_line = matches!(pl.block(1), Some(n) if n.kind == BlockKind::Line);
@@ -393,13 +410,8 @@ impl Preparer {
             return None;
         }
         let minor = b.steps.iter().any(|&s| s != 0 && s != b.count);
-        // The step rate comes from the fractional steps the profile covered
-        // in this time, not from the whole steps handed out: otherwise a
-        // 2 ms segment at 3.4 steps would run 3 or 4 steps at 3/4.
-        let covered = (s_steps - self.frac_prev).max(1e-3);
-        self.frac_prev = s_steps;
         let rate = if time > 0.0 {
-            covered / time
+            n as f32 / time
         } else {
             self.v / b.length * b.count as f32
         };
@@ -418,7 +430,7 @@ impl Preparer {
         let events = n << amass;
         let ticks = (dominant * n as f32).min(MAX_SEGMENT_TICKS) + self.tick_carry;
         let period_f = ticks / events as f32;
-        let period = if period_f >= self.cfg.min_period as f32 {
+        let mut period = if period_f >= self.cfg.min_period as f32 {
             let p = (period_f.min(u32::MAX as f32) as u32).max(self.cfg.min_period);
             let rest = ticks - p as f32 * events as f32;
             if period_f > u32::MAX as f32 {
@@ -435,6 +447,12 @@ impl Preparer {
             self.tick_carry = 0.0;
             self.cfg.min_period
         };
+        let floor = self.rate_floor(&b, amass);
+        if period < floor {
+            // Within an event of an axis limit: hold it (see `prep::rate`).
+            period = floor;
+            self.tick_carry = 0.0;
+        }
         let speed_mm_min = rate / b.count as f32 * b.length * 60.0;
         self.max_speed_mm_min = self.max_speed_mm_min.max(speed_mm_min);
         let first = core::mem::replace(&mut self.new_block, false);

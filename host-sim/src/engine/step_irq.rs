@@ -40,7 +40,10 @@ impl Sim<'_> {
         let v = self.stepper.speed_mm_min();
         if v != self.stats.last_speed {
             self.stats.last_speed = v;
-            self.stats.max_speed = self.stats.max_speed.max(v);
+            if v <= 0.0 {
+                // As the plot's speed panel does (`crate::feed`).
+                self.stats.feed.stop();
+            }
             self.rec.velocity(self.now, v);
         }
         let done = self.hw.done_at();
@@ -77,6 +80,7 @@ impl Sim<'_> {
             for i in 0..AXES {
                 self.stats.steps[i] += u64::from(e.step >> i & 1);
             }
+            let _ = self.stats.feed.step(e.tick, pos.map(i64::from));
             self.rec.step_event(&PinEvent {
                 tick: e.tick,
                 dir_mask: e.dir,

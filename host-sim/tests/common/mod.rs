@@ -186,9 +186,13 @@ pub fn check_max_accel(info: &RunInfo, events: &[PinEvent], corners: &[u64], jd_
             let v = v0.abs().max(v1.abs());
             let mut tol = a_max * (1.0 + 0.002 / ACCEL_BIN_S)
                 + 4.0 * v * 125e-6 / (ACCEL_BIN_S * ACCEL_BIN_S);
+            // `check_path` registers a corner when the stepped path leaves
+            // the previous piece's one-step tolerance, which on a steep
+            // turn (an arc's end into a near-reversal of Z) comes a few ms
+            // after the vertex: look one more bin ahead for it.
             let (lo, hi) = (
                 ((t0 - ACCEL_BIN_S) * hz) as u64,
-                ((t1 + ACCEL_BIN_S) * hz) as u64,
+                ((t1 + 2.0 * ACCEL_BIN_S) * hz) as u64,
             );
             let i0 = corners.partition_point(|&c| c < lo);
             if corners.get(i0).is_some_and(|&c| c <= hi) {

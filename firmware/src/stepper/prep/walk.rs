@@ -114,8 +114,8 @@ impl Preparer {
     /// at most the timer's range apart. It keeps the block's Bresenham
     /// state (no `new_block`, and a count so large that the accumulators,
     /// which stay below any real block's threshold, never reach it) and
-    /// leaves `frac_prev` alone, so the next segment's rate takes in the
-    /// distance covered during the wait and the step's time is kept.
+    /// times the next step from the wait's end (the wait took the time
+    /// walked since the last step), so the step's time is kept.
     pub(super) fn wait_chunk(&mut self, rt: &Realtime) -> Segment {
         let left = self.wait_left.max(u64::from(self.cfg.min_period));
         let period = left.min(u64::from(u32::MAX)) as u32;

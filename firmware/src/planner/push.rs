@@ -1,0 +1,129 @@
+//! Turning one move into a block: step counts, caps, the speed request,
+//! the corner with the block before, and the merge with it.
+
+use super::*;
+
+impl<const N: usize> Planner<N> {
+    pub(super) fn push(
+        &mut self,
+        target: [i32; AXES],
+        end_mm: &Pos,
+        speed: Speed,
+        watch: Watch,
+        line: u32,
+        curve: Option<Curve>,
+    ) -> Result<(), PlanError> {
+        if self.is_full() {
+            return Err(PlanError::Full);
+        }
+        let s = &self.settings;
+        let mut b = Block {
+            target,
+            watch,
+            line,
+            ..Block::EMPTY
+        };
+        let mut mm = [0.0f32; AXES];
+        let mut len2 = 0.0;
+        for i in 0..AXES {
+            let spm = s.axes[i].steps_per_mm;
+            if !(spm.is_finite() && spm > 0.0) {
+                return Err(PlanError::InvalidNumber);
+            }
+            let d = target[i] as i64 - self.position[i] as i64;
+            let ad = d.unsigned_abs();
+            if ad > MAX_BLOCK_STEPS as u64 {
+                return Err(PlanError::MoveTooLong);
+            }
+            b.steps[i] = ad as u32;
+            if d < 0 {
+                b.dir_mask |= 1 << i;
+            }
+            mm[i] = d as f32 / s.axes[i].steps_per_mm;
+            len2 += mm[i] * mm[i];
+        }
+        b.count = b.steps.iter().copied().max().unwrap_or(0);
+        if b.count == 0 {
+            return Ok(());
+        }
+        b.length = libm::sqrtf(len2);
+        let mut unit = [0.0f32; AXES];
+        let (mut cap, mut accel) = (f32::INFINITY, f32::INFINITY);
+        for i in 0..AXES {
+            unit[i] = mm[i] / b.length;
+            if b.steps[i] == 0 {
+                continue;
+            }
+            let ax = &s.axes[i];
+            let sane = |v: f32| v.is_finite() && v > 0.0;
+            if !(sane(ax.max_rate) && sane(ax.max_accel) && sane(ax.steps_per_mm)) {
+                return Err(PlanError::InvalidNumber);
+            }
+            if ax.max_rate / 60.0 * ax.steps_per_mm > s.max_step_rate_hz {
+                return Err(PlanError::StepRateTooHigh { axis: i as u8 });
+            }
+            let u = unit[i].abs();
+            cap = cap.min(ax.max_rate / 60.0 / u);
+            accel = accel.min(ax.max_accel / u);
+        }
+        b.cap = cap;
+        b.line_accel = accel;
+        b.accel = accel;
+        match curve.map(|c| c.budget(s)) {
+            Some(Some((ar, a))) => (b.curve_ar, b.curve_a) = (ar, a),
+            // Unknown radius: half the budget each way (the sum stays
+            // within every axis limit).
+            Some(None) => b.accel = accel * 0.5,
+            None => {}
+        }
+        match speed {
+            Speed::Feed(v) if v > 0.0 && v.is_finite() => b.programmed = v,
+            Speed::Time(t) if t > 0.0 && t.is_finite() => b.programmed = b.length / t,
+            Speed::Rapid => {
+                b.programmed = f32::INFINITY;
+                b.rapid = true;
+            }
+            _ => return Err(PlanError::InvalidFeed),
+        }
+        // Steps further apart than the timer reaches cannot be timed by one
+        // period. Refused here, before anything moved, rather than run
+        // faster than programmed (see `FeedTooSlow`). At 100 % override:
+        // a lower override is floored at this speed instead, so a job that
+        // was accepted never fails halfway through.
+        b.floor = self.min_step_hz * b.length / b.count as f32;
+        if b.programmed.min(b.cap) < b.floor {
+            return Err(PlanError::FeedTooSlow);
+        }
+        b.nominal = self.nominal(&b);
+        Self::curve_limits(&mut b);
+        // Curvature on the commanded geometry (a zero-length commanded move
+        // that still rounds to a step keeps the step direction).
+        let d: [f32; AXES] = core::array::from_fn(|i| end_mm[i] - self.position_mm[i]);
+        let len_mm = libm::sqrtf(d.iter().map(|v| v * v).sum());
+        let (unit_mm, len_mm) = if len_mm.is_finite() && len_mm > 1e-6 {
+            (d.map(|v| v / len_mm), len_mm)
+        } else {
+            (unit, b.length)
+        };
+        b.junction = self.junction_speed(&unit_mm, len_mm, curve.is_some());
+        b.max_entry = b.junction.min(b.nominal).min(self.prev_nominal);
+        b.entry = if self.len == 0 { 0.0 } else { b.max_entry };
+        let merged = b.junction.is_infinite() && self.merge(&b);
+        self.prev_unit_mm = unit_mm;
+        self.prev_nominal = b.nominal;
+        self.prev_length = if merged {
+            self.prev_length + len_mm
+        } else {
+            len_mm
+        };
+        self.position = target;
+        self.position_mm = *end_mm;
+        if !merged {
+            let k = self.len;
+            *self.at(k) = b;
+            self.len += 1;
+        }
+        self.replan(false);
+        Ok(())
+    }
+}

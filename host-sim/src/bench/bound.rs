@@ -1,0 +1,246 @@
+//! The time-optimal bound of `cargo xtask bench-motion`: how fast the
+//! commanded path could be run at best under the machine's limits. A small
+//! reference written apart from the planner (no ring, no step rounding, no
+//! incremental replanning), so that the planner is judged against something
+//! that does not share its mistakes.
+//!
+//! The path is the commanded one in millimetres, as the executor expands it
+//! (arcs and splines as their chords, at the same `$12` tolerance), with the
+//! stops the job asks for (dwells, synced commands). Constraints:
+//!
+//! * on each straight piece, every axis within its rate (`$110`…) and its
+//!   acceleration (`$120`…): path speed `≤ min_i vmax_i/|u_i|`, path
+//!   acceleration `≤ min_i amax_i/|u_i|` (`u` the unit direction);
+//! * at each vertex, the corner rule: junction deviation (`$11`), with the
+//!   acceleration the axes allow along the direction change, and the
+//!   curvature rule `v² ≤ a·l/φ` (the chords turn by φ every `l` mm: the
+//!   tool follows a curve of radius about `l/φ`), both on the commanded
+//!   geometry;
+//! * the programmed feed; standstill at the start, the end and every stop.
+//!
+//! Why it is a lower bound: one backward and one forward pass over the
+//! whole job (unlimited look-ahead) give, at every point, the highest speed
+//! that any profile meeting these constraints can have there (each pass only
+//! lowers a speed that some constraint forbids, and the result is feasible).
+//! A profile that is pointwise fastest takes the least time. The bound is
+//! more permissive than the real machine in two ways, both of which only
+//! make it smaller: on a curve it gives the tangential acceleration the
+//! whole budget, as if the centripetal part were free, and it does not
+//! round to steps. So no planner that keeps the same limits and corner rule
+//! can be faster; a ratio below 1.00 means a limit was broken (or, by a
+//! fraction of a percent, that steps rounded the path shorter).
+
+use burin::settings::Settings;
+use burin::AXES;
+
+use crate::record::PathEvent;
+
+/// One straight piece of the path.
+#[derive(Clone, Copy, Debug)]
+struct Piece {
+    len: f64,
+    unit: [f64; AXES],
+    /// Highest speed on it, mm/s.
+    cap: f64,
+    /// Highest path acceleration on it, mm/s².
+    accel: f64,
+    /// Fixed duration (G93), if any: the piece runs at `len/seconds`.
+    seconds: Option<f64>,
+    /// Motion stops before this piece (a dwell or synced command).
+    stop_before: bool,
+}
+
+/// Builds the path from [`PathEvent`]s and answers its best time.
+#[derive(Clone, Debug)]
+pub struct Bound {
+    settings: Settings,
+    pos: Option<[f64; AXES]>,
+    pieces: Vec<Piece>,
+    stop_pending: bool,
+    /// Dwell time between the first and the last piece.
+    dwell_s: f64,
+    /// Dwells seen since the last piece (counted only if motion follows).
+    dwell_pending: f64,
+}
+
+impl Bound {
+    /// `start_mm`: where the machine stands before the job.
+    pub fn new(settings: Settings, start_mm: [f32; AXES]) -> Self {
+        Bound {
+            settings,
+            pos: Some(start_mm.map(f64::from)),
+            pieces: Vec::new(),
+            stop_pending: false,
+            dwell_s: 0.0,
+            dwell_pending: 0.0,
+        }
+    }
+
+    pub fn push(&mut self, ev: &PathEvent) {
+        match *ev {
+            PathEvent::Stop { seconds } => {
+                self.stop_pending = true;
+                self.dwell_pending += f64::from(seconds.max(0.0));
+            }
+            PathEvent::To {
+                to_mm,
+                feed_mm_s,
+                seconds,
+                ..
+            } => {
+                let to = to_mm.map(f64::from);
+                let from = self.pos.replace(to).unwrap_or(to);
+                let d: [f64; AXES] = std::array::from_fn(|i| to[i] - from[i]);
+                let len = d.iter().map(|v| v * v).sum::<f64>().sqrt();
+                if len < 1e-9 {
+                    return;
+                }
+                let unit = d.map(|v| v / len);
+                let (mut cap, mut accel) = (f64::from(feed_mm_s), f64::INFINITY);
+                for (u, ax) in unit.iter().zip(&self.settings.axes) {
+                    if u.abs() > 1e-12 {
+                        cap = cap.min(f64::from(ax.max_rate) / 60.0 / u.abs());
+                        accel = accel.min(f64::from(ax.max_accel) / u.abs());
+                    }
+                }
+                if !self.pieces.is_empty() {
+                    self.dwell_s += self.dwell_pending;
+                }
+                self.dwell_pending = 0.0;
+                self.pieces.push(Piece {
+                    len,
+                    unit,
+                    cap,
+                    accel,
+                    seconds: seconds.map(f64::from),
+                    stop_before: std::mem::take(&mut self.stop_pending),
+                });
+            }
+        }
+    }
+
+    /// The commanded end of the path, mm.
+    pub fn end_mm(&self) -> [f64; AXES] {
+        self.pos.unwrap_or([0.0; AXES])
+    }
+
+    /// Corner limit between pieces `a` and `b` (mm/s).
+    fn corner(&self, a: &Piece, b: &Piece) -> f64 {
+        let cos = a.unit.iter().zip(&b.unit).map(|(x, y)| x * y).sum::<f64>();
+        if cos > 1.0 - 1e-12 {
+            return f64::INFINITY;
+        }
+        let d: [f64; AXES] = std::array::from_fn(|i| b.unit[i] - a.unit[i]);
+        let dn = d.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let mut acc = f64::INFINITY;
+        for (di, ax) in d.iter().zip(&self.settings.axes) {
+            let c = di.abs() / dn;
+            if c > 1e-9 {
+                acc = acc.min(f64::from(ax.max_accel) / c);
+            }
+        }
+        // Junction deviation, with θ the angle between the moves' reversed
+        // first and second directions (π when straight on).
+        let sin_half = (0.5 * (1.0 + cos)).sqrt();
+        if sin_half >= 1.0 {
+            return f64::INFINITY;
+        }
+        let r = f64::from(self.settings.junction_deviation) * sin_half / (1.0 - sin_half);
+        let phi = cos.clamp(-1.0, 1.0).acos().max(1e-12);
+        let l = a.len.min(b.len);
+        (acc * r).sqrt().min((acc * l / phi).sqrt())
+    }
+
+    /// Seconds from the first step to the last: the time-optimal profile
+    /// plus the dwells in between.
+    pub fn time_s(&self) -> f64 {
+        let p = &self.pieces;
+        let n = p.len();
+        if n == 0 {
+            return 0.0;
+        }
+        let cap = |q: &Piece| match q.seconds {
+            Some(t) if t > 0.0 => q.cap.min(q.len / t),
+            _ => q.cap,
+        };
+        // v[k]: speed at the start of piece k; v[n] the end of the job.
+        let mut v = vec![0.0f64; n + 1];
+        for k in 1..n {
+            v[k] = if p[k].stop_before {
+                0.0
+            } else {
+                self.corner(&p[k - 1], &p[k])
+                    .min(cap(&p[k - 1]))
+                    .min(cap(&p[k]))
+            };
+        }
+        for k in (0..n).rev() {
+            v[k] = v[k].min((v[k + 1] * v[k + 1] + 2.0 * p[k].accel * p[k].len).sqrt());
+        }
+        for k in 0..n {
+            v[k + 1] = v[k + 1].min((v[k] * v[k] + 2.0 * p[k].accel * p[k].len).sqrt());
+        }
+        let mut t = self.dwell_s;
+        for (k, q) in p.iter().enumerate() {
+            t += piece_time(v[k], v[k + 1], cap(q), q.accel, q.len);
+        }
+        t
+    }
+}
+
+/// Time of the fastest trapezoid over `len` from `v0` to `v1` (both
+/// reachable), cruising at most at `vc`, accelerating at most at `a`.
+fn piece_time(v0: f64, v1: f64, vc: f64, a: f64, len: f64) -> f64 {
+    // Peak where the up and down ramps meet, capped by the cruise speed.
+    let peak = ((2.0 * a * len + v0 * v0 + v1 * v1) / 2.0)
+        .sqrt()
+        .min(vc)
+        .max(v0.max(v1));
+    let up = (peak * peak - v0 * v0) / (2.0 * a);
+    let down = (peak * peak - v1 * v1) / (2.0 * a);
+    let cruise = (len - up - down).max(0.0);
+    (peak - v0) / a + (peak - v1) / a + cruise / peak.max(1e-12)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::record::MoveKind;
+
+    fn to(x: f32, y: f32, f: f32) -> PathEvent {
+        PathEvent::To {
+            kind: MoveKind::Feed,
+            to_mm: [x, y, 0.0, 0.0],
+            feed_mm_s: f,
+            seconds: None,
+        }
+    }
+
+    #[test]
+    fn straight_line_is_one_trapezoid() {
+        let s = Settings::default();
+        let a = f64::from(s.axes[0].max_accel);
+        let mut b = Bound::new(s, [0.0; AXES]);
+        b.push(&to(100.0, 0.0, 10.0));
+        // 10 mm/s: ramps of 10/a s each way, cruise for the rest.
+        let ramp = 10.0 / a;
+        let want = 2.0 * ramp + (100.0 - 10.0 * ramp) / 10.0;
+        assert!((b.time_s() - want).abs() < 1e-9, "{} vs {want}", b.time_s());
+    }
+
+    #[test]
+    fn collinear_split_costs_nothing_and_a_stop_costs_a_ramp() {
+        let s = Settings::default();
+        let mut one = Bound::new(s, [0.0; AXES]);
+        one.push(&to(100.0, 0.0, 10.0));
+        let mut two = Bound::new(s, [0.0; AXES]);
+        two.push(&to(50.0, 0.0, 10.0));
+        two.push(&to(100.0, 0.0, 10.0));
+        assert!((one.time_s() - two.time_s()).abs() < 1e-9);
+        let mut stop = Bound::new(s, [0.0; AXES]);
+        stop.push(&to(50.0, 0.0, 10.0));
+        stop.push(&PathEvent::Stop { seconds: 1.0 });
+        stop.push(&to(100.0, 0.0, 10.0));
+        assert!(stop.time_s() > one.time_s() + 1.0);
+    }
+}

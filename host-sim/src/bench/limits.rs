@@ -1,0 +1,164 @@
+//! What the step trace itself says about the axis limits: peak velocity
+//! and acceleration per axis, and step intervals shorter than the rate
+//! limits allow. Measured on the steps as they left the pins, so it judges
+//! the planner, the preparer and the step driver together.
+//!
+//! Velocity and acceleration are taken over windows of [`WINDOW_S`]: with
+//! `x(t)` the step position, `v = (x(t+W) − x(t))/W` and
+//! `a = (x(t+2W) − 2·x(t+W) + x(t))/W²`, evaluated every [`GRID_S`]. A
+//! window that long averages out the step quantisation (one X step over
+//! 50 ms² is 5 mm/s², 1 % of 500) yet still sees a corner's acceleration.
+
+use burin::AXES;
+
+use crate::record::{PinEvent, Recorder, RunInfo, Summary};
+
+/// Window length of the velocity and acceleration figures.
+pub const WINDOW_S: f64 = 0.05;
+/// Spacing of the sliding windows.
+pub const GRID_S: f64 = 0.001;
+/// Slack on a single step interval, in timer ticks: the step timer counts
+/// whole ticks, so a rate exactly at the limit may come out one tick short.
+pub const INTERVAL_SLACK_TICKS: u64 = 1;
+
+/// Figures of one run.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TraceLimits {
+    /// First and last step, ticks.
+    pub first_tick: Option<u64>,
+    pub last_tick: u64,
+    /// Peak |velocity| per axis over the windows, mm/s.
+    pub peak_vel: [f64; AXES],
+    /// Peak |acceleration| per axis over the windows, mm/s².
+    pub peak_acc: [f64; AXES],
+    /// Step intervals shorter than the axis' rate limit allows, per axis.
+    pub short_intervals: [u64; AXES],
+    /// The shortest step interval seen per axis, ticks.
+    pub min_interval: [u64; AXES],
+    /// Final step position.
+    pub end_steps: [i64; AXES],
+}
+
+/// Recorder that fills [`TraceLimits`] as the run goes.
+pub struct LimitMeter {
+    max_step_hz: f64,
+    tick_hz: f64,
+    steps_per_mm: [f64; AXES],
+    /// Shortest allowed interval per axis, ticks.
+    min_ticks: [u64; AXES],
+    grid_ticks: u64,
+    /// Window length in grid samples.
+    w: usize,
+    /// Step position at the grid times, newest last (2w+1 kept).
+    samples: std::collections::VecDeque<[i64; AXES]>,
+    next_grid: u64,
+    pos: [i64; AXES],
+    last_step: [Option<u64>; AXES],
+    pub out: TraceLimits,
+}
+
+impl LimitMeter {
+    /// `max_step_rate_hz`: `$201`, the fastest any single axis may step.
+    pub fn new(max_step_rate_hz: f32) -> Self {
+        LimitMeter {
+            max_step_hz: f64::from(max_step_rate_hz),
+            tick_hz: 1.0,
+            steps_per_mm: [1.0; AXES],
+            min_ticks: [0; AXES],
+            grid_ticks: 1,
+            w: 1,
+            samples: Default::default(),
+            next_grid: 0,
+            pos: [0; AXES],
+            last_step: [None; AXES],
+            out: TraceLimits {
+                min_interval: [u64::MAX; AXES],
+                ..Default::default()
+            },
+        }
+    }
+
+    fn sample(&mut self) {
+        self.samples.push_back(self.pos);
+        if self.samples.len() > 2 * self.w + 1 {
+            self.samples.pop_front();
+        }
+        let n = self.samples.len();
+        if n < self.w + 1 {
+            return;
+        }
+        let wt = self.w as f64 * self.grid_ticks as f64 / self.tick_hz;
+        let (x2, x1) = (self.samples[n - 1], self.samples[n - 1 - self.w]);
+        for i in 0..AXES {
+            let v = (x2[i] - x1[i]) as f64 / self.steps_per_mm[i] / wt;
+            self.out.peak_vel[i] = self.out.peak_vel[i].max(v.abs());
+        }
+        if n == 2 * self.w + 1 {
+            let x0 = self.samples[0];
+            for i in 0..AXES {
+                let d2 = (x2[i] - 2 * x1[i] + x0[i]) as f64;
+                let a = d2 / self.steps_per_mm[i] / (wt * wt);
+                self.out.peak_acc[i] = self.out.peak_acc[i].max(a.abs());
+            }
+        }
+    }
+}
+
+impl Recorder for LimitMeter {
+    fn start(&mut self, info: &RunInfo) {
+        let max_step_hz = self.max_step_hz;
+        self.tick_hz = f64::from(info.tick_hz);
+        for (i, a) in info.axes.iter().enumerate() {
+            self.steps_per_mm[i] = f64::from(a.steps_per_mm);
+            let hz =
+                (f64::from(a.max_rate_mm_min) / 60.0 * f64::from(a.steps_per_mm)).min(max_step_hz);
+            self.min_ticks[i] = if hz > 0.0 {
+                (self.tick_hz / hz).floor() as u64
+            } else {
+                0
+            };
+        }
+        self.grid_ticks = ((GRID_S * self.tick_hz) as u64).max(1);
+        self.w = ((WINDOW_S / GRID_S).round() as usize).max(1);
+    }
+
+    fn step_event(&mut self, ev: &PinEvent) {
+        if ev.step_mask == 0 {
+            return;
+        }
+        if self.out.first_tick.is_none() {
+            self.out.first_tick = Some(ev.tick);
+            self.next_grid = ev.tick;
+            // Where the machine stood (within this one step) before it.
+            self.pos = ev.pos;
+        }
+        while self.next_grid <= ev.tick {
+            self.sample();
+            self.next_grid += self.grid_ticks;
+        }
+        for i in 0..AXES {
+            if ev.step_mask >> i & 1 == 0 {
+                continue;
+            }
+            if let Some(t) = self.last_step[i] {
+                let dt = ev.tick - t;
+                self.out.min_interval[i] = self.out.min_interval[i].min(dt);
+                if dt + INTERVAL_SLACK_TICKS < self.min_ticks[i] {
+                    self.out.short_intervals[i] += 1;
+                }
+            }
+            self.last_step[i] = Some(ev.tick);
+        }
+        self.pos = ev.pos;
+        self.out.last_tick = ev.tick;
+    }
+
+    fn finish(&mut self, _summary: &Summary) -> std::io::Result<()> {
+        // Standing still after the last step: let the windows see the stop.
+        for _ in 0..=2 * self.w {
+            self.sample();
+        }
+        self.out.end_steps = self.pos;
+        Ok(())
+    }
+}

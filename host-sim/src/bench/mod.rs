@@ -1,0 +1,81 @@
+//! `cargo xtask bench-motion`: run a job, measure the step trace against
+//! the axis limits ([`limits`]) and compare its time with the time-optimal
+//! bound of the same path ([`bound`]). All in simulated time, so every
+//! figure is the same on every machine and every run.
+
+pub mod bound;
+pub mod limits;
+
+use burin::AXES;
+
+use crate::config::MachineConfig;
+use crate::record::{PathEvent, PinEvent, Recorder, RunInfo, Summary};
+use bound::Bound;
+use limits::{LimitMeter, TraceLimits};
+
+/// One job's figures.
+#[derive(Clone, Debug)]
+pub struct JobFigures {
+    /// burin's time, first step to last, s.
+    pub time_s: f64,
+    /// Time-optimal bound of the same path, s.
+    pub bound_s: f64,
+    pub limits: TraceLimits,
+    pub summary: Summary,
+    /// The commanded end of the path, rounded to steps.
+    pub bound_end_steps: [i64; AXES],
+}
+
+struct Both {
+    meter: LimitMeter,
+    bound: Bound,
+}
+
+impl Recorder for Both {
+    fn start(&mut self, info: &RunInfo) {
+        self.meter.start(info);
+    }
+    fn step_event(&mut self, ev: &PinEvent) {
+        self.meter.step_event(ev);
+    }
+    fn path(&mut self, ev: &PathEvent) {
+        self.bound.push(ev);
+    }
+    fn finish(&mut self, summary: &Summary) -> std::io::Result<()> {
+        self.meter.finish(summary)
+    }
+}
+
+/// Runs `source` on `cfg` (streamed through the virtual board, as `cargo
+/// xtask sim` does) and measures it.
+pub fn run_job(cfg: &MachineConfig, source: &str) -> JobFigures {
+    let mut both = Both {
+        meter: LimitMeter::new(cfg.settings.max_step_rate_hz),
+        bound: Bound::new(cfg.settings, cfg.start_position_mm),
+    };
+    let summary = crate::offline::run_file(cfg, source, &mut both);
+    let l = both.meter.out;
+    let time_s = match l.first_tick {
+        Some(t0) => (l.last_tick - t0) as f64 / f64::from(cfg.tick_hz),
+        None => 0.0,
+    };
+    let end = both.bound.end_mm();
+    let spm = cfg.settings.axes.map(|a| f64::from(a.steps_per_mm));
+    JobFigures {
+        time_s,
+        bound_end_steps: std::array::from_fn(|i| (end[i] * spm[i]).round() as i64),
+        bound_s: both.bound.time_s(),
+        limits: l,
+        summary,
+    }
+}
+
+/// The per-axis limits of `cfg` in the units the figures use: rate mm/s,
+/// acceleration mm/s².
+pub fn axis_limits(cfg: &MachineConfig) -> ([f64; AXES], [f64; AXES]) {
+    let a = &cfg.settings.axes;
+    (
+        std::array::from_fn(|i| f64::from(a[i].max_rate) / 60.0),
+        std::array::from_fn(|i| f64::from(a[i].max_accel)),
+    )
+}
