@@ -13,7 +13,8 @@ impl<const N: usize> Planner<N> {
     /// Merge `b` into the newest block if it continues it exactly: same
     /// direction in whole steps (the step counts are proportional, so the
     /// merged Bresenham line is the same line), same speed request, plain
-    /// lines on both sides (no chord, watch or dwell). The oldest block is
+    /// lines on both sides (no chord, watch or dwell), and in laser mode
+    /// the same program line. The oldest block is
     /// never touched: the segment preparer works on a copy of it.
     pub(super) fn merge(&mut self, b: &Block) -> bool {
         if self.len < 2 || self.prev_nominal <= 0.0 {
@@ -27,7 +28,11 @@ impl<const N: usize> Planner<N> {
                 && x.curve_ar == 0.0
                 && x.accel == x.line_accel
         };
+        // In laser mode power follows the running line (an S between two
+        // G1 moves takes effect where the second starts): keep lines apart.
+        let laser_split = self.settings.laser_mode && p.line != b.line;
         if !(plain(&p) && plain(b))
+            || laser_split
             || p.dir_mask != b.dir_mask
             || p.rapid != b.rapid
             || p.programmed != b.programmed
