@@ -232,9 +232,11 @@ fn parse(out: &str) -> Canon {
     Canon::Ok(ends)
 }
 
-/// Drops moves that end where the previous one did.
-fn dedup<T: Copy>(v: Vec<Option<T>>, same: impl Fn(&T, &T) -> bool) -> Vec<Option<T>> {
-    let mut out: Vec<Option<T>> = Vec::new();
+/// Drops moves that end where the previous one did, the first one too
+/// when it ends at the start (both run from machine zero; rs274 emits a
+/// traverse to where it is for a bare `G00` after a tool change).
+fn dedup<T: Copy>(v: Vec<Option<T>>, start: T, same: impl Fn(&T, &T) -> bool) -> Vec<Option<T>> {
+    let mut out: Vec<Option<T>> = vec![Some(start)];
     for p in v {
         if let (Some(Some(a)), Some(b)) = (out.last(), p.as_ref()) {
             if same(a, b) {
@@ -243,7 +245,15 @@ fn dedup<T: Copy>(v: Vec<Option<T>>, same: impl Fn(&T, &T) -> bool) -> Vec<Optio
         }
         out.push(p);
     }
+    out.remove(0);
     out
+}
+
+/// One point for [`dedup`]: far below rs274's printed 0.0001 and the
+/// agreement tolerance, so a 0.003 mm move (Cereal.ngc has them) is never
+/// dropped on one side and kept on the other.
+fn same_point(a: &P, b: &P) -> bool {
+    a.iter().zip(b).all(|(x, y)| (x - y).abs() <= 5e-4)
 }
 
 fn close(a: &P, b: &P) -> bool {
@@ -313,12 +323,12 @@ pub fn run(install: bool) -> Result<()> {
             .unwrap_or(&name);
         match (canon, ours) {
             (Canon::Ok(theirs), Ok(ours)) => {
-                let theirs = dedup(theirs, close);
+                let theirs = dedup(theirs, [0.0; 4], same_point);
                 let ours: Vec<Option<P>> = ours
                     .iter()
                     .map(|p| Some([p[0] as f64, p[1] as f64, p[2] as f64, p[3] as f64]))
                     .collect();
-                let ours = dedup(ours, close);
+                let ours = dedup(ours, [0.0; 4], same_point);
                 // rs274 stops at a probe; compare that far.
                 let n = theirs.len();
                 let mut diff = None;
