@@ -256,10 +256,6 @@ fn same_point(a: &P, b: &P) -> bool {
     a.iter().zip(b).all(|(x, y)| (x - y).abs() <= 5e-4)
 }
 
-fn close(a: &P, b: &P) -> bool {
-    a.iter().zip(b).all(|(x, y)| (x - y).abs() <= TOL)
-}
-
 fn files() -> Vec<PathBuf> {
     let mut v = Vec::new();
     let corpus = std::env::var_os("BURIN_CORPUS")
