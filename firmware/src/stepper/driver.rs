@@ -296,6 +296,19 @@ impl StepDriver {
         // One call site, so the inlined stepper exists once here.
         self.pending = stepper.on_event(rt, pop, hw.switches());
         if !steps {
+            // A wait or dwell steps nothing, and may last longer than the
+            // 2^31 ticks the wrapping comparisons in `later` can tell
+            // apart: a bound older than itself no longer binds, so keep it
+            // just within reach. (A 28 s dwell left them stale; the next
+            // rise then read as 16 s in the future, waited for the counter
+            // to wrap and caught up at the `$201` floor: a fuzz finding.)
+            let cfg = &stepper.cfg;
+            if now.wrapping_sub(self.last_rise) > cfg.min_period {
+                self.last_rise = now.wrapping_sub(cfg.min_period);
+            }
+            if now.wrapping_sub(self.last_fall) > cfg.min_low_ticks {
+                self.last_fall = now.wrapping_sub(cfg.min_low_ticks);
+            }
             self.phase = Phase::Low;
             self.target = self.rise_target(&stepper.cfg);
             hw.schedule_at(self.target);
