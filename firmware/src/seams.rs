@@ -98,3 +98,12 @@ impl<T: Tx + ?Sized> Tx for &mut T {
         (**self).room()
     }
 }
+
+/// Longest interval between two step events, ticks (11.2 s at 96 MHz).
+/// The step driver compares counter times with `wrapping_sub(..) as i32`,
+/// which is only right for differences under 2^31 ticks: a step period
+/// between 2^31 and the 32-bit timer's full range (a diagonal `G1 X0 Y0
+/// F0.4` on the fuzz machine, 42 s per step) read as "already past" and
+/// the steps went out at the `$201` floor (fuzz finding, `executor`
+/// target). Half that range leaves a margin for interrupt lateness.
+pub const MAX_PERIOD: u32 = 1 << 30;

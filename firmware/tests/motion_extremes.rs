@@ -147,7 +147,7 @@ fn check(steps_per_mm: f32, dx: f32, feed: f32) {
 
 #[test]
 fn issue_feed_0_0001_on_default_machine_is_refused() {
-    // 7 500 s per step: beyond the timer's 44.7 s.
+    // 7 500 s per step: beyond the driver's 11.2 s (`seams::MAX_PERIOD`).
     check(80.0, -1.0, 0.0001);
     let r = within(20, || run_move(Settings::default(), -1.0, 0.0001));
     assert!(
@@ -196,28 +196,28 @@ fn step_span(s: Settings, dx: f32, feed: f32, pct: u16) -> (i32, u64) {
 
 #[test]
 fn slowest_accepted_feed_is_split_into_waits_and_keeps_time() {
-    // 1 step/mm at F1.5: a step every 40 s, inside the timer's 44.7 s but
-    // longer than one segment may span (22.4 s): each step comes after a wait.
-    let (pos, span) = within(20, || step_span(settings_with(1.0), 4.0, 1.5, 100));
+    // 1 step/mm at F6: a step every 10 s, inside the driver's 11.2 s
+    // (`seams::MAX_PERIOD`): each step comes after a wait.
+    let (pos, span) = within(20, || step_span(settings_with(1.0), 4.0, 6.0, 100));
     assert_eq!(pos, 4);
-    let want = 3.0 * 40.0 * TICK_HZ as f64;
+    let want = 3.0 * 10.0 * TICK_HZ as f64;
     assert!(
         (span as f64 - want).abs() < 0.02 * want,
-        "3 step intervals took {} s, want 120 s",
+        "3 step intervals took {} s, want 30 s",
         span as f64 / TICK_HZ as f64
     );
 }
 
 #[test]
 fn feed_override_never_takes_a_move_below_the_timer_floor() {
-    // Accepted at 100 % (40 s per step); at 10 % it would be 400 s per step,
-    // so it runs at the floor (44.7 s) instead of failing halfway.
-    let (pos, span) = within(20, || step_span(settings_with(1.0), 3.0, 1.5, 10));
+    // Accepted at 100 % (10 s per step); at 10 % it would be 100 s per step,
+    // so it runs at the floor (11.2 s) instead of failing halfway.
+    let (pos, span) = within(20, || step_span(settings_with(1.0), 3.0, 6.0, 10));
     assert_eq!(pos, 3);
-    let floor = 2.0 * u32::MAX as f64;
+    let floor = 2.0 * burin::seams::MAX_PERIOD as f64;
     assert!(
         (span as f64 - floor).abs() < 0.02 * floor,
-        "2 step intervals took {} s, want 89.5 s",
+        "2 step intervals took {} s, want 22.4 s",
         span as f64 / TICK_HZ as f64
     );
 }

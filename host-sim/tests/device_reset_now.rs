@@ -13,8 +13,8 @@ fn reset_during_a_slow_move_is_answered_at_once() {
     let mut rec = Discard;
     let mut r = Rig::new(&cfg, &mut rec);
     r.lines();
-    // 80 steps/mm at 0.02 mm/min: a step every 37.5 s.
-    assert_eq!(r.cmd("G1 X1 F0.02"), ["ok"]);
+    // 80 steps/mm at 0.08 mm/min: a step every 9.4 s.
+    assert_eq!(r.cmd("G1 X1 F0.08"), ["ok"]);
     // Past the acceleration: well into the first interval.
     for _ in 0..1000 {
         r.run(100);

@@ -91,7 +91,7 @@ fn origin() -> MachineConfig {
 }
 
 /// The line: one step would be 7 500 s away, beyond the step
-/// timer's 44.7 s, so the move is refused (error 412) and nothing moves;
+/// driver's 11.2 s (`seams::MAX_PERIOD`), so the move is refused (error 412) and nothing moves;
 /// `?`, `!` and a soft reset are all answered.
 #[test]
 fn feed_0_0001_is_refused_and_the_device_keeps_answering() {
@@ -110,7 +110,7 @@ fn feed_0_0001_is_refused_and_the_device_keeps_answering() {
     });
 }
 
-/// The slowest feeds that are accepted (a step every 37.5 s at F0.02 on
+/// The slowest feeds that are accepted (a step every 9.4 s at F0.08 on
 /// 80 steps/mm) run as steps plus waits: the device answers `?` while the
 /// move runs, holds on `!`, and a soft reset stops it with alarm 3.
 #[test]
@@ -118,7 +118,7 @@ fn slowest_accepted_feed_runs_and_the_device_keeps_answering() {
     within(|| {
         let mut rec = Discard;
         let mut r = Rig::new(&origin(), &mut rec);
-        let out = r.send_until(b"G1 X-1 F0.02\n", |l| l == "ok");
+        let out = r.send_until(b"G1 X-1 F0.08\n", |l| l == "ok");
         assert!(!out.iter().any(|l| l.contains("error")), "{out:?}");
         assert_eq!(r.state(), "Run");
         r.send_until(b"!", |_| true);

@@ -41,8 +41,8 @@ pub enum MachineError {
     /// 411: G38.2/G38.4 probe started in the state it waits for.
     ProbeInitialState,
     /// 412: the feed is so slow that the dominant axis's steps would be
-    /// further apart than the 32-bit step timer can time (`u32::MAX` ticks,
-    /// 44.7 s at 96 MHz). GRBL silently raises such feeds to its minimum of
+    /// further apart than the step driver times ([`crate::seams::MAX_PERIOD`],
+    /// 11.2 s at 96 MHz). GRBL silently raises such feeds to its minimum of
     /// 1 mm/min; burin refuses instead, because a move that runs faster
     /// than programmed is worse than one that does not start: a feed like
     /// `F0.0001` is almost always a typo or a units mistake, and a refused

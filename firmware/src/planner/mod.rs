@@ -207,7 +207,7 @@ impl<const N: usize> Planner<N> {
     /// ([`PlanError::FeedTooSlow`]). The executor sets it; a bare planner
     /// (tests, benches) checks nothing and the preparer still stays bounded.
     pub fn set_tick_hz(&mut self, tick_hz: u32) {
-        self.min_step_hz = tick_hz as f32 / u32::MAX as f32;
+        self.min_step_hz = tick_hz as f32 / crate::seams::MAX_PERIOD as f32;
     }
 
     pub fn len(&self) -> usize {

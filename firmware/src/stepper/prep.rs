@@ -431,9 +431,10 @@ impl Preparer {
         let ticks = (dominant * n as f32).min(MAX_SEGMENT_TICKS) + self.tick_carry;
         let period_f = ticks / events as f32;
         let mut period = if period_f >= self.cfg.min_period as f32 {
-            let p = (period_f.min(u32::MAX as f32) as u32).max(self.cfg.min_period);
+            let max = crate::seams::MAX_PERIOD as f32;
+            let p = (period_f.min(max) as u32).max(self.cfg.min_period);
             let rest = ticks - p as f32 * events as f32;
-            if period_f > u32::MAX as f32 {
+            if period_f > max {
                 // Beyond the timer's range: the rest waits after the steps.
                 self.tick_carry = 0.0;
                 self.wait_left = rest as u64;

@@ -34,7 +34,7 @@ impl Preparer {
             let k = (events / s as u64).max(1) as f32;
             let p = libm::ceilf(limit / k);
             if p.is_finite() && p > floor as f32 {
-                floor = p.min(u32::MAX as f32) as u32;
+                floor = p.min(crate::seams::MAX_PERIOD as f32) as u32;
             }
         }
         floor

@@ -15,8 +15,9 @@
 //! - one segment takes at most [`MAX_WALKS_PER_SEGMENT`] walk steps; if
 //!   they cover no whole step, the time walked goes out as a wait (events
 //!   that step nothing) and the next segment goes on from there;
-//! - a step interval longer than the 32-bit timer reaches is split: the
-//!   step's event takes `u32::MAX` ticks and the rest follows as a wait,
+//! - a step interval longer than the driver may time is split: the
+//!   step's event takes [`crate::seams::MAX_PERIOD`] ticks and the rest
+//!   follows as a wait,
 //!   so the steps keep their times. The planner refuses feeds whose
 //!   cruise would need that (`FeedTooSlow`) and floors the feed override
 //!   at the timer's reach, so only slow ramps get there.
@@ -36,7 +37,7 @@ pub const MAX_WALKS_PER_SEGMENT: u32 = 64;
 /// (64 timer ranges, 48 min at 96 MHz): only a block the planner did not
 /// check (no tick rate set) or a ramp of an absurdly low acceleration
 /// gets near it, and then the timing is off but the wait is finite.
-pub(super) const MAX_SEGMENT_TICKS: f32 = u32::MAX as f32 * 64.0;
+pub(super) const MAX_SEGMENT_TICKS: f32 = crate::seams::MAX_PERIOD as f32 * 256.0;
 
 /// A walk step is at least `tau / TAU_ULPS`: `f32` has 24 bits, so adding
 /// it moves `tau` by at least 2^8 units in the last place.
@@ -118,7 +119,7 @@ impl Preparer {
     /// walked since the last step), so the step's time is kept.
     pub(super) fn wait_chunk(&mut self, rt: &Realtime) -> Segment {
         let left = self.wait_left.max(u64::from(self.cfg.min_period));
-        let period = left.min(u64::from(u32::MAX)) as u32;
+        let period = left.min(u64::from(crate::seams::MAX_PERIOD)) as u32;
         let events = (left / u64::from(period)).min(u64::from(u32::MAX)) as u32;
         self.wait_left = left - u64::from(period) * u64::from(events);
         // A remainder below the shortest period is not worth an event.
