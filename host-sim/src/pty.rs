@@ -23,7 +23,9 @@
 //! the banner). A framed client's 0x00 makes the device send a 0x00 too,
 //! so the banner ends as one frame the client ignores before its
 //! `Welcome`. `BURIN_PTY_DEBUG=1` logs connections and received bytes to
-//! stderr.
+//! stderr; `BURIN_PTY_TRACE=FILE` records every call into the device
+//! (bytes taken, virtual times, hangups) so that [`replay`] runs the same
+//! session again, tick for tick, without the wall clock.
 
 use std::fs::File;
 use std::io::{self, ErrorKind, Read, Write};
@@ -130,6 +132,7 @@ pub fn run(cfg: &MachineConfig, speed: f64, announce: impl FnOnce(&str)) -> io::
     let mut base = (Instant::now(), dev.sim.now());
     let mut buf = [0u8; 4096];
     let debug = std::env::var_os("BURIN_PTY_DEBUG").is_some();
+    let mut trace = Trace::open();
     loop {
         let up = pty.wait(Duration::from_millis(1))?;
         if up != connected {
@@ -142,6 +145,7 @@ pub fn run(cfg: &MachineConfig, speed: f64, announce: impl FnOnce(&str)) -> io::
                 // read: its first `ok` then always follows the banner.
                 if !dev.framed() && dev.link_mode() == burin::link::LinkMode::Text {
                     dev.hello();
+                    trace.note("H");
                 }
             } else {
                 // What the client wrote before it left (a last soft reset,
@@ -156,13 +160,16 @@ pub fn run(cfg: &MachineConfig, speed: f64, announce: impl FnOnce(&str)) -> io::
         }
         if closing {
             let n = dev.receive(&inbox);
+            trace.bytes(&inbox[..n]);
             inbox.drain(..n);
             dev.advance_to(dev.sim.now());
+            trace.note(&format!("A {}", dev.sim.now()));
             inbox.clear();
             closing = false;
             // Replies the departed client never read must not reach the next.
             pty.flush_stale();
             dev.port_closed();
+            trace.note("C");
             outbox.clear();
         }
         // Flow control: read only what the device can take now (its ring
@@ -196,9 +203,11 @@ pub fn run(cfg: &MachineConfig, speed: f64, announce: impl FnOnce(&str)) -> io::
         let target = target.min(limit);
         loop {
             let n = dev.receive(&inbox);
+            trace.bytes(&inbox[..n]);
             inbox.drain(..n);
             let (before, t) = (dev.sim.now(), (dev.sim.now() + chunk).min(target));
             dev.advance_to(t);
+            trace.note(&format!("A {t}"));
             // Idle or held: no events to run, virtual time stands still.
             if dev.sim.now() >= target || dev.sim.now() == before {
                 break;
@@ -219,4 +228,67 @@ pub fn run(cfg: &MachineConfig, speed: f64, announce: impl FnOnce(&str)) -> io::
             }
         }
     }
+}
+
+/// The record `BURIN_PTY_TRACE` asks for: one line per call into the
+/// device, `R <hex>` (bytes taken), `A <tick>` (advance to), `H` (banner),
+/// `C` (port closed). [`replay`] skips `#` lines (a test's notes). A run of
+/// `A` lines may be cut to its first and last: the device is polled at
+/// each, but between inputs only the first and last poll matter as long
+/// as the run stays deterministic (the replay test checks its outcome).
+struct Trace(Option<io::BufWriter<File>>);
+
+impl Trace {
+    fn open() -> Trace {
+        let file = std::env::var_os("BURIN_PTY_TRACE").and_then(|p| File::create(p).ok());
+        Trace(file.map(io::BufWriter::new))
+    }
+    fn note(&mut self, line: &str) {
+        if let Some(w) = self.0.as_mut() {
+            let _ = writeln!(w, "{line}");
+            let _ = w.flush();
+        }
+    }
+    fn bytes(&mut self, b: &[u8]) {
+        if !b.is_empty() && self.0.is_some() {
+            let hex: String = b.iter().map(|x| format!("{x:02x}")).collect();
+            self.note(&format!("R {hex}"));
+        }
+    }
+}
+
+/// Run a session recorded with `BURIN_PTY_TRACE` again on a fresh device;
+/// returns it as the recording left it, and everything it sent.
+pub fn replay<'r>(
+    cfg: &MachineConfig,
+    rec: &'r mut Discard,
+    trace: &str,
+) -> io::Result<(VirtualDevice<'r>, Vec<u8>)> {
+    let bad = |l: &str| io::Error::new(ErrorKind::InvalidData, format!("trace line {l:?}"));
+    let mut dev = VirtualDevice::new(cfg, rec);
+    let _ = dev.take_output();
+    let mut out = Vec::new();
+    for line in trace
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.is_empty())
+    {
+        let (op, arg) = line.split_once(' ').unwrap_or((line, ""));
+        match op {
+            "H" => dev.hello(),
+            "C" => dev.port_closed(),
+            "A" => dev.advance_to(arg.parse().map_err(|_| bad(line))?),
+            "R" => {
+                let bytes: Vec<u8> = (0..arg.len() / 2)
+                    .map(|i| u8::from_str_radix(arg.get(2 * i..2 * i + 2).unwrap_or("zz"), 16))
+                    .collect::<Result<_, _>>()
+                    .map_err(|_| bad(line))?;
+                if dev.receive(&bytes) != bytes.len() {
+                    return Err(bad(line));
+                }
+            }
+            _ => return Err(bad(line)),
+        }
+        out.extend(dev.take_output());
+    }
+    Ok((dev, out))
 }

@@ -6,6 +6,8 @@ the final position from the status report.
 
 usage: python grbl_streamer_job.py PORT JOB X,Y,Z
 exit 0 on success; prints one line saying what failed otherwise."""
+import faulthandler
+import os
 import sys
 import time
 import threading
@@ -16,9 +18,12 @@ port, job, want = sys.argv[1], open(sys.argv[2]).read(), [float(v) for v in sys.
 booted, done, errors, states = threading.Event(), threading.Event(), [], []
 processed = [0]
 boots = []
+log = []  # what went each way, for the failure report
 
 
 def on_event(event, *data):
+    if event in ("on_write", "on_read", "on_stateupdate", "on_boot", "on_job_completed"):
+        log.append("%.3f %s %r" % (time.time(), event, data))
     if event == "on_boot":
         boots.append(time.time())
         booted.set()
@@ -33,11 +38,28 @@ def on_event(event, *data):
 
 
 def fail(why):
-    print("FAIL: " + why)
-    sys.exit(1)
+    # The sender's reader and poller threads are not daemons: sys.exit
+    # would wait on them for ever and hide this line behind a timeout.
+    print("FAIL: " + why, flush=True)
+    # The first exchange and the last: a stuck run repeats one status.
+    for entry in (log if len(log) <= 300 else log[:240] + ["..."] + log[-60:]):
+        print(entry, file=sys.stderr)
+    sys.stderr.flush()
+    os._exit(1)
 
 
+# Were anything to block past the runner's limit, say where.
+faulthandler.dump_traceback_later(200, exit=True)
 g = GrblStreamer(on_event)
+_update_state = g._update_state
+
+
+def logged_update_state(line):
+    log.append("%.3f status %s" % (time.time(), line))
+    _update_state(line)
+
+
+g._update_state = logged_update_state
 g.cnect(port, 115200)
 if not booted.wait(10):
     fail("no boot banner")

@@ -7,6 +7,8 @@ is read from a `?` status report.
 
 usage: python printcore_job.py PORT JOB X,Y,Z
 exit 0 on success; prints one line saying what failed otherwise."""
+import faulthandler
+import os
 import sys
 import time
 
@@ -18,8 +20,13 @@ lines, errors, resends = [], [], []
 
 
 def fail(why):
-    print("FAIL: " + why)
-    sys.exit(1)
+    # printcore's threads would keep sys.exit waiting: leave at once.
+    print("FAIL: " + why, flush=True)
+    os._exit(1)
+
+
+# Were anything to block past the runner's limit, say where.
+faulthandler.dump_traceback_later(200, exit=True)
 
 
 def on_recv(line):

@@ -109,23 +109,34 @@ fn install(python: &Path) -> bool {
 }
 
 /// Run one driver script; `Ok(line)` on success, `Err(line)` otherwise.
+/// On failure the script's stderr (a traceback, or faulthandler's dump of
+/// where it blocked) is printed too, so a red run says why.
 fn drive(
     python: &Path,
     script: &Path,
     port: &str,
     job: &Path,
 ) -> std::result::Result<String, String> {
+    let err_path = target_dir().join("senders").join(format!(
+        "{}.stderr",
+        script
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .unwrap_or("script")
+    ));
+    let err_file = std::fs::File::create(&err_path).map_err(|e| format!("stderr file: {e}"))?;
     let mut child = Command::new(python)
+        .arg("-u")
         .arg(script)
         .arg(port)
         .arg(job)
         .arg(WANT)
         .stdout(Stdio::piped())
-        .stderr(Stdio::null())
+        .stderr(Stdio::from(err_file))
         .spawn()
         .map_err(|e| format!("spawn: {e}"))?;
     let end = Instant::now() + TIMEOUT;
-    loop {
+    let result = loop {
         match child.try_wait() {
             Ok(Some(status)) => {
                 let mut text = String::new();
@@ -134,20 +145,30 @@ fn drive(
                     let _ = out.read_to_string(&mut text);
                 }
                 let line = text.lines().last().unwrap_or("").to_string();
-                return if status.success() {
+                break if status.success() {
                     Ok(line)
+                } else if line.is_empty() {
+                    Err(format!("exited with {status}"))
                 } else {
-                    Err(line)
+                    Err(line.trim_start_matches("FAIL: ").to_string())
                 };
             }
             Ok(None) if Instant::now() < end => std::thread::sleep(Duration::from_millis(100)),
             _ => {
                 let _ = child.kill();
                 let _ = child.wait();
-                return Err(format!("timed out after {} s", TIMEOUT.as_secs()));
+                break Err(format!("timed out after {} s", TIMEOUT.as_secs()));
             }
         }
+    };
+    if result.is_err() {
+        let err = std::fs::read_to_string(&err_path).unwrap_or_default();
+        let tail: Vec<&str> = err.lines().rev().take(400).collect();
+        for l in tail.iter().rev() {
+            eprintln!("senders: {} stderr: {l}", script.display());
+        }
     }
+    result
 }
 
 pub fn run() -> Result<i32> {

@@ -349,6 +349,7 @@ impl Preparer {
             }
         };
         let n = target.saturating_sub(self.steps_done);
+        let prev = self.steps_done as f32;
         self.steps_done = target;
         let s_steps = if block_end {
             b.count as f32
@@ -360,12 +361,21 @@ impl Preparer {
         // the speed it has now. Timing steps from walk ends instead cost a
         // block of a few steps up to 0.7 ms (its last segment had to run a
         // whole step in the time of half a step's walk).
+        //
+        // Near a stop "the speed it has now" tends to zero and that
+        // estimate to infinity (a feed hold ending a hair past a step took
+        // all the walked time back, and the step went out as an 11 s wait
+        // the resume then sat behind). So it is also held to the share of
+        // the walk that lies past the step, at the walk's mean speed since
+        // the last step: always less than all of it once a step was made.
         let elapsed = time + self.since_step;
         let step_hz = self.v / b.length * b.count as f32;
         let back = if block_end || stopped || step_hz <= 0.0 {
             0.0
         } else {
-            crate::num::clamp((s_steps - target as f32) / step_hz, 0.0, elapsed)
+            let past = s_steps - target as f32;
+            let mean = elapsed * past / (s_steps - prev).max(past);
+            crate::num::clamp(past / step_hz, 0.0, mean)
         };
         self.since_step = back;
         let time = elapsed - back;
@@ -413,7 +423,12 @@ impl Preparer {
         let rate = if time > 0.0 {
             n as f32 / time
         } else {
-            self.v / b.length * b.count as f32
+            // Steps with no time walked (a rounding remainder at a block's
+            // end): at the speed now, but never slower than the first step
+            // from rest at the block's acceleration, sqrt(2a/step) steps/s.
+            let per_step = b.length / b.count as f32;
+            let from_rest = libm::sqrtf(2.0 * b.accel.max(0.0) / per_step);
+            (self.v / per_step).max(from_rest)
         };
         let dominant = if rate > 0.0 {
             self.cfg.tick_hz as f32 / rate
