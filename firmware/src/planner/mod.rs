@@ -9,6 +9,7 @@
 //! entry speed stops changing; the forward pass starts at `planned`.
 
 mod curve;
+pub mod interval;
 mod merge;
 mod passes;
 mod push;
@@ -180,6 +181,8 @@ pub struct Planner<const N: usize> {
     /// Fewest dominant-axis steps per second the step timer can time
     /// (`tick_hz / u32::MAX`); 0 until [`set_tick_hz`](Self::set_tick_hz).
     min_step_hz: f32,
+    /// The step timer's clock (0: not set, no interval cap).
+    tick_hz: u32,
     pub settings: Settings,
 }
 
@@ -198,6 +201,7 @@ impl<const N: usize> Planner<N> {
             feed_pct: 1.0,
             rapid_pct: 1.0,
             min_step_hz: 0.0,
+            tick_hz: 0,
             settings,
         }
     }
@@ -208,6 +212,7 @@ impl<const N: usize> Planner<N> {
     /// (tests, benches) checks nothing and the preparer still stays bounded.
     pub fn set_tick_hz(&mut self, tick_hz: u32) {
         self.min_step_hz = tick_hz as f32 / crate::seams::MAX_PERIOD as f32;
+        self.tick_hz = tick_hz;
     }
 
     pub fn len(&self) -> usize {

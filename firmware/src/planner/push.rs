@@ -66,6 +66,14 @@ impl<const N: usize> Planner<N> {
             cap = cap.min(ax.max_rate / 60.0 / u);
             accel = accel.min(ax.max_accel / u);
         }
+        // Single intervals of minor axes, too (see `interval`).
+        let cap = cap.min(interval::speed_cap(
+            s,
+            self.tick_hz,
+            &b.steps,
+            b.count,
+            b.length,
+        ));
         b.cap = cap;
         b.line_accel = accel;
         b.accel = accel;

@@ -34,7 +34,7 @@ use crate::AXES;
 
 /// Highest smoothing level: at low step rates the Bresenham runs at up to
 /// 2^3 times the dominant axis's rate so slower axes step at evenly spaced times.
-pub const MAX_AMASS: u8 = 3;
+pub use crate::planner::interval::MAX_AMASS;
 
 /// A run of timer events at one constant period.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -14,7 +14,8 @@ use crate::settings::Settings;
 /// Target duration of one segment, seconds.
 pub const SEGMENT_S: f32 = 0.002;
 /// Smoothing keeps the fine event rate at or below this (Hz).
-pub const AMASS_FINE_HZ: f32 = 16_000.0;
+pub const AMASS_FINE_HZ: f32 = crate::planner::interval::AMASS_FINE_HZ;
+
 /// Longest event period of a dwell segment, seconds.
 pub(super) const DWELL_CHUNK_S: f32 = 0.01;
 

@@ -11,32 +11,18 @@
 
 use super::Preparer;
 use crate::planner::Block;
-use crate::AXES;
 
 impl Preparer {
     /// Shortest event period (ticks) at which no axis of `b` steps faster
-    /// than its limit, with `amass` events per dominant step.
+    /// than its limit, with `amass` events per dominant step
+    /// ([`crate::planner::interval::floor_ticks`]).
     pub(super) fn rate_floor(&self, b: &Block, amass: u8) -> u32 {
-        let tick_hz = self.cfg.tick_hz as f32;
-        let events = (b.count as u64) << amass;
-        let mut floor = 0u32;
-        for i in 0..AXES {
-            let s = b.steps[i];
-            if s == 0 {
-                continue;
-            }
-            let ax = &self.settings.axes[i];
-            let hz = (ax.max_rate / 60.0 * ax.steps_per_mm).min(self.settings.max_step_rate_hz);
-            if !(hz.is_finite() && hz > 0.0) {
-                continue;
-            }
-            let limit = libm::ceilf(tick_hz / hz);
-            let k = (events / s as u64).max(1) as f32;
-            let p = libm::ceilf(limit / k);
-            if p.is_finite() && p > floor as f32 {
-                floor = p.min(crate::seams::MAX_PERIOD as f32) as u32;
-            }
-        }
-        floor
+        crate::planner::interval::floor_ticks(
+            &self.settings,
+            self.cfg.tick_hz,
+            &b.steps,
+            b.count,
+            amass,
+        )
     }
 }
