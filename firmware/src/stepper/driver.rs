@@ -20,8 +20,9 @@
 //! delays an edge, never skips one: every step gets high ≥ `$0` and low
 //! ≥ `min_low_ticks`, and planned times catch up afterwards at no more
 //! than `$201`. After each compare write the counter is re-read: a target
-//! already past (or within [`SPIN_TICKS`]) is done at once in the same
-//! handler instead of waiting 2^32 ticks for the counter to wrap.
+//! already past (or within [`SPIN_TICKS`], scaled to the timer) is done at
+//! once in the same handler instead of waiting 2^32 ticks for the counter
+//! to wrap.
 //!
 //! Events without steps (direction changes, smoothing events) have no
 //! fall: the next rise follows directly, `$200` after a direction change.
@@ -37,6 +38,7 @@ use crate::seams::{StepPins, StepTimer};
 /// A target this close (or past) is not left to the compare: the handler
 /// waits for it in a short loop. Covers the compare write's latency
 /// (a few timer clocks) so a just-missed match cannot cost a 2^32 wrap.
+/// At a 96 MHz count; `StepConfig::spin_ticks` scales it to the timer.
 pub const SPIN_TICKS: u32 = 8;
 
 /// The later of two counter values (wrapping: valid within 2^31 ticks).
@@ -137,6 +139,8 @@ impl StepDriver {
         let due = (self.target.wrapping_sub(hw.now()) as i32) <= 0;
         if due && self.phase == Phase::High {
             self.fall(&stepper.cfg, hw);
+            // The constant window here (the hot path loads nothing more);
+            // a slower timer's closer targets go through `run`'s scaled one.
             if (self.target.wrapping_sub(hw.now()) as i32) > SPIN_TICKS as i32 {
                 return false;
             }
@@ -176,7 +180,7 @@ impl StepDriver {
         }
         loop {
             let early = self.target.wrapping_sub(hw.now()) as i32;
-            if early > SPIN_TICKS as i32 {
+            if early > stepper.cfg.spin_ticks as i32 {
                 if self.phase == Phase::Low && stepper.is_flushed(rt) {
                     // A kick after a flush: the pending event is the last
                     // of flushed motion (the stepper already counted its
