@@ -107,7 +107,8 @@ pub struct StepConfig {
     pub enable_ticks: u32,
     /// How close a target may be for the step interrupt to wait for it
     /// rather than arm the compare: [`driver::SPIN_TICKS`] at 96 MHz,
-    /// scaled to the timer's clock (at least 1). A slow counter (a fuzzing
+    /// scaled to the timer's clock (0 below 12 MHz, where the compare
+    /// write's latency is a fraction of a tick). A slow counter (a fuzzing
     /// clock of 48 kHz) spun 8 whole ticks per event, 167 µs each.
     pub spin_ticks: u32,
     pub step_invert: u8,
@@ -129,9 +130,8 @@ impl StepConfig {
             min_period: ceiling.max(pulse_ticks + 1),
             min_low_ticks: pulse_ticks.max(ticks(1.0)),
             enable_ticks: exact(s.enable_delay_us),
-            spin_ticks: (driver::SPIN_TICKS as u64 * tick_hz as u64)
-                .div_ceil(96_000_000)
-                .clamp(1, driver::SPIN_TICKS as u64) as u32,
+            spin_ticks: (driver::SPIN_TICKS as u64 * tick_hz as u64 / 96_000_000)
+                .min(driver::SPIN_TICKS as u64) as u32,
             step_invert: s.step_invert,
             dir_invert: s.dir_invert,
             limit_invert: s.limit_invert,
