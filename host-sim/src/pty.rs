@@ -236,17 +236,17 @@ pub fn run(cfg: &MachineConfig, speed: f64, announce: impl FnOnce(&str)) -> io::
 /// `A` lines may be cut to its first and last: the device is polled at
 /// each, but between inputs only the first and last poll matter as long
 /// as the run stays deterministic (the replay test checks its outcome).
-struct Trace(Option<io::BufWriter<File>>);
+/// Each line is written at once, so a session killed mid-run keeps its
+/// record.
+struct Trace(Option<File>);
 
 impl Trace {
     fn open() -> Trace {
-        let file = std::env::var_os("BURIN_PTY_TRACE").and_then(|p| File::create(p).ok());
-        Trace(file.map(io::BufWriter::new))
+        Trace(std::env::var_os("BURIN_PTY_TRACE").and_then(|p| File::create(p).ok()))
     }
     fn note(&mut self, line: &str) {
         if let Some(w) = self.0.as_mut() {
             let _ = writeln!(w, "{line}");
-            let _ = w.flush();
         }
     }
     fn bytes(&mut self, b: &[u8]) {

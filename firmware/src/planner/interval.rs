@@ -20,9 +20,23 @@ use crate::AXES;
 /// dominant step (re-exported as `stepper::MAX_AMASS`).
 pub const MAX_AMASS: u8 = 3;
 /// Smoothing runs at most this event rate (Hz): level `a` is used while
-/// `2^a` events per dominant step stay at or below it (re-exported as
-/// `stepper::prep::AMASS_FINE_HZ`).
+/// `2^a` events per dominant step stay at or below it ([`level`]).
 pub const AMASS_FINE_HZ: f32 = 16_000.0;
+
+/// The smoothing level the preparer runs a segment at: the finest whose
+/// event rate, `2^a` events per dominant step of `dominant` ticks, stays
+/// within [`AMASS_FINE_HZ`]; 0 without minor axes. [`speed_cap`] plans
+/// with this same rule.
+pub fn level(dominant: f32, tick_hz: u32, minor: bool) -> u8 {
+    let mut a = 0u8;
+    if minor {
+        let fine = tick_hz as f32 / AMASS_FINE_HZ;
+        while a < MAX_AMASS && dominant / (2u32 << a) as f32 >= fine {
+            a += 1;
+        }
+    }
+    a
+}
 
 /// Shortest event period (ticks) at which no axis of a block with these
 /// `steps` (dominant `count`) steps faster than its limit, with `2^amass`
@@ -51,11 +65,10 @@ pub fn floor_ticks(s: &Settings, tick_hz: u32, steps: &[u32; AXES], count: u32, 
 }
 
 /// Fastest path speed (mm/s) up to which the preparer's smoothing level
-/// (chosen by rate alone: `2^a` events per dominant step within
-/// [`AMASS_FINE_HZ`]) keeps the event period at or above [`floor_ticks`]
+/// ([`level`], chosen by rate alone) keeps the event period at or above [`floor_ticks`]
 /// all the way from rest, so the floor never has to cut in.
 ///
-/// In dominant-step periods `D` (ticks): level `a` covers
+/// In dominant-step periods `D` (ticks), [`level`] picks `a` for
 /// `fine·2^a <= D < fine·2^(a+1)` (level 0 everything faster, the top level
 /// everything slower) and is legal from `L_a = floor_ticks(a)·2^a` up.
 /// Walking from slow to fast, the first level whose legal bound falls

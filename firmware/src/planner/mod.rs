@@ -178,10 +178,8 @@ pub struct Planner<const N: usize> {
     prev_length: f32,
     feed_pct: f32,
     rapid_pct: f32,
-    /// Fewest dominant-axis steps per second the step timer can time
-    /// (`tick_hz / u32::MAX`); 0 until [`set_tick_hz`](Self::set_tick_hz).
-    min_step_hz: f32,
-    /// The step timer's clock (0: not set, no interval cap).
+    /// The step timer's clock; 0 until [`set_tick_hz`](Self::set_tick_hz)
+    /// (then no slow-feed refusal and no interval cap).
     tick_hz: u32,
     pub settings: Settings,
 }
@@ -200,7 +198,6 @@ impl<const N: usize> Planner<N> {
             prev_length: 0.0,
             feed_pct: 1.0,
             rapid_pct: 1.0,
-            min_step_hz: 0.0,
             tick_hz: 0,
             settings,
         }
@@ -211,7 +208,6 @@ impl<const N: usize> Planner<N> {
     /// ([`PlanError::FeedTooSlow`]). The executor sets it; a bare planner
     /// (tests, benches) checks nothing and the preparer still stays bounded.
     pub fn set_tick_hz(&mut self, tick_hz: u32) {
-        self.min_step_hz = tick_hz as f32 / crate::seams::MAX_PERIOD as f32;
         self.tick_hz = tick_hz;
     }
 

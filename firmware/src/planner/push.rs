@@ -98,7 +98,9 @@ impl<const N: usize> Planner<N> {
         // faster than programmed (see `FeedTooSlow`). At 100 % override:
         // a lower override is floored at this speed instead, so a job that
         // was accepted never fails halfway through.
-        b.floor = self.min_step_hz * b.length / b.count as f32;
+        // Fewest dominant steps per second the step driver times.
+        let min_step_hz = self.tick_hz as f32 / crate::seams::MAX_PERIOD as f32;
+        b.floor = min_step_hz * b.length / b.count as f32;
         if b.programmed.min(b.cap) < b.floor {
             return Err(PlanError::FeedTooSlow);
         }

@@ -6,16 +6,13 @@
 //! the profile of the remaining distance, and the block's step count is
 //! handed out exactly: the last segment of a block takes every step left.
 
-use super::{Segment, StepConfig, MAX_AMASS};
+use super::{Segment, StepConfig};
 use crate::planner::{Block, BlockKind, Planner, Profile, Shape, Watch};
 use crate::realtime::{Realtime, Trip};
 use crate::settings::Settings;
 
 /// Target duration of one segment, seconds.
 pub const SEGMENT_S: f32 = 0.002;
-/// Smoothing keeps the fine event rate at or below this (Hz).
-pub const AMASS_FINE_HZ: f32 = crate::planner::interval::AMASS_FINE_HZ;
-
 /// Longest event period of a dwell segment, seconds.
 pub(super) const DWELL_CHUNK_S: f32 = 0.01;
 
@@ -436,13 +433,7 @@ impl Preparer {
         } else {
             f32::MAX
         };
-        let mut amass = 0u8;
-        if minor {
-            let fine_min = self.cfg.tick_hz as f32 / AMASS_FINE_HZ;
-            while amass < MAX_AMASS && dominant / (2u32 << amass) as f32 >= fine_min {
-                amass += 1;
-            }
-        }
+        let amass = crate::planner::interval::level(dominant, self.cfg.tick_hz, minor);
         let events = n << amass;
         let ticks = (dominant * n as f32).min(MAX_SEGMENT_TICKS) + self.tick_carry;
         let period_f = ticks / events as f32;
