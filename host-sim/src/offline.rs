@@ -45,6 +45,8 @@ pub struct Progress {
     pub line: u32,
     /// The step timer runs (a move or a dwell).
     pub stepping: bool,
+    /// Machine position in steps, as the status report's `MPos` gives it.
+    pub steps: [i32; burin::AXES],
 }
 
 /// [`run_file`], calling `watch` after every round (at most
@@ -135,6 +137,7 @@ pub fn run_file_watched(
                 file_line(&seq_lines, seq)
             },
             stepping: dev.sim.rt.stepping(),
+            steps: dev.sim.rt.position(),
         });
         // The operator presses cycle start at a program pause.
         if paused(&dev) {

@@ -21,6 +21,7 @@ mod report;
 mod run;
 mod summary;
 mod term;
+mod timeline;
 
 use anyhow::{Context, Result};
 use protocol::client::Client;
@@ -134,13 +135,13 @@ pub fn stream_file(
     }
     let eta = if o.eta {
         let settings = board::read_settings(&mut client)?;
-        let profile = eta::Profile::simulate(source, &settings);
+        let profile = timeline::Profile::simulate(source, &settings);
         eprintln!(
             "{}: simulated on the board's settings: {} of motion",
             job.name,
             run::clock(profile.total_s)
         );
-        Some(eta::Eta::new(profile, o.status_every.as_secs_f64() / 2.0))
+        Some(eta::Eta::new(profile))
     } else {
         None
     };

@@ -24,7 +24,7 @@ pub fn run(dir: &Path, speed: f64) -> Result<i32> {
         .collect();
     jobs.sort();
     let exe = std::env::current_exe()?;
-    println!("ETA against the real time left, sim --pty --speed {speed}, status every 5 ms");
+    println!("ETA against the real time left, sim --pty --speed {speed}, status every 1 ms");
     println!("| job | sim s | wall s | at 10 %: ETA / real s (err) | at 50 % | at 90 % |");
     println!("|---|---:|---:|---|---|---|");
     let mut worst: f64 = 0.0;
@@ -49,7 +49,7 @@ pub fn run(dir: &Path, speed: f64) -> Result<i32> {
             resume_pauses: true,
             eta: true,
             interactive: false,
-            status_every: Duration::from_millis(5),
+            status_every: Duration::from_millis(1),
         };
         let result = stream_file(&port, Job::new(name.clone(), &source), &source, &opts);
         let _ = sim.kill();

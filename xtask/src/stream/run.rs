@@ -20,6 +20,9 @@ pub(super) enum Ask {
     Interrupt,
 }
 
+/// A status query unanswered this long is taken as lost.
+const STATUS_LOST: Duration = Duration::from_millis(200);
+
 /// What one streaming run saw.
 pub struct Stream<'a, T> {
     pub client: Client<T>,
@@ -103,6 +106,7 @@ impl<'a, T: Read + Write> Stream<'a, T> {
             None
         };
         let mut last_poll = Instant::now();
+        let mut asked: Option<Instant> = None;
         let mut done_sent = false;
         self.started = Some(Instant::now());
         loop {
@@ -131,8 +135,12 @@ impl<'a, T: Read + Write> Stream<'a, T> {
                 self.client.send_line(b"$C")?;
                 done_sent = true;
             }
-            if last_poll.elapsed() >= self.status_every {
+            // One status query in flight at a time (a lost reply is asked
+            // again), so a short interval never floods the link.
+            let answered = asked.is_none_or(|t| t.elapsed() >= STATUS_LOST);
+            if answered && last_poll.elapsed() >= self.status_every {
                 last_poll = Instant::now();
+                asked = Some(last_poll);
                 self.client.realtime(Rt::StatusQuery)?;
             }
             let ev = match self.client.poll() {
@@ -175,6 +183,7 @@ impl<'a, T: Read + Write> Stream<'a, T> {
                     self.alarm_wants_text = Some((self.line_now, code));
                 }
                 DeviceMsg::Status(st) => {
+                    asked = None;
                     if let Some(end) = self.on_status(st)? {
                         return Ok(end);
                     }
@@ -316,7 +325,8 @@ impl<'a, T: Read + Write> Stream<'a, T> {
         if let Some(eta) = &mut self.eta {
             if !paused {
                 let running = st.state == MachineState::Run;
-                eta.observe(active, if running { self.line_now } else { 0 });
+                let line = if running { self.line_now } else { 0 };
+                eta.observe(active, line, &st.mpos);
             }
             match eta.remaining(active) {
                 Some(left) => {

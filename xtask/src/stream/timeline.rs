@@ -1,0 +1,253 @@
+//! The job's timeline, from a run on the virtual board before streaming
+//! (`host_sim::offline`, the board's own code, on the settings read from
+//! the real board): where the machine is at each virtual instant, and when
+//! each file line starts to move. [`super::eta`] places status reports on
+//! it.
+
+use burin::AXES;
+use host_sim::config::MachineConfig;
+use host_sim::offline::{run_file_watched, Progress};
+use host_sim::record::Discard;
+
+/// How far a reported position may lie from the simulated path and still
+/// be placed on it (mm): steps are at most a few hundredths of a mm, and
+/// the board runs the same code, so a farther one is another path (a jog,
+/// an override changing corners) and only its line is used.
+const ON_PATH_MM: f32 = 0.05;
+
+/// The simulated run.
+#[derive(Default)]
+pub struct Profile {
+    /// Virtual seconds from the first motion at which file line `i + 1`
+    /// first ran (NaN: it never moves the machine).
+    starts: Vec<f64>,
+    /// Where on the timeline each line may be: see [`Profile::span`].
+    spans: Vec<(f64, f64)>,
+    /// (virtual seconds, machine position in mm) after every round of the
+    /// simulation from the first motion to the last.
+    path: Vec<(f64, [f32; AXES])>,
+    /// Virtual seconds from the first motion to the last.
+    pub total_s: f64,
+}
+
+impl Profile {
+    /// Simulate `source` on the default virtual machine with `settings`
+    /// (the board's `$n` values) applied.
+    pub fn simulate(source: &str, settings: &[(u16, f32)]) -> Profile {
+        let mut cfg = MachineConfig::default();
+        for &(n, v) in settings {
+            // A setting the host model does not know stays at its default.
+            let _ = cfg.settings.set(n, v);
+        }
+        let lines = source.lines().count();
+        let hz = f64::from(cfg.tick_hz);
+        let spm = cfg.settings.axes.map(|a| a.steps_per_mm);
+        let mut first: Vec<Option<u64>> = vec![None; lines + 1];
+        let (mut t0, mut t_end) = (None::<u64>, 0u64);
+        let mut path: Vec<(u64, [f32; AXES])> = Vec::new();
+        let mut watch = |p: Progress| {
+            if p.line != 0 {
+                let slot = &mut first[(p.line as usize).min(lines)];
+                slot.get_or_insert(p.tick);
+                t0.get_or_insert(p.tick);
+            }
+            if p.stepping {
+                t_end = p.tick;
+            }
+            if t0.is_some() {
+                path.push((p.tick, std::array::from_fn(|i| p.steps[i] as f32 / spm[i])));
+            }
+        };
+        run_file_watched(&cfg, source, &mut Discard, &mut watch);
+        let t0 = t0.unwrap_or(0);
+        let secs = |t: u64| t.saturating_sub(t0) as f64 / hz;
+        let starts = first[1..]
+            .iter()
+            .map(|t| t.map_or(f64::NAN, secs))
+            .collect();
+        let path = path
+            .into_iter()
+            .take_while(|&(t, _)| t <= t_end)
+            .map(|(t, p)| (secs(t), p))
+            .collect();
+        Profile::new(starts, path, secs(t_end))
+    }
+
+    pub fn new(starts: Vec<f64>, path: Vec<(f64, [f32; AXES])>, total_s: f64) -> Profile {
+        let mut spans = vec![(f64::NAN, total_s); starts.len()];
+        let mut last = f64::NAN;
+        for (span, &s) in spans.iter_mut().zip(&starts) {
+            if !s.is_nan() {
+                last = s;
+            }
+            span.0 = last;
+        }
+        // Backwards: the start of the first seen line after this one, and
+        // the end of the span of the first seen line from this one.
+        let (mut next, mut end) = (total_s, total_s);
+        for (span, &s) in spans.iter_mut().zip(&starts).rev() {
+            if !s.is_nan() {
+                end = next;
+                next = s;
+            }
+            span.1 = end;
+        }
+        Profile {
+            starts,
+            spans,
+            path,
+            total_s,
+        }
+    }
+
+    /// When file line `line` starts, in simulated seconds.
+    pub fn start(&self, line: usize) -> Option<f64> {
+        let s = *self.starts.get(line.checked_sub(1)?)?;
+        (!s.is_nan()).then_some(s)
+    }
+
+    /// The stretch of the run (simulated seconds) in which file line `line`
+    /// moves the machine: from the start of the last line up to it that was
+    /// seen running, to the start of the next line seen after the first one
+    /// from it that was. Wider than the line on purpose: the planner merges
+    /// collinear lines into one block, reported under one of their numbers,
+    /// and how many it merges depends on how fast lines arrive, so a board
+    /// may report a line this run never reported; a line shorter than one
+    /// round of the simulation is never seen either.
+    pub fn span(&self, line: usize) -> Option<(f64, f64)> {
+        let (lo, hi) = *self.spans.get(line.checked_sub(1)?)?;
+        (!lo.is_nan()).then_some((lo, hi))
+    }
+
+    /// The simulated instant, not before `after`, at which the machine,
+    /// running file line `line`, was at `mpos`: the first point of the path
+    /// near enough to it while that line (or the round of the simulation
+    /// it ran in) ran. The first, because one line
+    /// may pass a point twice (a canned cycle's plunge and retract); time
+    /// only runs forward, so the earliest pass that fits is the one, at its
+    /// nearest. None while
+    /// the machine stands still (a dwell, a spindle wait: every instant of
+    /// it fits).
+    pub fn locate(&self, line: usize, mpos: &[f32], after: f64) -> Option<f64> {
+        let (lo, hi) = self.span(line)?;
+        let lo = lo.max(after);
+        let i0 = self.path.partition_point(|p| p.0 < lo).saturating_sub(1);
+        let i1 = (self.path.partition_point(|p| p.0 <= hi) + 1).min(self.path.len());
+        let path = self.path.get(i0..i1)?;
+        let still = |k: usize| {
+            path.get(k)
+                .zip(path.get(k + 1))
+                .is_some_and(|(a, b)| a.1 == b.1)
+        };
+        // (offset, instant, whether the machine stood still there)
+        let mut best: Option<(f32, f64, bool)> = None;
+        for k in 0..path.len().saturating_sub(1) {
+            let ((ta, a), (tb, b)) = (path[k], path[k + 1]);
+            let d: [f32; AXES] = std::array::from_fn(|i| b[i] - a[i]);
+            let len2: f32 = d.iter().map(|x| x * x).sum();
+            if len2 == 0.0 {
+                continue;
+            }
+            let along: f32 = (0..AXES).map(|i| (mpos[i] - a[i]) * d[i]).sum();
+            let u = (along / len2).clamp(0.0, 1.0);
+            let off: f32 = (0..AXES)
+                .map(|i| (a[i] + u * d[i] - mpos[i]).powi(2))
+                .sum::<f32>()
+                .sqrt();
+            let s = ta + f64::from(u) * (tb - ta);
+            let fits = off <= ON_PATH_MM && s >= after;
+            // An end of a move next to a standstill: any instant of the
+            // standstill fits as well.
+            let stood = (u == 0.0 && k > 0 && still(k - 1)) || (u == 1.0 && still(k + 1));
+            match best {
+                // Still closing in on the point.
+                Some((o, ..)) if fits && off < o => best = Some((off, s, stood)),
+                // Moving away again: the nearest pass is found.
+                Some(_) => break,
+                None if fits => best = Some((off, s, stood)),
+                None => {}
+            }
+        }
+        best.and_then(|(_, s, stood)| (!stood).then_some(s))
+    }
+}
+
+#[cfg(test)]
+pub mod tests {
+    use super::*;
+
+    /// Five lines moving X from 0 to 5 mm at 1 mm/s; line 4 is a dwell.
+    pub fn profile() -> Profile {
+        Profile::new(
+            vec![0.0, 1.0, 2.0, f64::NAN, 3.0, 4.0],
+            (0..=50)
+                .map(|i| {
+                    let t = f64::from(i) * 0.1;
+                    (t, [t as f32, 0.0, 0.0, 0.0])
+                })
+                .collect(),
+            5.0,
+        )
+    }
+
+    #[test]
+    fn a_position_is_placed_within_its_line() {
+        let p = profile();
+        let s = p.locate(3, &[2.25, 0.0, 0.0, 0.0], 0.0).unwrap();
+        assert!((s - 2.25).abs() < 1e-6, "{s}");
+        // The same point, reported for a line that ran elsewhere.
+        assert_eq!(p.locate(6, &[2.25, 0.0, 0.0, 0.0], 0.0), None);
+        // Off the path.
+        assert_eq!(p.locate(3, &[2.25, 1.0, 0.0, 0.0], 0.0), None);
+        // Already past it.
+        assert_eq!(p.locate(3, &[2.25, 0.0, 0.0, 0.0], 2.5), None);
+    }
+
+    #[test]
+    fn a_line_never_seen_running_is_looked_for_around_its_neighbours() {
+        let p = profile();
+        assert_eq!(p.span(3), Some((2.0, 3.0)));
+        // Line 4 never ran on its own (merged into line 5's block, say).
+        assert_eq!(p.span(4), Some((2.0, 4.0)));
+        let s = p.locate(4, &[3.5, 0.0, 0.0, 0.0], 0.0).unwrap();
+        assert!((s - 3.5).abs() < 1e-6, "{s}");
+    }
+
+    #[test]
+    fn a_standstill_is_not_placed() {
+        // Line 1 dwells 1 s at X0, then moves X to 1 mm at 1 mm/s.
+        let p = Profile::new(
+            vec![0.0],
+            (0..=20)
+                .map(|i| {
+                    let t = f64::from(i) * 0.1;
+                    (t, [(t as f32 - 1.0).max(0.0), 0.0, 0.0, 0.0])
+                })
+                .collect(),
+            2.0,
+        );
+        assert_eq!(p.locate(1, &[0.0; 4], 0.0), None);
+        let s = p.locate(1, &[0.01, 0.0, 0.0, 0.0], 0.0).unwrap();
+        assert!((s - 1.01).abs() < 1e-6, "{s}");
+    }
+
+    #[test]
+    fn a_point_passed_twice_in_one_line_is_placed_in_order() {
+        // Line 1 plunges Z to -1 mm and retracts it, 1 mm/s.
+        let p = Profile::new(
+            vec![0.0],
+            (0..=20)
+                .map(|i| {
+                    let t = f64::from(i) * 0.1;
+                    (t, [0.0, 0.0, -(1.0 - (t as f32 - 1.0).abs()), 0.0])
+                })
+                .collect(),
+            2.0,
+        );
+        let z = [0.0, 0.0, -0.5, 0.0];
+        let down = p.locate(1, &z, 0.0).unwrap();
+        assert!((down - 0.5).abs() < 1e-6, "{down}");
+        let up = p.locate(1, &z, 1.2).unwrap();
+        assert!((up - 1.5).abs() < 1e-6, "{up}");
+    }
+}
