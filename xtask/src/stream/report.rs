@@ -3,6 +3,10 @@
 //! board (`sim --pty --speed N`); the ETA shown when 10, 50 and 90 % of
 //! the running time had passed is compared with the time that was really
 //! left then. Slow on purpose: it runs every job in (scaled) real time.
+//! Status is asked again as soon as it is answered: a 0.14 s job (2.8 s at
+//! `--speed 20`) leaves 14 ms at 90 %, and 2 % of that is less than the
+//! 5 ms a fixed poll would add to seeing its end; at real speed the
+//! streamer's 50 ms poll is the same share of the job as 2.5 ms here.
 
 use super::{job::Job, stream_file, Options, Outcome};
 use anyhow::{bail, Context, Result};
@@ -24,7 +28,7 @@ pub fn run(dir: &Path, speed: f64) -> Result<i32> {
         .collect();
     jobs.sort();
     let exe = std::env::current_exe()?;
-    println!("ETA against the real time left, sim --pty --speed {speed}, status every 1 ms");
+    println!("ETA against the real time left, sim --pty --speed {speed}, status queried continuously (one query in flight)");
     println!("| job | sim s | wall s | at 10 %: ETA / real s (err) | at 50 % | at 90 % |");
     println!("|---|---:|---:|---|---|---|");
     let mut worst: f64 = 0.0;
@@ -49,7 +53,7 @@ pub fn run(dir: &Path, speed: f64) -> Result<i32> {
             resume_pauses: true,
             eta: true,
             interactive: false,
-            status_every: Duration::from_millis(1),
+            status_every: Duration::ZERO,
         };
         let result = stream_file(&port, Job::new(name.clone(), &source), &source, &opts);
         let _ = sim.kill();
