@@ -145,7 +145,7 @@ pub fn run(cfg: &MachineConfig, speed: f64, announce: impl FnOnce(&str)) -> io::
                 // read: its first `ok` then always follows the banner.
                 if !dev.framed() && dev.link_mode() == burin::link::LinkMode::Text {
                     dev.hello();
-                    trace.note("H");
+                    trace.note(format_args!("H"));
                 }
             } else {
                 // What the client wrote before it left (a last soft reset,
@@ -163,13 +163,13 @@ pub fn run(cfg: &MachineConfig, speed: f64, announce: impl FnOnce(&str)) -> io::
             trace.bytes(&inbox[..n]);
             inbox.drain(..n);
             dev.advance_to(dev.sim.now());
-            trace.note(&format!("A {}", dev.sim.now()));
+            trace.note(format_args!("A {}", dev.sim.now()));
             inbox.clear();
             closing = false;
             // Replies the departed client never read must not reach the next.
             pty.flush_stale();
             dev.port_closed();
-            trace.note("C");
+            trace.note(format_args!("C"));
             outbox.clear();
         }
         // Flow control: read only what the device can take now (its ring
@@ -207,7 +207,7 @@ pub fn run(cfg: &MachineConfig, speed: f64, announce: impl FnOnce(&str)) -> io::
             inbox.drain(..n);
             let (before, t) = (dev.sim.now(), (dev.sim.now() + chunk).min(target));
             dev.advance_to(t);
-            trace.note(&format!("A {t}"));
+            trace.note(format_args!("A {t}"));
             // Idle or held: no events to run, virtual time stands still.
             if dev.sim.now() >= target || dev.sim.now() == before {
                 break;
@@ -244,7 +244,9 @@ impl Trace {
     fn open() -> Trace {
         Trace(std::env::var_os("BURIN_PTY_TRACE").and_then(|p| File::create(p).ok()))
     }
-    fn note(&mut self, line: &str) {
+    /// Formats nothing unless a trace was asked for: the pacing loop
+    /// calls this on every pass.
+    fn note(&mut self, line: std::fmt::Arguments) {
         if let Some(w) = self.0.as_mut() {
             let _ = writeln!(w, "{line}");
         }
@@ -252,7 +254,7 @@ impl Trace {
     fn bytes(&mut self, b: &[u8]) {
         if !b.is_empty() && self.0.is_some() {
             let hex: String = b.iter().map(|x| format!("{x:02x}")).collect();
-            self.note(&format!("R {hex}"));
+            self.note(format_args!("R {hex}"));
         }
     }
 }

@@ -8,8 +8,9 @@
 //! and it scales what is left.
 
 use super::timeline::Profile;
+use std::collections::VecDeque;
 
-/// Anchors kept for the offset (the slope uses all of them).
+/// Anchors kept for the offset (the slope's running sums hold all of them).
 const RECENT: usize = 8;
 
 /// A least-squares line through (simulated s, wall s) points.
@@ -47,9 +48,9 @@ impl Fit {
 #[derive(Default)]
 pub struct Eta {
     profile: Profile,
-    /// (active wall seconds, simulated seconds) of the points placed on
-    /// the timeline.
-    anchors: Vec<(f64, f64)>,
+    /// (active wall seconds, simulated seconds) of the latest points placed
+    /// on the timeline.
+    anchors: VecDeque<(f64, f64)>,
     fit: Fit,
     last_line: usize,
     /// Active time of the previous status report.
@@ -81,7 +82,7 @@ impl Eta {
             self.gaps += 1.0;
         }
         if line != 0 {
-            let after = self.anchors.last().map_or(0.0, |a| a.1);
+            let after = self.anchors.back().map_or(0.0, |a| a.1);
             if let Some(s) = self.profile.locate(line, mpos, after) {
                 self.anchor(active, s);
             } else if line != self.last_line {
@@ -98,7 +99,10 @@ impl Eta {
     }
 
     fn anchor(&mut self, a: f64, s: f64) {
-        self.anchors.push((a, s));
+        if self.anchors.len() == RECENT {
+            self.anchors.pop_front();
+        }
+        self.anchors.push_back((a, s));
         self.fit.add(a, s);
     }
 
@@ -111,8 +115,8 @@ impl Eta {
     pub fn remaining(&self, active: f64) -> Option<f64> {
         let r = self.drift()?;
         let p = &self.profile;
-        let recent = &self.anchors[self.anchors.len().saturating_sub(RECENT)..];
-        let c = recent.iter().map(|(a, s)| a - r * s).sum::<f64>() / recent.len() as f64;
+        let n = self.anchors.len() as f64;
+        let c = self.anchors.iter().map(|(a, s)| a - r * s).sum::<f64>() / n;
         // Where on the timeline the board is now.
         let s_now = ((active - c) / r).clamp(0.0, p.total_s);
         let left = r * (p.total_s - s_now);
@@ -125,7 +129,7 @@ impl Eta {
         } else {
             0.0
         };
-        Some(left.max(floor).max(0.0) + latency)
+        Some(left.max(floor) + latency)
     }
 }
 

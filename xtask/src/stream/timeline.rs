@@ -121,13 +121,11 @@ impl Profile {
 
     /// The simulated instant, not before `after`, at which the machine,
     /// running file line `line`, was at `mpos`: the first point of the path
-    /// near enough to it while that line (or the round of the simulation
-    /// it ran in) ran. The first, because one line
-    /// may pass a point twice (a canned cycle's plunge and retract); time
-    /// only runs forward, so the earliest pass that fits is the one, at its
-    /// nearest. None while
-    /// the machine stands still (a dwell, a spindle wait: every instant of
-    /// it fits).
+    /// near enough to it within the line's [span](Profile::span). The first,
+    /// because one line may pass a point twice (a canned cycle's plunge and
+    /// retract); time only runs forward, so the earliest pass that fits is
+    /// the one, at its nearest. None while the machine stands still (a
+    /// dwell, a spindle wait: every instant of it fits).
     pub fn locate(&self, line: usize, mpos: &[f32], after: f64) -> Option<f64> {
         let (lo, hi) = self.span(line)?;
         let lo = lo.max(after);
@@ -176,18 +174,24 @@ impl Profile {
 pub mod tests {
     use super::*;
 
+    /// A run of `total_s` seconds sampled every 0.1 s, the machine at
+    /// `at(t)`.
+    fn sampled(starts: Vec<f64>, total_s: f64, at: impl Fn(f32) -> [f32; AXES]) -> Profile {
+        let rounds = (total_s * 10.0).round() as i32;
+        let path = (0..=rounds)
+            .map(|i| {
+                let t = f64::from(i) * 0.1;
+                (t, at(t as f32))
+            })
+            .collect();
+        Profile::new(starts, path, total_s)
+    }
+
     /// Five lines moving X from 0 to 5 mm at 1 mm/s; line 4 is a dwell.
     pub fn profile() -> Profile {
-        Profile::new(
-            vec![0.0, 1.0, 2.0, f64::NAN, 3.0, 4.0],
-            (0..=50)
-                .map(|i| {
-                    let t = f64::from(i) * 0.1;
-                    (t, [t as f32, 0.0, 0.0, 0.0])
-                })
-                .collect(),
-            5.0,
-        )
+        sampled(vec![0.0, 1.0, 2.0, f64::NAN, 3.0, 4.0], 5.0, |t| {
+            [t, 0.0, 0.0, 0.0]
+        })
     }
 
     #[test]
@@ -216,16 +220,7 @@ pub mod tests {
     #[test]
     fn a_standstill_is_not_placed() {
         // Line 1 dwells 1 s at X0, then moves X to 1 mm at 1 mm/s.
-        let p = Profile::new(
-            vec![0.0],
-            (0..=20)
-                .map(|i| {
-                    let t = f64::from(i) * 0.1;
-                    (t, [(t as f32 - 1.0).max(0.0), 0.0, 0.0, 0.0])
-                })
-                .collect(),
-            2.0,
-        );
+        let p = sampled(vec![0.0], 2.0, |t| [(t - 1.0).max(0.0), 0.0, 0.0, 0.0]);
         assert_eq!(p.locate(1, &[0.0; 4], 0.0), None);
         let s = p.locate(1, &[0.01, 0.0, 0.0, 0.0], 0.0).unwrap();
         assert!((s - 1.01).abs() < 1e-6, "{s}");
@@ -234,16 +229,9 @@ pub mod tests {
     #[test]
     fn a_point_passed_twice_in_one_line_is_placed_in_order() {
         // Line 1 plunges Z to -1 mm and retracts it, 1 mm/s.
-        let p = Profile::new(
-            vec![0.0],
-            (0..=20)
-                .map(|i| {
-                    let t = f64::from(i) * 0.1;
-                    (t, [0.0, 0.0, -(1.0 - (t as f32 - 1.0).abs()), 0.0])
-                })
-                .collect(),
-            2.0,
-        );
+        let p = sampled(vec![0.0], 2.0, |t| {
+            [0.0, 0.0, -(1.0 - (t - 1.0).abs()), 0.0]
+        });
         let z = [0.0, 0.0, -0.5, 0.0];
         let down = p.locate(1, &z, 0.0).unwrap();
         assert!((down - 0.5).abs() < 1e-6, "{down}");
