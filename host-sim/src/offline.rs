@@ -43,8 +43,11 @@ pub struct Progress {
     /// File line (1-based) of the segment the stepper runs; 0 before the
     /// first motion.
     pub line: u32,
-    /// The step timer runs (a move or a dwell).
-    pub stepping: bool,
+    /// The stepper has motion or a dwell left: the board reports Run. False
+    /// from the last step of a motion on (its rise computes the end), while
+    /// the step timer still runs to that step's slot, up to a step interval
+    /// longer.
+    pub running: bool,
     /// Machine position in steps, as the status report's `MPos` gives it.
     pub steps: [i32; burin::AXES],
 }
@@ -136,7 +139,7 @@ pub fn run_file_watched(
             } else {
                 file_line(&seq_lines, seq)
             },
-            stepping: dev.sim.rt.stepping(),
+            running: !dev.sim.rt.stepper_idle(),
             steps: dev.sim.rt.position(),
         });
         // The operator presses cycle start at a program pause.

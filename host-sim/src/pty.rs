@@ -172,27 +172,6 @@ pub fn run(cfg: &MachineConfig, speed: f64, announce: impl FnOnce(&str)) -> io::
             trace.note(format_args!("C"));
             outbox.clear();
         }
-        // Flow control: read only what the device can take now (its ring
-        // and backlog); the rest waits in the kernel and the writer blocks,
-        // as the board NAKs. Realtime bytes among what is read act at once.
-        let want = dev.room().min(buf.len());
-        if connected && inbox.is_empty() && want > 0 {
-            match pty.master.read(&mut buf[..want]) {
-                Ok(n) => {
-                    if debug && n > 0 {
-                        eprintln!("pty: rx {:?}", String::from_utf8_lossy(&buf[..n.min(40)]));
-                    }
-                    inbox.extend_from_slice(&buf[..n])
-                }
-                Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::Interrupted) => {}
-                // EIO: the client closed between poll and read.
-                Err(e) => {
-                    if debug {
-                        eprintln!("pty: read: {e}");
-                    }
-                }
-            }
-        }
         // Virtual time follows the wall clock; while idle it waits.
         if dev.sim.idle() {
             base = (Instant::now(), dev.sim.now());
@@ -216,6 +195,37 @@ pub fn run(cfg: &MachineConfig, speed: f64, announce: impl FnOnce(&str)) -> io::
         if dev.sim.now() >= limit || dev.sim.now() < target {
             // Falling behind the wall clock: do not try to catch up later.
             base = (Instant::now(), dev.sim.now());
+        }
+        // New input, once virtual time has caught up with the wall clock:
+        // a `?` is answered with the state of now, as the board answers,
+        // not of the previous pass (a pass is up to a poll interval old).
+        // Flow control: read only what the device can take now (its ring
+        // and backlog); the rest waits in the kernel and the writer blocks,
+        // as the board NAKs. Realtime bytes among what is read act at once.
+        let want = dev.room().min(buf.len());
+        if connected && inbox.is_empty() && want > 0 {
+            match pty.master.read(&mut buf[..want]) {
+                Ok(n) => {
+                    if debug && n > 0 {
+                        eprintln!("pty: rx {:?}", String::from_utf8_lossy(&buf[..n.min(40)]));
+                    }
+                    inbox.extend_from_slice(&buf[..n])
+                }
+                Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::Interrupted) => {}
+                // EIO: the client closed between poll and read.
+                Err(e) => {
+                    if debug {
+                        eprintln!("pty: read: {e}");
+                    }
+                }
+            }
+        }
+        if !inbox.is_empty() {
+            let n = dev.receive(&inbox);
+            trace.bytes(&inbox[..n]);
+            inbox.drain(..n);
+            dev.advance_to(dev.sim.now());
+            trace.note(format_args!("A {}", dev.sim.now()));
         }
         outbox.extend(dev.take_output());
         if connected && !closing && !outbox.is_empty() {

@@ -115,8 +115,17 @@ impl Eta {
     pub fn remaining(&self, active: f64) -> Option<f64> {
         let r = self.drift()?;
         let p = &self.profile;
-        let n = self.anchors.len() as f64;
-        let c = self.anchors.iter().map(|(a, s)| a - r * s).sum::<f64>() / n;
+        // The offset: the median, not the mean, of the recent anchors'. A
+        // report read late (the streamer or the link stalled a few ms)
+        // places its anchor late by as much; one such among the recent
+        // ones must not move the estimate.
+        let mut offsets: Vec<f64> = self.anchors.iter().map(|(a, s)| a - r * s).collect();
+        offsets.sort_by(f64::total_cmp);
+        let c = match offsets.len() {
+            0 => return None,
+            n if n % 2 == 1 => offsets[n / 2],
+            n => 0.5 * (offsets[n / 2 - 1] + offsets[n / 2]),
+        };
         // Where on the timeline the board is now.
         let s_now = ((active - c) / r).clamp(0.0, p.total_s);
         let left = r * (p.total_s - s_now);
@@ -166,6 +175,22 @@ mod tests {
         // 4 s left, and half a report interval until the end is seen.
         let left = eta.remaining(6.0).unwrap();
         assert!((left - 4.05).abs() < 1e-3, "{left}");
+    }
+
+    #[test]
+    fn a_report_read_late_does_not_move_the_estimate() {
+        let mut eta = Eta::new(profile());
+        for i in 0..60 {
+            let a = f64::from(i) * 0.1;
+            let s = a / 2.0;
+            eta.observe(a, line_at(s), &[s as f32, 0.0, 0.0, 0.0]);
+        }
+        // The report of 6.0 s is read at 6.2 s (the streamer stalled).
+        eta.observe(6.2, line_at(3.0), &[3.0, 0.0, 0.0, 0.0]);
+        // 3.8 s left at 6.2 s, plus half the mean report interval (about
+        // 0.05 s). Averaging the anchors instead would add 0.2 s / 8.
+        let left = eta.remaining(6.2).unwrap();
+        assert!((left - 3.85).abs() < 0.02, "{left}");
     }
 
     #[test]

@@ -7,13 +7,69 @@
 use burin::AXES;
 use host_sim::config::MachineConfig;
 use host_sim::offline::{run_file_watched, Progress};
-use host_sim::record::Discard;
+use host_sim::record::{PinEvent, Recorder};
 
 /// How far a reported position may lie from the simulated path and still
 /// be placed on it (mm): steps are at most a few hundredths of a mm, and
 /// the board runs the same code, so a farther one is another path (a jog,
 /// an override changing corners) and only its line is used.
 const ON_PATH_MM: f32 = 0.05;
+
+/// Step points kept for the path: one per this much virtual time at most,
+/// so a job keeps a few hundred thousand, and a straight line between two
+/// is off the real motion by far less than the 2 % the ETA aims at.
+const THIN_S: f64 = 0.001;
+
+/// The simulation's step events, thinned: every [`THIN_S`], plus the last
+/// step before each longer pause and the very last one, where the motion
+/// ends. The rounds of the simulation alone are up to 10 ms apart near the
+/// end, and the step timer runs on to the slot after the last step, up to
+/// a step interval (several ms at the end of a deceleration) after the
+/// board reports Idle.
+struct StepPoints {
+    thin: u64,
+    kept: Vec<(u64, [i64; AXES])>,
+    last: Option<(u64, [i64; AXES])>,
+}
+
+impl StepPoints {
+    fn new(thin: u64) -> StepPoints {
+        StepPoints {
+            thin: thin.max(1),
+            kept: Vec::new(),
+            last: None,
+        }
+    }
+
+    fn finish(mut self) -> Vec<(u64, [i64; AXES])> {
+        if let Some(p) = self.last {
+            if self.kept.last() != Some(&p) {
+                self.kept.push(p);
+            }
+        }
+        self.kept
+    }
+}
+
+impl Recorder for StepPoints {
+    fn step_event(&mut self, ev: &PinEvent) {
+        let kept = self.kept.last().map(|p| p.0);
+        if let Some(prev) = self.last {
+            if ev.tick.saturating_sub(prev.0) > self.thin && kept != Some(prev.0) {
+                self.kept.push(prev);
+            }
+        }
+        let now = (ev.tick, ev.pos);
+        if self
+            .kept
+            .last()
+            .is_none_or(|p| ev.tick.saturating_sub(p.0) >= self.thin)
+        {
+            self.kept.push(now);
+        }
+        self.last = Some(now);
+    }
+}
 
 /// The simulated run.
 #[derive(Default)]
@@ -43,32 +99,42 @@ impl Profile {
         let hz = f64::from(cfg.tick_hz);
         let spm = cfg.settings.axes.map(|a| a.steps_per_mm);
         let mut first: Vec<Option<u64>> = vec![None; lines + 1];
-        let (mut t0, mut t_end) = (None::<u64>, 0u64);
-        let mut path: Vec<(u64, [f32; AXES])> = Vec::new();
+        let (mut t0, mut t_run) = (None::<u64>, 0u64);
+        let mut rounds: Vec<(u64, [i64; AXES])> = Vec::new();
         let mut watch = |p: Progress| {
             if p.line != 0 {
                 let slot = &mut first[(p.line as usize).min(lines)];
                 slot.get_or_insert(p.tick);
                 t0.get_or_insert(p.tick);
             }
-            if p.stepping {
-                t_end = p.tick;
+            if p.running {
+                t_run = p.tick;
             }
             if t0.is_some() {
-                path.push((p.tick, std::array::from_fn(|i| p.steps[i] as f32 / spm[i])));
+                rounds.push((p.tick, p.steps.map(i64::from)));
             }
         };
-        run_file_watched(&cfg, source, &mut Discard, &mut watch);
+        let mut steps = StepPoints::new((THIN_S * hz) as u64);
+        run_file_watched(&cfg, source, &mut steps, &mut watch);
+        let steps = steps.finish();
         let t0 = t0.unwrap_or(0);
+        // The board says Idle from the last step on (a trailing dwell ends
+        // later, seen to a round).
+        let t_end = steps.last().map_or(0, |p| p.0).max(t_run);
         let secs = |t: u64| t.saturating_sub(t0) as f64 / hz;
         let starts = first[1..]
             .iter()
             .map(|t| t.map_or(f64::NAN, secs))
             .collect();
+        // Both lists are in time order; merged, rounds keep standstills
+        // visible (equal neighbours) and steps keep motion exact.
+        let mut path: Vec<(u64, [i64; AXES])> = rounds;
+        path.extend(steps.into_iter().filter(|p| p.0 >= t0));
+        path.sort_by_key(|p| p.0);
         let path = path
             .into_iter()
-            .take_while(|&(t, _)| t <= t_end)
-            .map(|(t, p)| (secs(t), p))
+            .filter(|&(t, _)| t <= t_end)
+            .map(|(t, p)| (secs(t), std::array::from_fn(|i| p[i] as f32 / spm[i])))
             .collect();
         Profile::new(starts, path, secs(t_end))
     }
@@ -192,6 +258,42 @@ pub mod tests {
         sampled(vec![0.0, 1.0, 2.0, f64::NAN, 3.0, 4.0], 5.0, |t| {
             [t, 0.0, 0.0, 0.0]
         })
+    }
+
+    #[test]
+    fn step_points_thin_but_keep_pauses_and_the_end() {
+        let mut sp = StepPoints::new(100);
+        let ev = |tick: u64, x: i64| PinEvent {
+            tick,
+            dir_mask: 0,
+            step_mask: 1,
+            dir_changed_tick: 0,
+            pos: [x, 0, 0, 0],
+        };
+        // Steps every 30 ticks up to 300, a pause, then two more.
+        for k in 0..=10 {
+            sp.step_event(&ev(30 * k, k as i64));
+        }
+        sp.step_event(&ev(1000, 11));
+        sp.step_event(&ev(1030, 12));
+        let kept: Vec<u64> = sp.finish().iter().map(|p| p.0).collect();
+        // One per 100 ticks; 300 (the step before the pause); 1000 (after
+        // it); 1030 (the last).
+        assert_eq!(kept, [0, 120, 240, 300, 1000, 1030]);
+    }
+
+    #[test]
+    fn a_simulated_job_ends_at_its_last_step() {
+        let p = Profile::simulate("G1 X10 F600\nG1 X0\n", &[]);
+        let (end_s, end) = *p.path.last().unwrap();
+        assert_eq!(end_s, p.total_s);
+        assert_eq!(end[0], 0.0);
+        // The end is where the final position is first reached: the step
+        // timer's run to the slot after the last step (the board already
+        // says Idle) is not part of the job.
+        let moving = p.path.iter().rposition(|q| q.1 != end).unwrap();
+        assert_eq!(p.path[moving + 1].0, p.total_s);
+        assert!(p.total_s > 2.0, "{}", p.total_s);
     }
 
     #[test]
