@@ -36,7 +36,7 @@ pub fn max_chord_angle(r: f32, tol: f32) -> f32 {
         return PI / 2.0;
     }
     let x = libm::sqrtf(tol / (2.0 * r)).min(1.0);
-    (4.0 * libm::asinf(x)).min(PI / 2.0)
+    (4.0 * crate::num::trig::asin(x)).min(PI / 2.0)
 }
 
 /// `x` wrapped into `[0, 2π)`.
@@ -75,8 +75,8 @@ impl ArcChords {
         }
         let (sa, sb) = (start[a] - ca, start[b] - cb);
         let (ea, eb) = (arc.end[a] - ca, arc.end[b] - cb);
-        let r0 = libm::hypotf(sa, sb);
-        let r1 = libm::hypotf(ea, eb);
+        let r0 = hypot(sa, sb);
+        let r1 = hypot(ea, eb);
         if r0 < 1e-6 || r1 < 1e-6 {
             return Err(ArcError::InvalidArc);
         }
@@ -152,8 +152,9 @@ impl ArcChords {
                 wrap(self.theta0 - ang)
             };
             if rel <= libm::fabsf(self.sweep) {
-                let pa = self.center[0] + r * libm::cosf(ang);
-                let pb = self.center[1] + r * libm::sinf(ang);
+                let (sin, cos) = [(0.0, 1.0), (1.0, 0.0), (0.0, -1.0), (-1.0, 0.0)][k];
+                let pa = self.center[0] + r * cos;
+                let pb = self.center[1] + r * sin;
                 lo[a] = lo[a].min(pa);
                 hi[a] = hi[a].max(pa);
                 lo[b] = lo[b].min(pb);
@@ -182,8 +183,9 @@ impl Iterator for ArcChords {
         for (k, v) in p.iter_mut().enumerate() {
             *v = self.start[k] + (self.end[k] - self.start[k]) * t;
         }
-        p[a] = self.center[0] + r * libm::cosf(th);
-        p[b] = self.center[1] + r * libm::sinf(th);
+        let (sin, cos) = crate::num::trig::sin_cos(th);
+        p[a] = self.center[0] + r * cos;
+        p[b] = self.center[1] + r * sin;
         Some(p)
     }
 }
@@ -214,7 +216,7 @@ impl SplineChords {
             return Err(ArcError::InvalidNumber);
         }
         let d = |p0: [f32; 2], p1: [f32; 2], p2: [f32; 2]| {
-            libm::hypotf(p0[0] - 2.0 * p1[0] + p2[0], p0[1] - 2.0 * p1[1] + p2[1])
+            hypot(p0[0] - 2.0 * p1[0] + p2[0], p0[1] - 2.0 * p1[1] + p2[1])
         };
         let p0 = [start[0], start[1]];
         let p3 = [s.end[0], s.end[1]];
@@ -282,4 +284,11 @@ impl Iterator for SplineChords {
         }
         Some(self.point(self.i as f32 / self.n as f32))
     }
+}
+
+/// √(a² + b²) in `f32`: libm's `hypotf` sums the squares in `f64`, soft
+/// float on the board, to be safe from overflow at 1e19, far beyond any
+/// length in mm.
+fn hypot(a: f32, b: f32) -> f32 {
+    libm::sqrtf(a * a + b * b)
 }

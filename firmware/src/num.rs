@@ -7,10 +7,11 @@
 //! with a fixed number of decimals. This module does exactly that, in a few
 //! hundred bytes, and says where it differs from core:
 //!
-//! - parsing is correctly rounded for up to 7 significant digits and 10
-//!   decimals (every number a CAM program writes); longer numbers may be 1
-//!   ulp off in the rare case that the decimal lies within 2^-50 (relative)
-//!   of the midpoint of two floats;
+//! - parsing is correctly rounded (one `f32` operation on exact operands
+//!   for up to 7 significant digits and 10 decimals, every number a CAM
+//!   program writes; 128-bit integer scaling beyond). Digits past the 19th
+//!   significant one are dropped, so such a number may be 1 ulp off when it
+//!   lies within 10^-18 (relative) of the midpoint of two floats;
 //! - formatting prints the exact binary value rounded half away from zero
 //!   (core rounds exact ties to even: `{:.0}` of 2.5 is "2" there, "3" here),
 //!   never prints "-0.000", prints NaN as 0 and clamps magnitudes to
@@ -18,14 +19,10 @@
 
 use core::fmt::{self, Write};
 
+pub mod trig;
+
 /// Exact `f32` powers of ten: 10^10 = 2^10 * 5^10 and 5^10 < 2^24.
 const POW10_F32: [f32; 11] = [1.0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10];
-
-/// Exact `f64` powers of ten (5^22 < 2^53).
-const POW10_F64: [f64; 23] = [
-    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
-    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
-];
 
 /// Significant digits kept; the rest only move the exponent. 19 digits are
 /// 63 bits, far more than f32's 24, so dropping the tail cannot matter
@@ -87,22 +84,48 @@ impl Decimal {
             // Below 10^-46, less than half the smallest subnormal.
             return 0.0;
         }
-        // Up to four f64 roundings (2^-53 each) before the one to f32.
-        let mut v = mant as f64;
-        let mut e = exp;
-        while e != 0 {
-            let step = e.unsigned_abs().min(22);
-            let p = POW10_F64.get(step as usize).copied().unwrap_or(1.0);
-            if e < 0 {
-                v /= p;
-                e += step as i32;
-            } else {
-                v *= p;
-                e -= step as i32;
-            }
-        }
-        v as f32
+        wide_to_f32(mant, exp)
     }
+}
+
+/// `mant · 10^exp` rounded to `f32` with integer arithmetic only: the
+/// board has no double-precision unit, and soft `f64` division was the
+/// only reason this path needed one. The value is carried as a 128-bit
+/// integer times a power of two, scaled by at most 10^19 at a time (a `u64`
+/// factor), with every bit shifted or divided away kept as a sticky bit in
+/// bit 0, which lies 39 bits or more below the rounding point (the integer
+/// keeps 64 bits or more): the conversion to `f32` then rounds as if it
+/// saw the exact value. Only scaling up (more than 19 digits before the
+/// point) rounds before multiplying, an error of 2^-63 (relative); and a
+/// subnormal result (below 1.2e-38) is rounded twice.
+fn wide_to_f32(mant: u64, exp: i32) -> f32 {
+    let mut m = u128::from(mant);
+    let mut e2: i32 = 0;
+    let mut sticky = false;
+    let mut e = exp;
+    while e != 0 {
+        let k = e.unsigned_abs().min(19);
+        let p = 10u64.pow(k);
+        if e > 0 {
+            // At most 64 bits before the multiply: the product fits.
+            let excess = 64u32.saturating_sub(m.leading_zeros());
+            sticky |= m & ((1u128 << excess) - 1) != 0;
+            m >>= excess;
+            e2 += excess as i32;
+            m *= u128::from(p);
+            e -= k as i32;
+        } else {
+            // Top bit at 127: the quotient keeps 64 bits or more.
+            let lz = m.leading_zeros();
+            m <<= lz;
+            e2 -= lz as i32;
+            let q = m / u128::from(p);
+            sticky |= q * u128::from(p) != m;
+            m = q;
+            e += k as i32;
+        }
+    }
+    libm::scalbnf((m | u128::from(sticky)) as f32, e2)
 }
 
 /// A plain decimal, `[+-]digits[.digits]` with at least one digit: GRBL's

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 mod checks;
 pub use checks::check_vectors;
-use checks::{check_no_float_text, word};
+use checks::{check_no_float_text, check_no_soft_double, word};
 
 pub const FLASH_BASE: u32 = 0x0800_0000;
 /// Flash sectors 1 and 2 of both Black Pills: the settings and work
@@ -128,6 +128,7 @@ pub fn build_and_check(board: Board) -> Result<Sizes> {
     print_sizes(board, &elf, &sizes);
     check_vectors(&elf)?;
     check_no_float_text(&elf)?;
+    check_no_soft_double(&elf)?;
     check_budget(board, &sizes)?;
     Ok(sizes)
 }

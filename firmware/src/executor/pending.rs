@@ -84,7 +84,7 @@ impl<const N: usize> Machine<N> {
                         }
                     }
                     Ok(homing::Action::Settle { seconds }) => {
-                        let ticks = (seconds as f64 * self.cfg.tick_hz as f64) as u64;
+                        let ticks = super::submit::dwell_ticks(seconds, self.cfg.tick_hz);
                         match self.planner.push_dwell(ticks, line) {
                             Ok(()) => self.pending = Pending::Homing(h),
                             Err(e) => self.raise_alarm(rt, e.into(), line, obs),

@@ -12,8 +12,9 @@
 use super::error::{ErrorKind, Unsupported};
 use super::lexer::{blank, Cursor, LexResult};
 use super::params::{Name, ParamStore, PARAM_READ_MAX};
+use crate::num::trig::sin_cos_deg;
 use crate::num::Decimal;
-use libm::{atan2f, ceilf, cosf, expf, floorf, fmodf, logf, powf, roundf, sinf, sqrtf, tanf};
+use libm::{atan2f, ceilf, expf, floorf, fmodf, logf, powf, roundf, sqrtf};
 
 /// Deepest bracket/parameter nesting accepted.
 pub const MAX_DEPTH: u8 = 10;
@@ -403,11 +404,14 @@ impl Cursor<'_> {
             }
             b"ASIN\0" => {
                 dom((-1.0..=1.0).contains(&a))?;
-                libm::asinf(a) / DEG
+                crate::num::trig::asin(a) / DEG
             }
-            b"COS\0\0" => cosf(a * DEG),
-            b"SIN\0\0" => sinf(a * DEG),
-            b"TAN\0\0" => tanf(a * DEG),
+            b"COS\0\0" => sin_cos_deg(a).1,
+            b"SIN\0\0" => sin_cos_deg(a).0,
+            b"TAN\0\0" => {
+                let (s, c) = sin_cos_deg(a);
+                s / c
+            }
             b"EXP\0\0" => expf(a),
             b"FIX\0\0" => floorf(a),
             b"FUP\0\0" => ceilf(a),

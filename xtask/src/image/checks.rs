@@ -67,6 +67,39 @@ pub fn check_no_float_text(elf: &Path) -> Result<()> {
     Ok(())
 }
 
+/// Whether a symbol is soft-float `f64` arithmetic (compiler-builtins'
+/// `__adddf3`, `__muldf3`, `__divdf3`, conversions and compares, under
+/// their ARM EABI names too). The FPU is single precision: one `f64` in
+/// the core (libm's `sinf`, `asinf` and `hypotf` compute in it) costs
+/// 3-8 KB of these and tens of cycles per operation.
+fn soft_double(name: &str) -> bool {
+    let eabi = name.strip_prefix("__aeabi_");
+    name.ends_with("df3")
+        || name.contains("dfsf")
+        || name.contains("sfdf")
+        || eabi.is_some_and(|e| e.starts_with('d') && e != "dmb" || e.ends_with("2d"))
+}
+
+/// Refuses an image that computes in `f64`.
+pub fn check_no_soft_double(elf: &Path) -> Result<()> {
+    let bytes = read(elf)?;
+    let file = parse(&bytes)?;
+    let found: Vec<&str> = file
+        .symbols()
+        .filter_map(|s| s.name().ok())
+        .filter(|n| soft_double(n))
+        .take(5)
+        .collect();
+    if !found.is_empty() {
+        bail!(
+            "soft-float f64 code is linked in ({}): keep the core in f32 \
+             (burin::num::trig, not libm's sinf/cosf/tanf/asinf/hypotf)",
+            found.join(", ")
+        );
+    }
+    Ok(())
+}
+
 fn float_text_symbols<'a>(names: impl Iterator<Item = &'a str>) -> Vec<&'a str> {
     names
         .filter(|n| FLOAT_TEXT.iter().any(|part| n.contains(part)))
@@ -76,7 +109,29 @@ fn float_text_symbols<'a>(names: impl Iterator<Item = &'a str>) -> Vec<&'a str> 
 
 #[cfg(test)]
 mod tests {
-    use super::float_text_symbols;
+    use super::{float_text_symbols, soft_double};
+
+    #[test]
+    fn finds_soft_double_symbols() {
+        for n in [
+            "__adddf3",
+            "__aeabi_dmul",
+            "__aeabi_d2f",
+            "__aeabi_f2d",
+            "__truncdfsf2",
+        ] {
+            assert!(soft_double(n), "{n}");
+        }
+        for n in [
+            "__aeabi_fmul",
+            "__aeabi_uldivmod",
+            "__aeabi_memcpy",
+            "__floatuntisf",
+            "sqrtf",
+        ] {
+            assert!(!soft_double(n), "{n}");
+        }
+    }
 
     #[test]
     fn finds_float_text_symbols_by_mangled_name() {
