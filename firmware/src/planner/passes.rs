@@ -32,24 +32,16 @@ impl<const N: usize> Planner<N> {
         if cos > 0.999_999 {
             return 0.0;
         }
-        let v_jd = if cos < -0.999_999 {
-            f32::INFINITY
-        } else {
-            let sin_half = libm::sqrtf(0.5 * (1.0 - cos));
-            let r = self.settings.junction_deviation * sin_half / (1.0 - sin_half);
-            libm::sqrtf(a * r)
-        };
-        let (cos_mm, a_mm) = self.turn(unit_mm, &self.prev_unit_mm);
-        if cos_mm < -0.999_999 {
-            return v_jd;
+        if cos < -0.999_999 {
+            // Straight on: no corner to limit.
+            return f32::INFINITY;
         }
-        let phi = libm::acosf(crate::num::clamp(-cos_mm, -1.0, 1.0)).max(1e-9);
+        let sin_half = libm::sqrtf(0.5 * (1.0 - cos));
+        let r = self.settings.junction_deviation * sin_half / (1.0 - sin_half);
+        let v_jd = libm::sqrtf(a * r);
+        let phi = libm::acosf(crate::num::clamp(-cos, -1.0, 1.0)).max(1e-9);
         let l = length.min(self.prev_length);
-        let a_curve = if curve {
-            super::curve::C_MAX * a_mm
-        } else {
-            a_mm
-        };
+        let a_curve = if curve { super::curve::C_MAX * a } else { a };
         let v_curve = libm::sqrtf(a_curve * l / phi);
         v_jd.min(v_curve)
     }
