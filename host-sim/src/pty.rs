@@ -141,6 +141,11 @@ pub fn run(cfg: &MachineConfig, speed: f64, announce: impl FnOnce(&str)) -> io::
                 eprintln!("pty: {}", if up { "client connected" } else { "hangup" });
             }
             if up {
+                // Replies made while no client had the port (a line the
+                // last one left running answers when it completes) are for
+                // nobody: a USB host that reopens the port gets none either.
+                outbox.clear();
+                let _ = dev.take_output();
                 // The banner at once, before anything the client writes is
                 // read: its first `ok` then always follows the banner.
                 if !dev.framed() && dev.link_mode() == burin::link::LinkMode::Text {

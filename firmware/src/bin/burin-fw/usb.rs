@@ -102,6 +102,11 @@ impl UsbLink {
             news = true;
         }
         if open && !self.open {
+            // Replies made while the port was closed (a line the last
+            // client left running answers when it completes) are for
+            // nobody: the new client's first bytes are the banner.
+            while self.tx.dequeue().is_some() {}
+            (self.len, self.sent) = (0, 0);
             PORT_OPENED.store(true, Ordering::Release);
             news = true;
         }
