@@ -164,11 +164,7 @@ pub fn run(cfg: &MachineConfig, speed: f64, announce: impl FnOnce(&str)) -> io::
             }
         }
         if closing {
-            let n = dev.receive(&inbox);
-            trace.bytes(&inbox[..n]);
-            inbox.drain(..n);
-            dev.advance_to(dev.sim.now());
-            trace.note(format_args!("A {}", dev.sim.now()));
+            take_now(&mut dev, &mut inbox, &mut trace);
             inbox.clear();
             closing = false;
             // Replies the departed client never read must not reach the next.
@@ -186,9 +182,7 @@ pub fn run(cfg: &MachineConfig, speed: f64, announce: impl FnOnce(&str)) -> io::
         let limit = dev.sim.now() + chunk * 64;
         let target = target.min(limit);
         loop {
-            let n = dev.receive(&inbox);
-            trace.bytes(&inbox[..n]);
-            inbox.drain(..n);
+            take(&mut dev, &mut inbox, &mut trace);
             let (before, t) = (dev.sim.now(), (dev.sim.now() + chunk).min(target));
             dev.advance_to(t);
             trace.note(format_args!("A {t}"));
@@ -226,11 +220,7 @@ pub fn run(cfg: &MachineConfig, speed: f64, announce: impl FnOnce(&str)) -> io::
             }
         }
         if !inbox.is_empty() {
-            let n = dev.receive(&inbox);
-            trace.bytes(&inbox[..n]);
-            inbox.drain(..n);
-            dev.advance_to(dev.sim.now());
-            trace.note(format_args!("A {}", dev.sim.now()));
+            take_now(&mut dev, &mut inbox, &mut trace);
         }
         outbox.extend(dev.take_output());
         if connected && !closing && !outbox.is_empty() {
@@ -243,6 +233,21 @@ pub fn run(cfg: &MachineConfig, speed: f64, announce: impl FnOnce(&str)) -> io::
             }
         }
     }
+}
+
+/// The device takes what it has room for from `inbox` (realtime bytes act).
+fn take(dev: &mut VirtualDevice, inbox: &mut Vec<u8>, trace: &mut Trace) {
+    let n = dev.receive(inbox);
+    trace.bytes(&inbox[..n]);
+    inbox.drain(..n);
+}
+
+/// [`take`], then a pass of the task at the current instant, so what was
+/// taken is answered before virtual time moves on.
+fn take_now(dev: &mut VirtualDevice, inbox: &mut Vec<u8>, trace: &mut Trace) {
+    take(dev, inbox, trace);
+    dev.advance_to(dev.sim.now());
+    trace.note(format_args!("A {}", dev.sim.now()));
 }
 
 /// The record `BURIN_PTY_TRACE` asks for: one line per call into the

@@ -12,7 +12,7 @@
 use super::error::{ErrorKind, Unsupported};
 use super::lexer::{blank, Cursor, LexResult};
 use super::params::{Name, ParamStore, PARAM_READ_MAX};
-use crate::num::trig::sin_cos_deg;
+use crate::num::trig::{asin, sin_cos_deg};
 use crate::num::Decimal;
 use libm::{atan2f, ceilf, expf, floorf, fmodf, logf, powf, roundf, sqrtf};
 
@@ -404,7 +404,7 @@ impl Cursor<'_> {
             }
             b"ASIN\0" => {
                 dom((-1.0..=1.0).contains(&a))?;
-                crate::num::trig::asin(a) / DEG
+                asin(a) / DEG
             }
             b"COS\0\0" => sin_cos_deg(a).1,
             b"SIN\0\0" => sin_cos_deg(a).0,

@@ -54,17 +54,32 @@ const FLOAT_TEXT: [&str; 3] = ["flt2dec", "dec2flt", "float_to_decimal"];
 
 /// Refuses an image that contains core's float parsing or printing.
 pub fn check_no_float_text(elf: &Path) -> Result<()> {
+    refuse_symbols(
+        elf,
+        float_text,
+        "core's float text code",
+        "use burin::num instead of float Display/FromStr/clamp",
+    )
+}
+
+/// Fails, naming up to five of them, when the image has symbols `bad`
+/// picks out.
+fn refuse_symbols(elf: &Path, bad: fn(&str) -> bool, what: &str, advice: &str) -> Result<()> {
     let bytes = read(elf)?;
     let file = parse(&bytes)?;
-    let found = float_text_symbols(file.symbols().filter_map(|s| s.name().ok()));
+    let found = matching(file.symbols().filter_map(|s| s.name().ok()), bad);
     if !found.is_empty() {
-        bail!(
-            "core's float text code is linked in ({}): use burin::num instead of \
-             float Display/FromStr/clamp",
-            found.join(", ")
-        );
+        bail!("{what} is linked in ({}): {advice}", found.join(", "));
     }
     Ok(())
+}
+
+fn matching<'a>(names: impl Iterator<Item = &'a str>, bad: fn(&str) -> bool) -> Vec<&'a str> {
+    names.filter(|n| bad(n)).take(5).collect()
+}
+
+fn float_text(name: &str) -> bool {
+    FLOAT_TEXT.iter().any(|part| name.contains(part))
 }
 
 /// Whether a symbol is soft-float `f64` arithmetic (compiler-builtins'
@@ -82,34 +97,21 @@ fn soft_double(name: &str) -> bool {
 
 /// Refuses an image that computes in `f64`.
 pub fn check_no_soft_double(elf: &Path) -> Result<()> {
-    let bytes = read(elf)?;
-    let file = parse(&bytes)?;
-    let found: Vec<&str> = file
-        .symbols()
-        .filter_map(|s| s.name().ok())
-        .filter(|n| soft_double(n))
-        .take(5)
-        .collect();
-    if !found.is_empty() {
-        bail!(
-            "soft-float f64 code is linked in ({}): keep the core in f32 \
-             (burin::num::trig, not libm's sinf/cosf/tanf/asinf/hypotf)",
-            found.join(", ")
-        );
-    }
-    Ok(())
-}
-
-fn float_text_symbols<'a>(names: impl Iterator<Item = &'a str>) -> Vec<&'a str> {
-    names
-        .filter(|n| FLOAT_TEXT.iter().any(|part| n.contains(part)))
-        .take(5)
-        .collect()
+    refuse_symbols(
+        elf,
+        soft_double,
+        "soft-float f64 code",
+        "keep the core in f32 (burin::num::trig, not libm's sinf/cosf/tanf/asinf/hypotf)",
+    )
 }
 
 #[cfg(test)]
 mod tests {
-    use super::{float_text_symbols, soft_double};
+    use super::{float_text, matching, soft_double};
+
+    fn float_text_symbols<'a>(names: impl Iterator<Item = &'a str>) -> Vec<&'a str> {
+        matching(names, float_text)
+    }
 
     #[test]
     fn finds_soft_double_symbols() {

@@ -96,8 +96,7 @@ impl UsbLink {
             // reader.
             self.backlog
                 .port_reset(&mut self.splitter, &mut self.rx, flags);
-            while self.tx.dequeue().is_some() {}
-            (self.len, self.sent) = (0, 0);
+            self.drop_replies();
             PORT_CLOSED.store(true, Ordering::Release);
             news = true;
         }
@@ -105,8 +104,7 @@ impl UsbLink {
             // Replies made while the port was closed (a line the last
             // client left running answers when it completes) are for
             // nobody: the new client's first bytes are the banner.
-            while self.tx.dequeue().is_some() {}
-            (self.len, self.sent) = (0, 0);
+            self.drop_replies();
             PORT_OPENED.store(true, Ordering::Release);
             news = true;
         }
@@ -136,6 +134,12 @@ impl UsbLink {
     }
 
     /// Returns true when reply bytes left the ring (room for the parse task).
+    /// Forget every reply not yet handed to the USB stack.
+    fn drop_replies(&mut self) {
+        while self.tx.dequeue().is_some() {}
+        (self.len, self.sent) = (0, 0);
+    }
+
     fn transmit(&mut self) -> bool {
         let mut freed = false;
         loop {
