@@ -21,6 +21,20 @@ pub trait StepPins {
     fn step_low(&mut self);
     /// Stepper drivers on/off.
     fn set_enabled(&mut self, on: bool);
+    /// The hardware ends each pulse by itself at a tick the driver gives
+    /// ([`StepPins::end_pulse_at`]), so a step costs one interrupt, not
+    /// two. The F411/F401 boards do (a timer compare triggers a DMA write
+    /// of the step-off word to BSRR); QEMU's model has no DMA and lowers
+    /// the pins in a second interrupt ([`StepPins::step_low`]).
+    const ENDS_PULSES: bool = false;
+    /// With [`StepPins::ENDS_PULSES`]: lower all step pins when the step
+    /// timer reaches `at`, without the CPU. Returns the latest tick by which
+    /// they are low (`at` plus the hardware's worst latency), which the
+    /// driver takes as the fall for the minimum low time and direction
+    /// changes. Called right after the rising store, so `at` is ahead.
+    fn end_pulse_at(&mut self, at: u32) -> u32 {
+        at
+    }
     /// Limit and probe pin levels (before the `$5`/`$6` inverts). The
     /// driver reads them right after each rising edge, so the stepper
     /// judges a switch with every step so far taken and a trip position

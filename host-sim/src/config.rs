@@ -7,7 +7,7 @@
 mod file;
 mod interrupts;
 
-pub use interrupts::{Interrupts, IrqTicks, MaskPhase, Masks};
+pub use interrupts::{Interrupts, IrqTicks, MaskPhase, Masks, PulseEnd};
 
 use std::fmt;
 use std::path::{Path, PathBuf};

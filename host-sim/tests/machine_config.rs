@@ -204,10 +204,25 @@ fn interrupt_model_keys() {
         }
     );
     assert_eq!(cfg.settings.enable_delay_us, 5.0);
+    assert_eq!(
+        cfg.interrupts.pulse_end,
+        host_sim::config::PulseEnd::Hardware { latency_ns: 0 }
+    );
+    let qemu = MachineConfig::from_toml_str("[interrupts]\npulse_end = \"interrupt\"\n").unwrap();
+    assert_eq!(
+        qemu.interrupts.pulse_end,
+        host_sim::config::PulseEnd::Interrupt
+    );
+    let dma = MachineConfig::from_toml_str("[interrupts]\npulse_end_latency_ns = 333\n").unwrap();
+    assert_eq!(
+        dma.interrupts.pulse_end,
+        host_sim::config::PulseEnd::Hardware { latency_ns: 333 }
+    );
     let seeded = MachineConfig::from_toml_str("[interrupts]\nmask_seed = 9\n").unwrap();
     assert_eq!(seeded.interrupts.mask_phase, MaskPhase::Random(9));
     for bad in [
         "[interrupts]\nmask_phase = \"sometimes\"\n",
+        "[interrupts]\npulse_end = \"dma\"\n",
         "[interrupts]\nmask_window_us = 2000.0\n",
         "[interrupts]\nmask_period_us = 0.0\n",
         "[pulses]\nenable_delay_us = -1.0\n",

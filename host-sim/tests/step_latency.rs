@@ -18,7 +18,7 @@ use burin::command::{Command, Feed};
 use burin::stepper::StepConfig;
 use burin::AXES;
 use common::*;
-use host_sim::config::{Interrupts, MachineConfig, MaskPhase, Masks};
+use host_sim::config::{Interrupts, MachineConfig, MaskPhase, Masks, PulseEnd};
 use host_sim::engine::{Edge, Sim};
 use host_sim::record::Discard;
 
@@ -33,18 +33,19 @@ const STEPS: i64 = 2000;
 /// store, the rise handler with the next event computed, a short fall
 /// handler; windows every 100 µs (ten times the USB frame rate, so every
 /// run meets many of them) at a new random offset each time.
-fn irq(window_us: f32) -> Interrupts {
+fn irq(window_us: f32, pulse_end: PulseEnd) -> Interrupts {
     Interrupts {
         step_entry_ns: 250,
         step_handler_ns: 1600,
         step_fall_ns: 600,
+        pulse_end,
         mask_window_us: window_us,
         mask_period_us: 100.0,
         mask_phase: MaskPhase::Random(7),
     }
 }
 
-fn machine(rate_hz: f32, window_us: f32) -> MachineConfig {
+fn machine(rate_hz: f32, window_us: f32, pulse_end: PulseEnd) -> MachineConfig {
     let mut cfg = config();
     let s = &mut cfg.settings;
     s.max_step_rate_hz = 200_000.0;
@@ -53,7 +54,7 @@ fn machine(rate_hz: f32, window_us: f32) -> MachineConfig {
         a.max_rate = rate_hz / 80.0 * 60.0;
         a.max_accel = 1.0e6;
     }
-    cfg.interrupts = irq(window_us);
+    cfg.interrupts = irq(window_us, pulse_end);
     cfg
 }
 
@@ -116,9 +117,16 @@ fn feed(rate_hz: f32) -> Feed {
 #[test]
 fn no_step_lost_and_no_pulse_cut_short_under_masked_windows() {
     let mm = STEPS as f32 / 80.0;
-    for rate in RATES_HZ {
-        for w in WINDOWS_US {
-            let cfg = machine(rate, w);
+    // The boards' DMA pulse end (with the latency the board's driver
+    // allows for) and QEMU's fall interrupt.
+    let ends = [PulseEnd::Hardware { latency_ns: 333 }, PulseEnd::Interrupt];
+    for (end, rate, w) in ends
+        .into_iter()
+        .flat_map(|e| RATES_HZ.into_iter().map(move |r| (e, r)))
+        .flat_map(|(e, r)| WINDOWS_US.into_iter().map(move |w| (e, r, w)))
+    {
+        {
+            let cfg = machine(rate, w, end);
             let sc = StepConfig::new(&cfg.settings, cfg.tick_hz);
             let mut rec = Discard;
             let mut sim = Sim::new(&cfg, &mut rec);
@@ -138,7 +146,7 @@ fn no_step_lost_and_no_pulse_cut_short_under_masked_windows() {
             let s = sim.summary(2, [0.0; AXES]);
             assert!(s.errors.is_empty(), "{rate} Hz, {w} µs: {:?}", s.errors);
             let t = analyse(sim.edges());
-            let label = format!("{rate} Hz, {w} µs window: {t:?}");
+            let label = format!("{end:?} {rate} Hz, {w} µs window: {t:?}");
             let want = [2 * STEPS, STEPS, 0, 0];
             assert_eq!(t.rises, want, "rising edges, {label}");
             assert_eq!(s.steps.map(|n| n as i64), want, "stepper steps, {label}");
@@ -154,7 +162,7 @@ fn no_step_lost_and_no_pulse_cut_short_under_masked_windows() {
             );
             let us = |ticks: u64| ticks as f64 * 1e6 / f64::from(cfg.tick_hz);
             println!(
-                "new {:>6} Hz window {w:>4} µs: rises {:?}, high >= {:.2} µs, low >= {:.2} µs, setup >= {:.2} µs, job {:.3} ms",
+                "{end:?} {:>6} Hz window {w:>4} µs: rises {:?}, high >= {:.2} µs, low >= {:.2} µs, setup >= {:.2} µs, job {:.3} ms",
                 rate,
                 &t.rises[..2],
                 us(t.min_high),
@@ -225,7 +233,7 @@ fn old_scheme(n: u64, period: u64, pulse: u64, cfg: &MachineConfig) -> Vec<Edge>
 fn the_previous_step_timer_loses_steps_in_the_same_windows() {
     let mut lost_at_4us = 0;
     for w in WINDOWS_US {
-        let cfg = machine(200_000.0, w);
+        let cfg = machine(200_000.0, w, PulseEnd::Interrupt);
         let sc = StepConfig::new(&cfg.settings, cfg.tick_hz);
         let n = 20_000;
         let (period, pulse) = (u64::from(sc.min_period), u64::from(sc.pulse_ticks));

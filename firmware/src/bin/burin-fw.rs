@@ -290,7 +290,11 @@ mod app {
 
         // Motion core: executor on the default settings, stepper with the
         // same pin timing, the step port with the same inverts.
-        let timer = Tim5::new(dp.TIM5, &mut rcc);
+        #[allow(unused_mut)]
+        let mut timer = Tim5::new(dp.TIM5, &mut rcc);
+        // The step pulses end by DMA, at the idle levels `set_invert` chose.
+        #[cfg(not(feature = "board-qemu"))]
+        timer.end_pulses_by_dma(dp.DMA1, &mut rcc, &pins.steppers);
         let tick_hz = burin::seams::StepTimer::tick_hz(&timer);
         let cfg = burin::stepper::StepConfig::new(&settings, tick_hz);
         let steppers = pins.steppers;

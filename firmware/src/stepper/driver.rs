@@ -293,13 +293,23 @@ impl StepDriver {
         let steps = ev.step_mask != 0;
         if steps {
             self.last_rise = now;
-            self.phase = Phase::High;
-            self.target = now.wrapping_add(cfg.pulse_ticks);
-            hw.schedule_at(self.target);
+            if H::ENDS_PULSES {
+                // `now` was read after the store: the pulse lasts at least
+                // `$0` from the moment the pins really rose.
+                self.last_fall = hw.end_pulse_at(now.wrapping_add(cfg.pulse_ticks));
+            } else {
+                self.phase = Phase::High;
+                self.target = now.wrapping_add(cfg.pulse_ticks);
+                hw.schedule_at(self.target);
+            }
         }
         // One call site, so the inlined stepper exists once here.
         self.pending = stepper.on_event(rt, pop, hw.switches());
-        if !steps {
+        if H::ENDS_PULSES && steps {
+            // What the fall handler does in the two-interrupt scheme.
+            self.target = self.rise_target::<H>(&stepper.cfg);
+            hw.schedule_at(self.target);
+        } else if !steps {
             // A wait or dwell steps nothing, and may last longer than the
             // 2^31 ticks the wrapping comparisons in `later` can tell
             // apart: a bound older than itself no longer binds, so keep it
@@ -314,7 +324,7 @@ impl StepDriver {
                 self.last_fall = now.wrapping_sub(cfg.min_low_ticks);
             }
             self.phase = Phase::Low;
-            self.target = self.rise_target(&stepper.cfg);
+            self.target = self.rise_target::<H>(&stepper.cfg);
             hw.schedule_at(self.target);
         }
         true
@@ -326,15 +336,21 @@ impl StepDriver {
         hw.step_low();
         self.last_fall = hw.now();
         self.phase = Phase::Low;
-        self.target = self.rise_target(cfg);
+        self.target = self.rise_target::<H>(cfg);
         hw.schedule_at(self.target);
     }
 
     /// The planned time of the pending event, held back by the minimum low
-    /// time and `$201` when it steps.
+    /// time and `$201` when it steps. When the hardware ends pulses, an
+    /// event without steps (a direction change, a wait) still waits for
+    /// the last pulse's end: direction pins never change while a step pin
+    /// is high, as with the fall handler first.
     #[inline(always)]
-    fn rise_target(&self, cfg: &StepConfig) -> u32 {
+    fn rise_target<H: StepPins>(&self, cfg: &StepConfig) -> u32 {
         if self.pending.step_mask == 0 {
+            if H::ENDS_PULSES {
+                return later(self.planned, self.last_fall);
+            }
             return self.planned;
         }
         let low = self.last_fall.wrapping_add(cfg.min_low_ticks);

@@ -7,7 +7,7 @@
 
 use serde::Deserialize;
 
-use super::{ConfigError, LimitSwitch, MachineConfig, MaskPhase, ProbeSurface};
+use super::{ConfigError, LimitSwitch, MachineConfig, MaskPhase, ProbeSurface, PulseEnd};
 use burin::settings::{Profile, RapidMode};
 use burin::{AXES, AXIS_NAMES};
 
@@ -85,6 +85,9 @@ struct Irq {
     step_entry_ns: Option<u32>,
     step_handler_ns: Option<u32>,
     step_fall_ns: Option<u32>,
+    /// "hardware" or "interrupt".
+    pulse_end: Option<String>,
+    pulse_end_latency_ns: Option<u32>,
     mask_window_us: Option<f32>,
     mask_period_us: Option<f32>,
     /// "random", or an offset in µs.
@@ -349,6 +352,29 @@ fn apply_interrupts(cfg: &mut MachineConfig, i: Irq) -> Result<(), ConfigError> 
     set(&mut m.step_entry_ns, i.step_entry_ns);
     set(&mut m.step_handler_ns, i.step_handler_ns);
     set(&mut m.step_fall_ns, i.step_fall_ns);
+    let latency = match m.pulse_end {
+        PulseEnd::Hardware { latency_ns } => latency_ns,
+        PulseEnd::Interrupt => 0,
+    };
+    let latency = i.pulse_end_latency_ns.unwrap_or(latency);
+    m.pulse_end = match i.pulse_end.as_deref() {
+        Some("hardware") => PulseEnd::Hardware {
+            latency_ns: latency,
+        },
+        Some("interrupt") => PulseEnd::Interrupt,
+        Some(w) => {
+            return Err(ConfigError::invalid(
+                "interrupts.pulse_end",
+                format!("`{w}`: use \"hardware\" or \"interrupt\""),
+            ))
+        }
+        None => match m.pulse_end {
+            PulseEnd::Hardware { .. } => PulseEnd::Hardware {
+                latency_ns: latency,
+            },
+            other => other,
+        },
+    };
     set(&mut m.mask_window_us, i.mask_window_us);
     set(&mut m.mask_period_us, i.mask_period_us);
     let seed = match (i.mask_seed, m.mask_phase) {

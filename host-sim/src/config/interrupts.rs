@@ -19,8 +19,19 @@ pub enum MaskPhase {
     Random(u64),
 }
 
+/// Who ends each step pulse (`burin::seams::StepPins::ENDS_PULSES`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PulseEnd {
+    /// The timer's second compare and a DMA write, as on the F411 and F401
+    /// boards, this many ns after the compare target at most.
+    Hardware { latency_ns: u32 },
+    /// A second interrupt lowers the pins, as in the QEMU build.
+    Interrupt,
+}
+
 /// The step interrupt's timing. All zero (the default): handlers take no
-/// time and nothing is masked, the ideal timer of earlier host-sim versions.
+/// time and nothing is masked, the ideal timer of earlier host-sim versions;
+/// pulses end in hardware, as on the boards.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Interrupts {
     /// From the compare match (or the end of a mask window) to the
@@ -29,8 +40,9 @@ pub struct Interrupts {
     /// A rise handler from entry to return (pin store, next event
     /// computed), ns. The CPU takes no other step interrupt meanwhile.
     pub step_handler_ns: u32,
-    /// A fall handler from entry to return, ns.
+    /// A fall handler from entry to return, ns (with [`PulseEnd::Interrupt`]).
     pub step_fall_ns: u32,
+    pub pulse_end: PulseEnd,
     /// Length of each interrupt-masked window, µs (0: none).
     pub mask_window_us: f32,
     /// One window per this many µs.
@@ -44,6 +56,7 @@ impl Interrupts {
         step_entry_ns: 0,
         step_handler_ns: 0,
         step_fall_ns: 0,
+        pulse_end: PulseEnd::Hardware { latency_ns: 0 },
         mask_window_us: 0.0,
         mask_period_us: 1000.0,
         mask_phase: MaskPhase::Random(1),
@@ -60,6 +73,10 @@ impl Interrupts {
             entry,
             rise: ns(self.step_handler_ns).max(entry),
             fall: ns(self.step_fall_ns).max(entry),
+            pulse_end: match self.pulse_end {
+                PulseEnd::Hardware { latency_ns } => Some(ns(latency_ns)),
+                PulseEnd::Interrupt => None,
+            },
             masks: Masks {
                 window,
                 period,
@@ -84,6 +101,8 @@ pub struct IrqTicks {
     pub entry: u64,
     pub rise: u64,
     pub fall: u64,
+    /// Hardware pulse end and its latency (None: a fall interrupt).
+    pub pulse_end: Option<u64>,
     pub masks: Masks,
 }
 

@@ -84,6 +84,11 @@ impl VirtualHw {
         self.enabled
     }
 
+    /// Pulses end in hardware (the boards), not in a fall interrupt.
+    pub fn hardware_fall(&self) -> bool {
+        self.irq.pulse_end.is_some()
+    }
+
     fn store(&mut self, step: u8, dir: u8, work: u64) {
         self.step = step;
         self.dir = dir;
@@ -102,15 +107,43 @@ impl VirtualHw {
     }
 }
 
+impl VirtualHw {
+    /// The hardware's pulse end: a store at a later tick, made without the
+    /// CPU (no handler time). It joins this handler's stores; the driver
+    /// never stores again before it (the next rise waits for it).
+    fn fall_at(&mut self, at: u64) {
+        let e = Edge {
+            tick: at,
+            step: 0,
+            dir: self.dir,
+        };
+        self.step = 0;
+        self.stores.push(e);
+        if let Some(log) = &mut self.log {
+            log.push(e);
+        }
+    }
+}
+
 /// The hardware and the machine it moves, for one handler: the carriage
 /// moves at each rising edge, so the switches the driver reads right after
-/// it already see that step.
-pub struct Wired<'a> {
+/// it already see that step. `HW_FALL`: pulses end in hardware
+/// ([`crate::config::PulseEnd`]).
+pub struct Wired<'a, const HW_FALL: bool> {
     pub hw: &'a mut VirtualHw,
     pub world: &'a mut World,
 }
 
-impl StepPins for Wired<'_> {
+impl<const HW_FALL: bool> StepPins for Wired<'_, HW_FALL> {
+    const ENDS_PULSES: bool = HW_FALL;
+    fn end_pulse_at(&mut self, at: u32) -> u32 {
+        let hw = &mut *self.hw;
+        let latency = hw.irq.pulse_end.unwrap_or(0);
+        let t = hw.t.get();
+        let tick = t + u64::from(at.wrapping_sub(t as u32)) + latency;
+        hw.fall_at(tick);
+        at.wrapping_add(latency as u32)
+    }
     fn step_high(&mut self, dir_mask: u8, step_mask: u8) {
         let hw = &mut *self.hw;
         let work = hw.irq.rise - hw.irq.entry;
@@ -132,7 +165,7 @@ impl StepPins for Wired<'_> {
     }
 }
 
-impl StepTimer for Wired<'_> {
+impl<const HW_FALL: bool> StepTimer for Wired<'_, HW_FALL> {
     fn tick_hz(&self) -> u32 {
         self.hw.tick_hz()
     }

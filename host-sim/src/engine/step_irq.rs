@@ -18,14 +18,17 @@ impl Sim<'_> {
         let was_running = self.driver.is_running();
         self.hw.enter(self.now);
         let queue = &mut self.queue;
-        let mut hw = Wired {
-            hw: &mut self.hw,
-            world: &mut self.world,
-        };
-        self.driver
-            .on_interrupt(&mut self.stepper, &mut hw, &self.rt, &mut || {
-                queue.dequeue()
-            });
+        let mut pop = || queue.dequeue();
+        let (hw, world) = (&mut self.hw, &mut self.world);
+        if hw.hardware_fall() {
+            let mut hw = Wired::<true> { hw, world };
+            self.driver
+                .on_interrupt(&mut self.stepper, &mut hw, &self.rt, &mut pop);
+        } else {
+            let mut hw = Wired::<false> { hw, world };
+            self.driver
+                .on_interrupt(&mut self.stepper, &mut hw, &self.rt, &mut pop);
+        }
         if was_running && !self.driver.is_running() && self.rt.underruns() == underruns {
             // Ran dry at a planned stop: a starved planner if the stop was
             // only there because the next line had not arrived or been parsed.

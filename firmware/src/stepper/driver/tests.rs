@@ -6,8 +6,9 @@ use crate::settings::Settings;
 use crate::stepper::Switches;
 
 /// The clock advances one tick per counter read, so the driver's short
-/// wait for a near target ends.
-struct Toy {
+/// wait for a near target ends. `HW`: the hardware ends pulses (logged as
+/// a fall at the tick asked for, when it is asked).
+struct Toy<const HW: bool> {
     t: core::cell::Cell<u64>,
     target: Option<u64>,
     log: [(u64, u8, u8); 64],
@@ -15,7 +16,7 @@ struct Toy {
     enabled: bool,
 }
 
-impl Toy {
+impl<const HW: bool> Toy<HW> {
     fn new() -> Self {
         Toy {
             t: core::cell::Cell::new(1000),
@@ -33,7 +34,15 @@ impl Toy {
     }
 }
 
-impl StepPins for Toy {
+impl<const HW: bool> StepPins for Toy<HW> {
+    const ENDS_PULSES: bool = HW;
+    fn end_pulse_at(&mut self, at: u32) -> u32 {
+        if self.n < self.log.len() {
+            self.log[self.n] = (u64::from(at), 0, 0xFF);
+            self.n += 1;
+        }
+        at
+    }
     fn step_high(&mut self, dir_mask: u8, step_mask: u8) {
         self.push(step_mask, dir_mask);
     }
@@ -48,7 +57,7 @@ impl StepPins for Toy {
     }
 }
 
-impl StepTimer for Toy {
+impl<const HW: bool> StepTimer for Toy<HW> {
     fn tick_hz(&self) -> u32 {
         1_000_000 * US as u32
     }
@@ -92,7 +101,14 @@ fn segment(steps: u32, dir: u8, new_block: bool) -> Segment {
 }
 
 /// Runs to a stop; every interrupt enters `late` ticks after its target.
-fn run(late: u64, segments: &[Segment]) -> Toy {
+fn run<const HW: bool>(late: u64, segments: &[Segment]) -> Toy<HW> {
+    let (hw, pos) = run_to(late, segments);
+    assert_eq!(pos, -3);
+    hw
+}
+
+/// As [`run`], with X's final position.
+fn run_to<const HW: bool>(late: u64, segments: &[Segment]) -> (Toy<HW>, i32) {
     let rt = Realtime::new();
     let s = Settings {
         step_pulse_us: 2.0,
@@ -114,15 +130,14 @@ fn run(late: u64, segments: &[Segment]) -> Toy {
         d.on_interrupt(&mut stepper, &mut hw, &rt, &mut pop);
     }
     assert!(!rt.stepping() && !d.is_running());
-    assert_eq!(stepper.position()[0], -3);
-    hw
+    (hw, stepper.position()[0])
 }
 
 #[test]
 fn pulses_keep_their_widths_however_late() {
     let segs = [segment(3, 1, true)];
     for late in [0, 1, 3, 7, 15].map(|us| us * US) {
-        let hw = run(late, &segs);
+        let hw = run::<false>(late, &segs);
         let log = &hw.log[..hw.n];
         // Direction first (no step), then rise/fall pairs.
         assert_eq!((log[0].1, log[0].2), (0, 1), "late {late}: {log:?}");
@@ -143,4 +158,50 @@ fn pulses_keep_their_widths_however_late() {
         }
         assert_eq!(hw.n, 7, "late {late}: {log:?}");
     }
+}
+
+#[test]
+fn hardware_pulse_ends_take_one_interrupt_per_step() {
+    let segs = [segment(3, 1, true)];
+    for late in [0, 1, 3, 7, 15].map(|us| us * US) {
+        let hw = run::<true>(late, &segs);
+        let log = &hw.log[..hw.n];
+        // The same train as with fall interrupts: direction, then rise and
+        // (hardware) fall pairs, each fall `$0` after its rise was read.
+        assert_eq!((log[0].1, log[0].2), (0, 1), "late {late}: {log:?}");
+        assert_eq!(hw.n, 7, "late {late}: {log:?}");
+        for i in 0..3 {
+            let (rise, fall) = (log[1 + 2 * i], log[2 + 2 * i]);
+            assert_eq!((rise.1, fall.1, fall.2), (1, 0, 0xFF), "{log:?}");
+            assert!(fall.0 >= rise.0 + 2 * US, "high time, late {late}: {log:?}");
+            if i > 0 {
+                let before = log[2 * i];
+                assert!(rise.0 >= before.0 + 2 * US, "low time, late {late}");
+                assert!(rise.0 >= log[2 * i - 1].0 + 5 * US, "$201, late {late}");
+            }
+        }
+    }
+}
+
+#[test]
+fn a_direction_change_waits_for_the_hardware_pulse_end() {
+    // Back and forth at the `$201` period: the reversal's direction store
+    // (an event without steps) is due while the last pulse is still high.
+    let mut segs = [segment(3, 1, true), segment(3, 0, true)];
+    for s in &mut segs {
+        s.period = 3 * US as u32;
+    }
+    let (hw, pos) = run_to::<true>(0, &segs);
+    assert_eq!(pos, 0);
+    let log = &hw.log[..hw.n];
+    let mut fall_at = 0;
+    for w in log {
+        if w.2 == 0xFF {
+            fall_at = w.0;
+        } else {
+            assert!(w.0 >= fall_at, "a store before the pulse ended: {log:?}");
+        }
+    }
+    let turn = log.iter().position(|w| w.2 == 0 && w.1 == 0);
+    assert!(turn.is_some(), "no direction store: {log:?}");
 }
