@@ -63,10 +63,12 @@ pub struct Realtime {
     running_speed: AtomicU32,
     running_line: AtomicU32,
     running_cut: AtomicU32,
-    /// Hard limits apply now (`$21` on, not homing, not in alarm): decided
-    /// by the controller each pass, read by the stepper at every event and
-    /// by the board's limit interrupts.
-    limits_armed: AtomicBool,
+    /// Which of a segment's switch reasons make the step event read the
+    /// switches (`stepper::SENSE_*`): its own watch always, hard limits
+    /// while they are armed (`$21` on, not homing, not in alarm: decided
+    /// by the controller each pass). One byte, so the event tests both
+    /// with one load; the board's limit interrupts read it too.
+    switch_sense: AtomicU8,
 }
 
 impl Default for Realtime {
@@ -98,7 +100,7 @@ impl Realtime {
             running_speed: AtomicU32::new(0),
             running_line: AtomicU32::new(0),
             running_cut: AtomicU32::new(0),
-            limits_armed: AtomicBool::new(false),
+            switch_sense: AtomicU8::new(crate::stepper::SENSE_WATCH),
         }
     }
 
@@ -283,10 +285,21 @@ impl Realtime {
     }
     /// Whether a closed limit switch trips now (see the field).
     pub fn limits_armed(&self) -> bool {
-        self.limits_armed.load(Relaxed)
+        self.switch_sense() & crate::stepper::SENSE_HARD != 0
     }
     pub fn set_limits_armed(&self, armed: bool) {
-        self.limits_armed.store(armed, Relaxed);
+        use crate::stepper::{SENSE_HARD, SENSE_WATCH};
+        let sense = if armed {
+            SENSE_WATCH | SENSE_HARD
+        } else {
+            SENSE_WATCH
+        };
+        self.switch_sense.store(sense, Relaxed);
+    }
+    /// The segment reasons that read the switches now (see the field).
+    #[inline(always)]
+    pub(crate) fn switch_sense(&self) -> u8 {
+        self.switch_sense.load(Relaxed)
     }
 
     pub(crate) fn take_new_position(&self) -> Option<[i32; AXES]> {
@@ -333,15 +346,15 @@ mod tests {
         ];
         let mut pop = || queue.iter_mut().find_map(Option::take);
         let open = Switches::default();
-        assert!(st.on_event(&rt, &mut pop, open).ticks > 0);
-        assert!(st.on_event(&rt, &mut pop, open).ticks > 0);
+        assert!(st.on_event(&rt, &mut pop, || open).ticks > 0);
+        assert!(st.on_event(&rt, &mut pop, || open).ticks > 0);
         let pos = rt.position();
         // The switch closed and bounced open again before the next event.
         rt.hard_limit(0b001);
         assert_eq!(rt.trip(), Trip::HardLimit);
         assert_eq!(rt.trip_mask(), 0b001);
         assert_eq!(rt.trip_position(), pos);
-        let ev = st.on_event(&rt, &mut pop, open);
+        let ev = st.on_event(&rt, &mut pop, || open);
         assert_eq!((ev.ticks, ev.step_mask), (0, 0), "no step after the trip");
         assert!(rt.stepper_idle());
         assert_eq!(rt.position(), pos);

@@ -36,7 +36,9 @@ pub trait StepPins {
         at
     }
     /// Limit and probe pin levels (before the `$5`/`$6` inverts). The
-    /// driver reads them right after each rising edge, so the stepper
+    /// driver reads them right after each rising edge of a move that
+    /// watches a switch (homing, probing) or while hard limits are armed
+    /// (a plain move reads nothing), so the stepper
     /// judges a switch with every step so far taken and a trip position
     /// is exact; it is the step interrupt's own read, a closed limit stops
     /// pulses within one event even if its edge interrupt was missed.

@@ -55,7 +55,7 @@ fn segments_of_a_fill_preempted_by_a_limit_never_step() {
         assert!(sink.queue.len() >= after, "the fill went on past the trip");
         let mut st = Stepper::new(StepConfig::new(&Settings::default(), 1_000_000));
         let mut queue = sink.queue.into_iter();
-        let ev = st.on_event(&rt, &mut || queue.next(), Switches::default());
+        let ev = st.on_event(&rt, &mut || queue.next(), Switches::default);
         assert_eq!(
             (ev.ticks, ev.step_mask),
             (0, 0),

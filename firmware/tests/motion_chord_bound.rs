@@ -51,7 +51,7 @@ fn chords_under_a_step_are_planned_a_bounded_piece_per_call() {
         );
         total += u64::from(std::mem::take(&mut chords));
         let (mut pop, mut left) = (|| q.dequeue(), 10_000);
-        while st.on_event(&rt, &mut pop, Switches::default()).ticks > 0 && left > 0 {
+        while st.on_event(&rt, &mut pop, Switches::default).ticks > 0 && left > 0 {
             left -= 1;
         }
         polls += 1;

@@ -80,13 +80,13 @@ fn run_move(settings: Settings, dx: f32, feed: f32) -> Outcome {
                 }
                 continue;
             }
-            st.on_event(&rt, &mut || q.dequeue(), Switches::default());
+            st.on_event(&rt, &mut || q.dequeue(), Switches::default);
             events += 1;
         }
     }
     // Let the stepper finish the last segment.
     while st
-        .on_event(&rt, &mut || q.dequeue(), Switches::default())
+        .on_event(&rt, &mut || q.dequeue(), Switches::default)
         .ticks
         != 0
     {
@@ -184,7 +184,7 @@ fn step_span(s: Settings, dx: f32, feed: f32, pct: u16) -> (i32, u64) {
         if q.is_empty() && m.planner.is_empty() && m.prep.is_idle() && st.is_idle() {
             break;
         }
-        let ev = st.on_event(&rt, &mut || q.dequeue(), Switches::default());
+        let ev = st.on_event(&rt, &mut || q.dequeue(), Switches::default);
         if ev.step_mask != 0 {
             first.get_or_insert(now);
             last = now;

@@ -154,7 +154,7 @@ fn run_steps(settings: Settings, moves: &[[f32; 4]]) -> ([i32; 4], [u32; 4], u8)
         if let Some(s) = q.peek() {
             max_amass = max_amass.max(s.amass);
         }
-        let ev = stepper.on_event(&rt, &mut || q.dequeue(), Switches::default());
+        let ev = stepper.on_event(&rt, &mut || q.dequeue(), Switches::default);
         for (i, c) in counts.iter_mut().enumerate() {
             *c += u32::from(ev.step_mask >> i & 1);
         }

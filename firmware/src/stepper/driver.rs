@@ -1,8 +1,10 @@
 //! The step interrupt: what the board's TIM5 handler and host-sim's virtual
 //! timer both run, generic over the [`StepPins`] and [`StepTimer`] seams.
 //!
-//! One compare channel, one absolute target at a time, two alternating
-//! actions:
+//! One compare channel, one absolute target at a time. Where the hardware
+//! ends pulses ([`StepPins::ENDS_PULSES`], the boards' DMA) every action
+//! is a rise that also arms the pulse end and schedules the next rise;
+//! otherwise (the QEMU build) two alternating actions:
 //!
 //! - **rise**: one store puts the direction pins and the rising step edges
 //!   of the pending event, the counter is read right after it, the fall is
@@ -95,8 +97,6 @@ impl StepDriver {
         const IDLE: StepEvent = StepEvent {
             dir_mask: 0,
             step_mask: 0,
-            dir_pins: 0,
-            step_pins: 0,
             ticks: 0,
         };
         StepDriver {
@@ -137,26 +137,18 @@ impl StepDriver {
         pop: &mut impl FnMut() -> Option<Segment>,
     ) -> WakeTask {
         let due = (self.target.wrapping_sub(hw.now()) as i32) <= 0;
-        if due && self.phase == Phase::High {
+        if due && self.phase == Phase::Low && self.pending.ticks != 0 {
+            self.rise(stepper, hw, rt, pop);
+            if (self.target.wrapping_sub(hw.now()) as i32) > SPIN_TICKS as i32 {
+                return stepper.take_popped();
+            }
+        } else if !H::ENDS_PULSES && due && self.phase == Phase::High {
             self.fall(&stepper.cfg, hw);
             // The constant window here (the hot path loads nothing more);
             // a slower timer's closer targets go through `run`'s scaled one.
             if (self.target.wrapping_sub(hw.now()) as i32) > SPIN_TICKS as i32 {
                 return false;
             }
-        } else if due && self.phase == Phase::Low && self.pending.ticks != 0 {
-            let mut took = false;
-            let mut pop = || {
-                let s = pop();
-                took |= s.is_some();
-                s
-            };
-            self.rise(stepper, hw, rt, &mut pop);
-            if (self.target.wrapping_sub(hw.now()) as i32) > SPIN_TICKS as i32 {
-                return took;
-            }
-            let more = self.run(stepper, hw, rt, &mut pop);
-            return more | took;
         }
         self.run(stepper, hw, rt, pop)
     }
@@ -169,13 +161,8 @@ impl StepDriver {
         rt: &Realtime,
         pop: &mut impl FnMut() -> Option<Segment>,
     ) -> WakeTask {
-        let mut took = false;
-        let mut pop = || {
-            let s = pop();
-            took |= s.is_some();
-            s
-        };
-        if self.phase == Phase::Stopped && !self.start(stepper, hw, rt, &mut pop) {
+        if self.phase == Phase::Stopped && !self.start(stepper, hw, rt, pop) {
+            stepper.take_popped();
             return true;
         }
         loop {
@@ -201,7 +188,7 @@ impl StepDriver {
                     }
                 }
                 // Armed, not due (a kick while running, or a stale match).
-                return took;
+                return stepper.take_popped();
             }
             if early > 0 {
                 continue;
@@ -209,10 +196,11 @@ impl StepDriver {
             match self.phase {
                 Phase::High => self.fall(&stepper.cfg, hw),
                 _ => {
-                    if !self.rise(stepper, hw, rt, &mut pop) {
+                    if !self.rise(stepper, hw, rt, pop) {
                         self.phase = Phase::Stopped;
                         hw.stop();
                         rt.set_stepping(false);
+                        stepper.take_popped();
                         return true;
                     }
                 }
@@ -227,7 +215,7 @@ impl StepDriver {
         stepper: &mut Stepper,
         rt: &Realtime,
         pop: &mut impl FnMut() -> Option<Segment>,
-        sw: crate::stepper::Switches,
+        sw: impl FnOnce() -> crate::stepper::Switches,
     ) -> StepEvent {
         stepper.on_event(rt, pop, sw)
     }
@@ -242,7 +230,7 @@ impl StepDriver {
         rt: &Realtime,
         pop: &mut impl FnMut() -> Option<Segment>,
     ) -> bool {
-        let ev = Self::poll_cold(stepper, rt, pop, hw.switches());
+        let ev = Self::poll_cold(stepper, rt, pop, || hw.switches());
         if ev.ticks == 0 {
             return false;
         }
@@ -276,7 +264,7 @@ impl StepDriver {
         if ev.ticks == 0 {
             // The slot after the last event: go on if more was queued
             // meanwhile, else stop.
-            ev = Self::poll_cold(stepper, rt, pop, hw.switches());
+            ev = Self::poll_cold(stepper, rt, pop, || hw.switches());
             if ev.ticks == 0 {
                 return false;
             }
@@ -285,12 +273,19 @@ impl StepDriver {
         let now = hw.now();
         let cfg = &stepper.cfg;
         let mut next = self.planned.wrapping_add(ev.ticks);
-        if ev.dir_mask != self.dirs {
+        let steps = ev.step_mask != 0;
+        // Directions change only in an event of their own (the stepper's
+        // direction event before a block's first step), never with a step:
+        // a step and its direction in one store would have no setup time.
+        debug_assert!(
+            !steps || ev.dir_mask == self.dirs,
+            "direction changed with a step"
+        );
+        if !steps && ev.dir_mask != self.dirs {
             self.dirs = ev.dir_mask;
             next = later(next, now.wrapping_add(cfg.dir_setup_ticks));
         }
         self.planned = next;
-        let steps = ev.step_mask != 0;
         if steps {
             self.last_rise = now;
             if H::ENDS_PULSES {
@@ -304,7 +299,11 @@ impl StepDriver {
             }
         }
         // One call site, so the inlined stepper exists once here.
-        self.pending = stepper.on_event(rt, pop, hw.switches());
+        let ev = stepper.on_event(rt, pop, || hw.switches());
+        // Field by field: a whole-struct store packs the padding too.
+        self.pending.ticks = ev.ticks;
+        self.pending.dir_mask = ev.dir_mask;
+        self.pending.step_mask = ev.step_mask;
         if H::ENDS_PULSES && steps {
             // What the fall handler does in the two-interrupt scheme.
             self.target = self.rise_target::<H>(&stepper.cfg);

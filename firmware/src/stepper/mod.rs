@@ -82,10 +82,6 @@ pub struct StepEvent {
     pub dir_mask: u8,
     /// Axes that step at this event.
     pub step_mask: u8,
-    /// Direction pin levels (after `$3`).
-    pub dir_pins: u8,
-    /// Step pin levels during the pulse (after `$2`); idle level is `step_invert`.
-    pub step_pins: u8,
     /// Ticks until the next event; 0: stop the timer (idle or stopped).
     pub ticks: u32,
 }
@@ -155,6 +151,24 @@ struct Running {
     /// False for dwells: a switch that is already closed while standing
     /// still is not a new event.
     moving: bool,
+    /// Position change per step of each axis (±1, from the direction).
+    delta: [i32; AXES],
+    /// When the event reads the switches: [`SENSE_WATCH`] (this segment
+    /// watches a limit or the probe) and [`SENSE_HARD`] (hard limits apply
+    /// if armed). Zero: a plain move, no read at all.
+    sense: u8,
+}
+
+pub(crate) const SENSE_WATCH: u8 = 1;
+pub(crate) const SENSE_HARD: u8 = 2;
+
+impl Running {
+    fn sense(&self) -> u8 {
+        let w = self.watch;
+        let watch = (self.moving && w.limits != 0) || w.probe != 0;
+        let hard = self.moving && !w.homing;
+        (u8::from(watch) * SENSE_WATCH) | (u8::from(hard) * SENSE_HARD)
+    }
 }
 
 /// The interrupt half: Bresenham over the current segment.
@@ -169,6 +183,9 @@ pub struct Stepper {
     dir: u8,
     halted: Option<u32>,
     last_end: bool,
+    /// A segment was popped since [`Stepper::take_popped`] (the task then
+    /// has room to fill).
+    popped: bool,
 }
 
 impl Stepper {
@@ -182,6 +199,7 @@ impl Stepper {
             dir: 0,
             halted: None,
             last_end: true,
+            popped: false,
         }
     }
 
@@ -204,6 +222,11 @@ impl Stepper {
     pub fn line(&self) -> u32 {
         self.run.line
     }
+    /// Whether a segment left the queue since the last call.
+    #[inline(always)]
+    pub fn take_popped(&mut self) -> bool {
+        core::mem::take(&mut self.popped)
+    }
     pub fn is_idle(&self) -> bool {
         self.left == 0
     }
@@ -213,12 +236,11 @@ impl Stepper {
         self.run.generation != rt.generation()
     }
 
+    #[inline(always)]
     fn event(&self, step_mask: u8, ticks: u32) -> StepEvent {
         StepEvent {
             dir_mask: self.dir,
             step_mask,
-            dir_pins: self.dir ^ self.cfg.dir_invert,
-            step_pins: step_mask ^ self.cfg.step_invert,
             ticks,
         }
     }
@@ -258,6 +280,7 @@ impl Stepper {
         if watch.probe != 0 && rt.trip() == Trip::Probe {
             watch.probe = 0;
         }
+        let dir = if s.new_block { s.dir_mask } else { self.dir };
         self.run = Running {
             inc: s.steps.map(|n| n << shift),
             threshold: s.count << MAX_AMASS,
@@ -267,7 +290,10 @@ impl Stepper {
             speed_mm_min: s.speed_mm_min,
             line: s.line,
             moving: s.steps.iter().any(|&n| n != 0),
+            delta: core::array::from_fn(|i| if dir & (1 << i) != 0 { -1 } else { 1 }),
+            sense: 0,
         };
+        self.run.sense = self.run.sense();
         rt.set_running(s.speed_mm_min, s.line, s.cut);
         if s.new_block {
             self.acc = [self.run.threshold / 2; AXES];
@@ -280,20 +306,77 @@ impl Stepper {
     }
 
     /// One timer event. `pop` takes the next segment from the queue;
-    /// `sw` are the switch pin levels as read now. Inlined into the step
-    /// driver's rise, its one hot caller (saves the call and the returned
-    /// event's round trip through the stack, about 20 instructions a step).
+    /// `sw` reads the switch pin levels now (only when the segment watches
+    /// a switch or hard limits are armed). Inlined into the step driver's
+    /// rise, its one hot caller (saves the call and the returned event's
+    /// round trip through the stack, about 20 instructions a step).
+    ///
+    /// The common event, within a running segment of the current
+    /// generation and reading no switch, is Bresenham alone; everything
+    /// else (a new segment, a flush, a halt, the switches) is out of line.
     #[inline(always)]
     pub fn on_event(
         &mut self,
         rt: &Realtime,
         pop: &mut impl FnMut() -> Option<Segment>,
-        sw: Switches,
+        sw: impl FnOnce() -> Switches,
     ) -> StepEvent {
+        // A halt leaves `left` at 0, so the one test covers it too.
+        if self.left == 0 || self.run.generation != rt.generation() {
+            if let Some(ev) = self.next_segment(rt, pop) {
+                return ev;
+            }
+        }
+        if self.run.sense & rt.switch_sense() != 0 {
+            if let Some(ev) = self.check_switches(rt, sw()) {
+                return ev;
+            }
+        }
+        // Written out per axis: the size-optimised build keeps a loop,
+        // and its counter cost more than the axes' own work.
+        const _: () = assert!(AXES == 4);
+        let t = self.run.threshold;
+        let mask = self.axis::<0>(rt, t)
+            | self.axis::<1>(rt, t)
+            | self.axis::<2>(rt, t)
+            | self.axis::<3>(rt, t);
+        self.left -= 1;
+        self.event(mask, self.run.period)
+    }
+
+    /// One axis's Bresenham step: its bit in the step mask if it steps.
+    /// An axis without steps in this segment costs a load and a branch.
+    #[inline(always)]
+    fn axis<const I: usize>(&mut self, rt: &Realtime, threshold: u32) -> u8 {
+        let inc = self.run.inc[I];
+        if inc == 0 {
+            return 0;
+        }
+        let acc = self.acc[I] + inc;
+        if acc < threshold {
+            self.acc[I] = acc;
+            return 0;
+        }
+        self.acc[I] = acc - threshold;
+        let p = self.position[I] + self.run.delta[I];
+        self.position[I] = p;
+        rt.store_position(I, p);
+        1 << I
+    }
+
+    /// The running segment ended or was flushed, or a halt holds: takes the
+    /// next segment of the current generation. `Some`: the event to return
+    /// instead of a step (idle, or a direction change before the first).
+    #[inline(never)]
+    fn next_segment(
+        &mut self,
+        rt: &Realtime,
+        pop: &mut impl FnMut() -> Option<Segment>,
+    ) -> Option<StepEvent> {
         let generation = rt.generation();
         if let Some(g) = self.halted {
             if g == generation {
-                return self.idle(rt);
+                return Some(self.idle(rt));
             }
             self.halted = None;
         }
@@ -304,23 +387,32 @@ impl Stepper {
         }
         while self.left == 0 {
             let Some(s) = pop() else {
-                return self.idle(rt);
+                return Some(self.idle(rt));
             };
+            self.popped = true;
             if s.generation != generation {
                 continue;
             }
             if let Some(ev) = self.load(rt, &s) {
-                return ev;
+                return Some(ev);
             }
         }
+        None
+    }
+
+    /// Homing and probe watches and hard limits, on the levels read now.
+    /// `Some`: the event to return instead of a step (a trip).
+    #[inline(never)]
+    fn check_switches(&mut self, rt: &Realtime, sw: Switches) -> Option<StepEvent> {
+        let generation = self.run.generation;
         let watch = self.run.watch;
         let lim = sw.limits ^ self.cfg.limit_invert;
         if lim != 0 && self.run.moving {
             if watch.limits & lim != 0 {
-                return self.trip(rt, Trip::Homing, watch.limits & lim, generation);
+                return Some(self.trip(rt, Trip::Homing, watch.limits & lim, generation));
             }
             if rt.limits_armed() && !watch.homing {
-                return self.trip(rt, Trip::HardLimit, lim, generation);
+                return Some(self.trip(rt, Trip::HardLimit, lim, generation));
             }
         }
         if watch.probe != 0 {
@@ -330,20 +422,9 @@ impl Stepper {
                 // ramps down within the acceleration limit and flushes the rest.
                 rt.set_trip(Trip::Probe, 0, &self.position);
                 self.run.watch.probe = 0;
+                self.run.sense = self.run.sense();
             }
         }
-        let threshold = self.run.threshold;
-        let mut mask = 0u8;
-        for i in 0..AXES {
-            self.acc[i] += self.run.inc[i];
-            if self.acc[i] >= threshold {
-                self.acc[i] -= threshold;
-                mask |= 1 << i;
-                self.position[i] += if self.dir & (1 << i) != 0 { -1 } else { 1 };
-                rt.store_position(i, self.position[i]);
-            }
-        }
-        self.left -= 1;
-        self.event(mask, self.run.period)
+        None
     }
 }

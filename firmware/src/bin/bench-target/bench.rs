@@ -24,11 +24,11 @@ const TARGET_HZ: f32 = 96.0e6;
 /// memory; the step handlers use no FPU register, so lazy stacking adds
 /// nothing). QEMU's -icount counts neither: they are added here.
 const ISR_ENTRY_EXIT: f32 = 12.0 + 12.0;
-/// Instructions of the RTIC binding around the driver, per interrupt, that
-/// the timed region does not contain: the vector's function (BASEPRI save
-/// and restore for a priority-3 task), `StepTask::on_interrupt`'s call,
-/// its prologue/epilogue and the `try_send` test of its result.
-const BINDING_INSNS: f32 = 14.0;
+/// The timed handler ([`isr`]) is built as RTIC builds the TIM5 vector:
+/// prologue, BASEPRI saved and restored around the task (a priority-3
+/// task), the task's `try_send` test of the driver's result, epilogue. The
+/// harness's own setting of the counter and the call instruction are
+/// counted too: a few instructions more than the chip runs.
 /// Assumed cycles per instruction of the handler code: QEMU counts
 /// instructions, the chip spends cycles. Loads take 2 cycles, taken
 /// branches 2-4 (pipeline refill), ALU operations 1; flash at 96 MHz has 3
@@ -36,13 +36,13 @@ const BINDING_INSNS: f32 = 14.0;
 /// its 1 KB instruction cache (it is small and runs at every step). 1.3 is
 /// an estimate, not a measurement: only DWT.CYCCNT on a board settles it.
 const CPI: f32 = 1.3;
-/// Peripheral reads per step and their extra cycles: TIM5 CNT at the rise
-/// and at the fall (APB1 at 48 MHz behind the bridge: about 5 cycles
-/// each), GPIOA IDR at the rise (AHB1: about 2). Stores go through the
-/// write buffer and do not stall.
-const BUS_CYCLES: f32 = 2.0 * 5.0 + 2.0;
-/// Interrupts per step: the rise and the fall.
-const IRQS_PER_STEP: f32 = 2.0;
+/// Extra cycles of one peripheral read: TIM5 CNT sits on APB1 (48 MHz,
+/// behind the AHB-APB bridge: about 5 core cycles), the switch port's IDR
+/// on AHB1 (about 2). Stores go through the write buffer and do not stall.
+/// The reads themselves are counted per step (a counting run of the same
+/// steps), not assumed.
+const CNT_READ_CYCLES: f32 = 5.0;
+const IDR_READ_CYCLES: f32 = 2.0;
 /// The default `$201` (burin's step-rate ceiling), Hz.
 const DEFAULT_201_HZ: f32 = 200_000.0;
 /// Same size as the firmware's ring (host-sim uses 64 too).
@@ -50,26 +50,55 @@ const PLANNER_BLOCKS: usize = 64;
 /// Step timer rate the stepper is configured with (TIM5 at 96 MHz).
 const TICK_HZ: u32 = 96_000_000;
 
-/// Stand-ins for the step interrupt's registers: GPIOB BSRR and IDR, TIM5
-/// CNT, CCR1 and SR. Plain RAM words cost the same instructions as the
-/// registers and keep the measurement independent of QEMU's models.
+/// Stand-ins for the step interrupt's registers: GPIOB BSRR and IDR, and
+/// TIM5's SR, CNT, CCR1 and CCR2 in one block as on the chip, so the code
+/// reaches them from one base address as it does the real ones. Plain RAM
+/// words cost the same instructions as the registers and keep the
+/// measurement independent of QEMU's models.
 static BSRR: AtomicU32 = AtomicU32::new(0);
 static IDR: AtomicU32 = AtomicU32::new(0xFFFF);
-static CNT: AtomicU32 = AtomicU32::new(0);
-static CCR1: AtomicU32 = AtomicU32::new(0);
-static SR: AtomicU32 = AtomicU32::new(0);
+#[repr(C)]
+struct Tim {
+    sr: AtomicU32,
+    cnt: AtomicU32,
+    ccr1: AtomicU32,
+    ccr2: AtomicU32,
+}
+static TIM: Tim = Tim {
+    sr: AtomicU32::new(0),
+    cnt: AtomicU32::new(0),
+    ccr1: AtomicU32::new(0),
+    ccr2: AtomicU32::new(0),
+};
+static CNT: &AtomicU32 = &TIM.cnt;
+static CCR1: &AtomicU32 = &TIM.ccr1;
+static CCR2: &AtomicU32 = &TIM.ccr2;
+static SR: &AtomicU32 = &TIM.sr;
 static RT: Realtime = Realtime::new();
+/// Peripheral reads of a counting run (never touched by a timed one).
+static CNT_READS: AtomicU32 = AtomicU32::new(0);
+static IDR_READS: AtomicU32 = AtomicU32::new(0);
 
 /// The board's `StepHw` on the stand-ins, store for store: BSRR words from
 /// 16-entry tables, one IDR read for the switches, CNT reads, and the
-/// compare's flag clear + CCR1 write.
-struct BenchHw {
+/// compare's flag clear + CCR1 write. `HW`: pulses end by DMA (the F411
+/// and F401 boards: one CCR2 write per step); else by a fall interrupt
+/// (the QEMU build). `COUNT`: count the peripheral reads instead of
+/// timing (the counting code is not in the timed build).
+struct BenchHw<const HW: bool, const COUNT: bool> {
     step_on: [u32; 16],
     dirs: [u32; 16],
     step_off: u32,
 }
 
-impl StepPins for BenchHw {
+impl<const HW: bool, const COUNT: bool> StepPins for BenchHw<HW, COUNT> {
+    const ENDS_PULSES: bool = HW;
+    /// As `Tim5::end_pulse_at`: one CCR2 store.
+    #[inline(always)]
+    fn end_pulse_at(&mut self, at: u32) -> u32 {
+        CCR2.store(at, Relaxed);
+        at.wrapping_add(32)
+    }
     #[inline(always)]
     fn step_high(&mut self, dir_mask: u8, step_mask: u8) {
         let word =
@@ -83,6 +112,9 @@ impl StepPins for BenchHw {
     fn set_enabled(&mut self, _on: bool) {}
     #[inline(always)]
     fn switches(&self) -> Switches {
+        if COUNT {
+            IDR_READS.fetch_add(1, Relaxed);
+        }
         let closed = !IDR.load(Relaxed);
         Switches {
             limits: ((closed >> 4) & 0b111) as u8,
@@ -91,12 +123,15 @@ impl StepPins for BenchHw {
     }
 }
 
-impl StepTimer for BenchHw {
+impl<const HW: bool, const COUNT: bool> StepTimer for BenchHw<HW, COUNT> {
     fn tick_hz(&self) -> u32 {
         TICK_HZ
     }
     #[inline(always)]
     fn now(&self) -> u32 {
+        if COUNT {
+            CNT_READS.fetch_add(1, Relaxed);
+        }
         CNT.load(Relaxed)
     }
     #[inline(always)]
@@ -190,55 +225,77 @@ fn segment(steps: [u32; AXES], events: u32, dir_mask: u8, new_block: bool) -> Se
     }
 }
 
-/// Per-step instructions of the step interrupt's two handlers, rise and
-/// fall: `StepDriver::on_interrupt` (the rise runs `Stepper::on_event`
-/// while the pulse is high) with every register access on [`BenchHw`].
-/// Each handler is timed on its own and the figures are averaged over
-/// `CHUNKS` x 1000 steps. The harness plays the counter: in each timed
-/// region it first sets CNT to the armed CCR1 (one load and one store,
-/// counted). Each chunk is two 500-event segments from the spsc queue, the
-/// second continuing the first's block, as the preparer emits them (2 ms
-/// segments at 250 kHz); a chunk's first rise (the kick from rest) and its
-/// stop are not timed. Returns (rise, fall).
-fn step_event(clock: &mut Clock, steps: [u32; AXES], dir_mask: u8) -> (f32, f32) {
+/// Per-step instructions of the step interrupt: `StepDriver::on_interrupt`
+/// (the rise runs `Stepper::on_event` while the pulse is high) with every
+/// register access on [`BenchHw`]. With `HW` (the boards) a step is one
+/// handler and the harness plays the DMA, lowering the pins after each
+/// rise outside the timed region; without it (QEMU) each step is a rise
+/// and a fall handler, timed apart. Figures are averaged over `CHUNKS` x
+/// 1000 steps. The harness plays the counter: in each timed region it
+/// first sets CNT to the armed CCR1 (one load and one store, counted).
+/// Each chunk is two 500-event segments from the spsc queue, the second
+/// continuing the first's block, as the preparer emits them (2 ms
+/// segments at 250 kHz); a chunk's first rise (the kick from rest) and
+/// its stop are not timed. Returns (rise, fall) instructions per step, and
+/// with `COUNT` the CNT and IDR reads per step instead.
+fn step_event<const HW: bool, const COUNT: bool>(
+    clock: &mut Clock,
+    steps: [u32; AXES],
+    dir_mask: u8,
+) -> (f32, f32) {
     const CHUNK: u32 = 1000;
     const CHUNKS: u32 = 20;
     let settings = Settings::default();
-    let mut stepper = Stepper::new(StepConfig::new(&settings, TICK_HZ));
-    let mut driver = StepDriver::new();
-    let mut hw = BenchHw {
-        step_on: core::array::from_fn(|m| (m as u32) << 12),
-        dirs: core::array::from_fn(|m| ((m as u32) << 4) | ((!m as u32 & 0xF) << 20)),
-        step_off: 0xF << 28,
-    };
     let mut queue: heapless::spsc::Queue<Segment, 4> = heapless::spsc::Queue::new();
-    let (mut tx, mut rx) = queue.split();
+    let (mut tx, rx) = queue.split();
+    let mut task = Task::<HW, COUNT> {
+        driver: StepDriver::new(),
+        stepper: Stepper::new(StepConfig::new(&settings, TICK_HZ)),
+        hw: BenchHw {
+            step_on: core::array::from_fn(|m| (m as u32) << 12),
+            dirs: core::array::from_fn(|m| ((m as u32) << 4) | ((!m as u32 & 0xF) << 20)),
+            step_off: 0xF << 28,
+        },
+        queue: rx,
+    };
     let (mut rise, mut fall, mut rises, mut falls) = (0u32, 0u32, 0u32, 0u32);
+    let is_high = || BSRR.load(Relaxed) & 0xF000 != 0;
+    // The DMA's pulse end, outside the timed region.
+    let dma_fall = || {
+        if HW {
+            BSRR.store(0xF << 28, Relaxed);
+        }
+    };
+    let (mut cnt_reads, mut idr_reads) = (0u32, 0u32);
     for chunk in 0..=CHUNKS {
         let half = CHUNK / 2;
         let _ = tx.enqueue(segment(steps, half, dir_mask, true));
         let _ = tx.enqueue(segment(steps, half, dir_mask, false));
-        let mut pop = || rx.dequeue();
         // The kick: starts, and (target = now) does the first rise, or a
         // direction change whose first step then follows untimed too.
-        driver.on_interrupt(&mut stepper, &mut hw, &RT, &mut pop);
-        let mut high = BSRR.load(Relaxed) & 0xF000 != 0;
+        isr(&mut task);
+        let mut high = is_high();
         while !high {
             CNT.store(CCR1.load(Relaxed), Relaxed);
-            driver.on_interrupt(&mut stepper, &mut hw, &RT, &mut pop);
-            high = BSRR.load(Relaxed) & 0xF000 != 0;
+            isr(&mut task);
+            high = is_high();
         }
+        dma_fall();
+        high = is_high();
         let mut n = 0;
-        while driver.is_running() && n < 2 * CHUNK {
+        while task.driver.is_running() && n < 2 * CHUNK {
+            let (c0, i0) = (CNT_READS.load(Relaxed), IDR_READS.load(Relaxed));
             let ticks = clock.time(|| {
                 CNT.store(CCR1.load(Relaxed), Relaxed);
-                driver.on_interrupt(&mut stepper, &mut hw, &RT, &mut pop);
+                isr(&mut task);
             });
             // A fall leaves the step pins low; the slot after the last
             // step (the stop) is no step's cost.
             let was_high = high;
-            high = BSRR.load(Relaxed) & 0xF000 != 0;
-            if chunk > 0 && driver.is_running() {
+            high = is_high();
+            if chunk > 0 && task.driver.is_running() {
+                cnt_reads += CNT_READS.load(Relaxed) - c0;
+                idr_reads += IDR_READS.load(Relaxed) - i0;
                 if was_high {
                     fall += ticks.saturating_sub(clock.overhead);
                     falls += 1;
@@ -247,13 +304,58 @@ fn step_event(clock: &mut Clock, steps: [u32; AXES], dir_mask: u8) -> (f32, f32)
                     rises += 1;
                 }
             }
+            if high {
+                dma_fall();
+                high = is_high();
+            }
             n += 1;
         }
-        black_box(stepper.position());
+        black_box(task.stepper.position());
     }
-    black_box(BSRR.load(Relaxed) ^ SR.load(Relaxed));
+    black_box(BSRR.load(Relaxed) ^ SR.load(Relaxed) ^ CCR2.load(Relaxed));
+    if COUNT {
+        let per = |n: u32| n as f32 / rises.max(1) as f32;
+        return (per(cnt_reads), per(idr_reads));
+    }
     let per = |t: u32, n: u32| t as f32 / clock.ticks_per_insn / n.max(1) as f32;
-    (per(rise, rises), per(fall, falls))
+    // Per step: every rise is a step here (no direction changes in the
+    // timed region), and with `HW` there are no falls.
+    (
+        per(rise, rises),
+        per(fall, falls) * falls as f32 / rises.max(1) as f32,
+    )
+}
+
+/// The board's `StepTask` on the stand-ins.
+struct Task<'q, const HW: bool, const COUNT: bool> {
+    driver: StepDriver,
+    stepper: Stepper,
+    hw: BenchHw<HW, COUNT>,
+    queue: heapless::spsc::Consumer<'q, Segment>,
+}
+
+/// Whether the last handler would have woken the parse task.
+static WAKE: AtomicU32 = AtomicU32::new(0);
+
+/// The TIM5 vector as RTIC 2 generates it for a priority-3 task
+/// (`rtic::export::run`: BASEPRI read, the task, BASEPRI written back;
+/// the task body is `StepTask::on_interrupt` and a `try_send` when it
+/// says so, here a store).
+#[inline(never)]
+fn isr<const HW: bool, const COUNT: bool>(task: &mut Task<'_, HW, COUNT>) {
+    let initial = cortex_m::register::basepri::read();
+    let queue = &mut task.queue;
+    if task
+        .driver
+        .on_interrupt(&mut task.stepper, &mut task.hw, &RT, &mut || {
+            queue.dequeue()
+        })
+    {
+        WAKE.fetch_add(1, Relaxed);
+    }
+    // SAFETY: register level, as RTIC's binding: writes back the BASEPRI
+    // value read on entry (0 here: nothing masked).
+    unsafe { cortex_m::register::basepri::write(initial) };
 }
 
 /// One typical line through the lexer and the interpreter, commands out.
@@ -362,45 +464,49 @@ pub fn run() -> ! {
     if !(0.16..0.176).contains(&clock.ticks_per_insn) {
         hprintln!("# WARNING: not 0.168; is QEMU running with -icount shift=0?");
     }
-    let (rise1, fall1) = step_event(&mut clock, [1000, 0, 0, 0], 0);
-    let (rise4, fall4) = step_event(&mut clock, [1000, 750, 500, 250], 0b0101);
-    let (one, four) = (rise1 + fall1, rise4 + fall4);
+    const ONE: [u32; AXES] = [1000, 0, 0, 0];
+    const FOUR: [u32; AXES] = [1000, 750, 500, 250];
+    // The boards: one interrupt per step, the pulse ended by DMA.
+    let (rise1, _) = step_event::<true, false>(&mut clock, ONE, 0);
+    let (rise4, _) = step_event::<true, false>(&mut clock, FOUR, 0b0101);
+    let (cnt_reads, idr_reads) = step_event::<true, true>(&mut clock, ONE, 0);
+    // The QEMU build: a rise and a fall interrupt per step.
+    let (q_rise1, q_fall1) = step_event::<false, false>(&mut clock, ONE, 0);
+    let (q_cnt, q_idr) = step_event::<false, true>(&mut clock, ONE, 0);
     let line = line(&mut clock);
     let plan = plan_block(&mut clock);
-    // Every cycle one step costs: both handlers' instructions and their
-    // bindings at the assumed CPI, both interrupts' entry and exit, and the
-    // peripheral reads' bus stalls.
-    let path_insns = one + IRQS_PER_STEP * BINDING_INSNS;
-    let cycles = path_insns * CPI + IRQS_PER_STEP * ISR_ENTRY_EXIT + BUS_CYCLES;
+    // Every cycle one step costs: the handler's instructions and its
+    // binding at the assumed CPI, the interrupt's entry and exit, and the
+    // peripheral reads' bus stalls (counted).
+    let cycles_of = |insns: f32, irqs: f32, cnt: f32, idr: f32| {
+        insns * CPI + irqs * ISR_ENTRY_EXIT + cnt * CNT_READ_CYCLES + idr * IDR_READ_CYCLES
+    };
+    let path_insns = rise1;
+    let cycles = cycles_of(rise1, 1.0, cnt_reads, idr_reads);
+    let q_cycles = cycles_of(q_rise1 + q_fall1, 2.0, q_cnt, q_idr);
     let rate = TARGET_HZ / cycles;
     let cpu = |hz: f32| cycles * hz / TARGET_HZ * 100.0;
-    hprintln!("step_event_insns_1axis {}", libm::roundf(one) as u32);
-    hprintln!("step_event_insns_4axis {}", libm::roundf(four) as u32);
-    hprintln!("step_rise_insns_1axis {}", libm::roundf(rise1) as u32);
-    hprintln!("step_fall_insns_1axis {}", libm::roundf(fall1) as u32);
-    hprintln!("step_rise_insns_4axis {}", libm::roundf(rise4) as u32);
-    hprintln!("step_fall_insns_4axis {}", libm::roundf(fall4) as u32);
-    hprintln!("line_insns {}", libm::roundf(line) as u32);
-    hprintln!("plan_block_insns {}", libm::roundf(plan) as u32);
-    hprintln!("step_path_insns_1axis {}", libm::roundf(path_insns) as u32);
-    hprintln!("step_path_cycles_1axis {}", libm::roundf(cycles) as u32);
-    hprintln!("max_step_rate_hz_1axis {}", libm::roundf(rate) as u32);
+    let r = |v: f32| libm::roundf(v) as u32;
+    hprintln!("step_event_insns_1axis {}", r(rise1));
+    hprintln!("step_event_insns_4axis {}", r(rise4));
+    hprintln!("step_cnt_reads_1axis {}", cnt_reads);
+    hprintln!("step_idr_reads_1axis {}", idr_reads);
+    hprintln!("qemu_step_rise_insns_1axis {}", r(q_rise1));
+    hprintln!("qemu_step_fall_insns_1axis {}", r(q_fall1));
+    hprintln!("qemu_step_path_cycles_1axis {}", r(q_cycles));
+    hprintln!("line_insns {}", r(line));
+    hprintln!("plan_block_insns {}", r(plan));
+    hprintln!("step_path_insns_1axis {}", r(path_insns));
+    hprintln!("step_path_cycles_1axis {}", r(cycles));
+    hprintln!("max_step_rate_hz_1axis {}", r(rate));
+    hprintln!("cpu_percent_at_100khz {}", r(cpu(100_000.0)));
+    hprintln!("cpu_percent_at_default_201 {}", r(cpu(DEFAULT_201_HZ)));
     hprintln!(
-        "cpu_percent_at_100khz {}",
-        libm::roundf(cpu(100_000.0)) as u32
-    );
-    hprintln!(
-        "cpu_percent_at_default_201 {}",
-        libm::roundf(cpu(DEFAULT_201_HZ)) as u32
-    );
-    hprintln!(
-        "# step_path_cycles_1axis = (step_event_insns_1axis + {} x {} binding insns) x {} CPI (assumed) + {} interrupts x {} cycles entry/exit + {} cycles of peripheral-read stalls; max_step_rate_hz_1axis = 96 MHz / that; cpu_percent_at_* = that x rate / 96 MHz ($201 default {} Hz)",
-        IRQS_PER_STEP,
-        BINDING_INSNS,
+        "# step_path_cycles_1axis = step_event_insns_1axis (the whole handler, RTIC's binding included) x {} CPI (assumed) + {} cycles interrupt entry/exit + CNT reads x {} + IDR reads x {} cycles of bus stalls (reads counted per step); one interrupt per step, the pulse ended by DMA (F411/F401). max_step_rate_hz_1axis = 96 MHz / that; cpu_percent_at_* = that x rate / 96 MHz ($201 default {} Hz). qemu_*: the QEMU build's rise + fall interrupts, the same sum for two.",
         CPI,
-        IRQS_PER_STEP,
         ISR_ENTRY_EXIT,
-        BUS_CYCLES,
+        CNT_READ_CYCLES,
+        IDR_READ_CYCLES,
         DEFAULT_201_HZ
     );
     exit(true)
