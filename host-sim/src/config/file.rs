@@ -352,15 +352,15 @@ fn apply_interrupts(cfg: &mut MachineConfig, i: Irq) -> Result<(), ConfigError> 
     set(&mut m.step_entry_ns, i.step_entry_ns);
     set(&mut m.step_handler_ns, i.step_handler_ns);
     set(&mut m.step_fall_ns, i.step_fall_ns);
-    let latency = match m.pulse_end {
+    let kept = match m.pulse_end {
         PulseEnd::Hardware { latency_ns } => latency_ns,
         PulseEnd::Interrupt => 0,
     };
-    let latency = i.pulse_end_latency_ns.unwrap_or(latency);
+    let hardware = PulseEnd::Hardware {
+        latency_ns: i.pulse_end_latency_ns.unwrap_or(kept),
+    };
     m.pulse_end = match i.pulse_end.as_deref() {
-        Some("hardware") => PulseEnd::Hardware {
-            latency_ns: latency,
-        },
+        Some("hardware") => hardware,
         Some("interrupt") => PulseEnd::Interrupt,
         Some(w) => {
             return Err(ConfigError::invalid(
@@ -368,12 +368,8 @@ fn apply_interrupts(cfg: &mut MachineConfig, i: Irq) -> Result<(), ConfigError> 
                 format!("`{w}`: use \"hardware\" or \"interrupt\""),
             ))
         }
-        None => match m.pulse_end {
-            PulseEnd::Hardware { .. } => PulseEnd::Hardware {
-                latency_ns: latency,
-            },
-            other => other,
-        },
+        None if m.pulse_end == PulseEnd::Interrupt => PulseEnd::Interrupt,
+        None => hardware,
     };
     set(&mut m.mask_window_us, i.mask_window_us);
     set(&mut m.mask_period_us, i.mask_period_us);

@@ -89,39 +89,38 @@ impl VirtualHw {
         self.irq.pulse_end.is_some()
     }
 
+    /// A store by the handler, now: the pins, and the handler's time.
     fn store(&mut self, step: u8, dir: u8, work: u64) {
-        self.step = step;
-        self.dir = dir;
-        let e = Edge {
-            tick: self.t.get(),
-            step,
-            dir,
-        };
-        self.stores.push(e);
-        if let Some(log) = &mut self.log {
-            log.push(e);
-        }
+        self.record(self.t.get(), step, dir);
         self.reads.set(0);
         self.touched.set(true);
         self.work.set(work);
     }
-}
 
-impl VirtualHw {
     /// The hardware's pulse end: a store at a later tick, made without the
     /// CPU (no handler time). It joins this handler's stores; the driver
     /// never stores again before it (the next rise waits for it).
     fn fall_at(&mut self, at: u64) {
-        let e = Edge {
-            tick: at,
-            step: 0,
-            dir: self.dir,
-        };
-        self.step = 0;
+        self.record(at, 0, self.dir);
+    }
+
+    /// New pin levels at `tick`, into this handler's stores and the log.
+    fn record(&mut self, tick: u64, step: u8, dir: u8) {
+        self.step = step;
+        self.dir = dir;
+        let e = Edge { tick, step, dir };
         self.stores.push(e);
         if let Some(log) = &mut self.log {
             log.push(e);
         }
+    }
+
+    /// The absolute tick of the counter value `at`: the next time the
+    /// 32-bit counter reads it (a value behind it waits for the wrap, as
+    /// on TIM5).
+    fn ahead(&self, at: u32) -> u64 {
+        let t = self.t.get();
+        t + u64::from(at.wrapping_sub(t as u32))
     }
 }
 
@@ -139,9 +138,7 @@ impl<const HW_FALL: bool> StepPins for Wired<'_, HW_FALL> {
     fn end_pulse_at(&mut self, at: u32) -> u32 {
         let hw = &mut *self.hw;
         let latency = hw.irq.pulse_end.unwrap_or(0);
-        let t = hw.t.get();
-        let tick = t + u64::from(at.wrapping_sub(t as u32)) + latency;
-        hw.fall_at(tick);
+        hw.fall_at(hw.ahead(at) + latency);
         at.wrapping_add(latency as u32)
     }
     fn step_high(&mut self, dir_mask: u8, step_mask: u8) {
@@ -200,10 +197,7 @@ impl StepTimer for VirtualHw {
         t as u32
     }
     fn schedule_at(&mut self, at: u32) {
-        // A target behind the counter waits for the wrap, as on TIM5.
-        let t = self.t.get();
-        let ahead = at.wrapping_sub(t as u32);
-        self.target = Some(t + u64::from(ahead));
+        self.target = Some(self.ahead(at));
         self.touched.set(true);
     }
     fn start(&mut self) {

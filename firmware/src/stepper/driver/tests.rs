@@ -14,6 +14,8 @@ struct Toy<const HW: bool> {
     log: [(u64, u8, u8); 64],
     n: usize,
     enabled: bool,
+    /// Interrupts entered (the kick included).
+    irqs: usize,
 }
 
 impl<const HW: bool> Toy<HW> {
@@ -24,11 +26,15 @@ impl<const HW: bool> Toy<HW> {
             log: [(0, 0, 0); 64],
             n: 0,
             enabled: false,
+            irqs: 0,
         }
     }
     fn push(&mut self, step: u8, dir: u8) {
+        self.push_at(self.t.get(), step, dir);
+    }
+    fn push_at(&mut self, tick: u64, step: u8, dir: u8) {
         if self.n < self.log.len() {
-            self.log[self.n] = (self.t.get(), step, dir);
+            self.log[self.n] = (tick, step, dir);
             self.n += 1;
         }
     }
@@ -37,10 +43,7 @@ impl<const HW: bool> Toy<HW> {
 impl<const HW: bool> StepPins for Toy<HW> {
     const ENDS_PULSES: bool = HW;
     fn end_pulse_at(&mut self, at: u32) -> u32 {
-        if self.n < self.log.len() {
-            self.log[self.n] = (u64::from(at), 0, 0xFF);
-            self.n += 1;
-        }
+        self.push_at(u64::from(at), 0, 0xFF);
         at
     }
     fn step_high(&mut self, dir_mask: u8, step_mask: u8) {
@@ -123,63 +126,69 @@ fn run_to<const HW: bool>(late: u64, segments: &[Segment]) -> (Toy<HW>, i32) {
     let mut q = segments.iter().copied();
     let mut pop = || q.next();
     d.on_interrupt(&mut stepper, &mut hw, &rt, &mut pop);
+    hw.irqs += 1;
     assert!(rt.stepping() && hw.enabled);
     for _ in 0..200 {
         let Some(t) = hw.target else { break };
         hw.t.set(hw.t.get().max(t + late));
         d.on_interrupt(&mut stepper, &mut hw, &rt, &mut pop);
+        hw.irqs += 1;
     }
     assert!(!rt.stepping() && !d.is_running());
     (hw, stepper.position()[0])
 }
 
-#[test]
-fn pulses_keep_their_widths_however_late() {
+/// Three steps, however late each interrupt: the direction first (no
+/// step), then rise/fall pairs (a fall logged by `step_low` or, with `HW`,
+/// by `end_pulse_at`, both as (0, 0xFF)), each with its widths.
+fn check_train<const HW: bool>() {
     let segs = [segment(3, 1, true)];
     for late in [0, 1, 3, 7, 15].map(|us| us * US) {
-        let hw = run::<false>(late, &segs);
+        let hw = run::<HW>(late, &segs);
         let log = &hw.log[..hw.n];
-        // Direction first (no step), then rise/fall pairs.
+        assert_eq!(hw.n, 7, "late {late}: {log:?}");
         assert_eq!((log[0].1, log[0].2), (0, 1), "late {late}: {log:?}");
         // `$207` from start (t = 1000) to the direction store, `$200` after it.
         assert!(log[0].0 >= 1000 + 5 * US);
-        let rises: [u64; 3] = core::array::from_fn(|i| log[1 + 2 * i].0);
-        let falls: [u64; 3] = core::array::from_fn(|i| log[2 + 2 * i].0);
-        assert!(rises[0] >= log[0].0 + 3 * US, "late {late}: {log:?}");
-        for i in 0..3 {
-            assert!(
-                falls[i] >= rises[i] + 2 * US,
-                "high time, late {late}: {log:?}"
-            );
-            if i > 0 {
-                assert!(rises[i] >= falls[i - 1] + 2 * US, "low time, late {late}");
-                assert!(rises[i] >= rises[i - 1] + 5 * US, "$201, late {late}");
-            }
-        }
-        assert_eq!(hw.n, 7, "late {late}: {log:?}");
-    }
-}
-
-#[test]
-fn hardware_pulse_ends_take_one_interrupt_per_step() {
-    let segs = [segment(3, 1, true)];
-    for late in [0, 1, 3, 7, 15].map(|us| us * US) {
-        let hw = run::<true>(late, &segs);
-        let log = &hw.log[..hw.n];
-        // The same train as with fall interrupts: direction, then rise and
-        // (hardware) fall pairs, each fall `$0` after its rise was read.
-        assert_eq!((log[0].1, log[0].2), (0, 1), "late {late}: {log:?}");
-        assert_eq!(hw.n, 7, "late {late}: {log:?}");
+        assert!(log[1].0 >= log[0].0 + 3 * US, "late {late}: {log:?}");
         for i in 0..3 {
             let (rise, fall) = (log[1 + 2 * i], log[2 + 2 * i]);
             assert_eq!((rise.1, fall.1, fall.2), (1, 0, 0xFF), "{log:?}");
             assert!(fall.0 >= rise.0 + 2 * US, "high time, late {late}: {log:?}");
             if i > 0 {
-                let before = log[2 * i];
-                assert!(rise.0 >= before.0 + 2 * US, "low time, late {late}");
-                assert!(rise.0 >= log[2 * i - 1].0 + 5 * US, "$201, late {late}");
+                let (last_rise, last_fall) = (log[2 * i - 1], log[2 * i]);
+                assert!(rise.0 >= last_fall.0 + 2 * US, "low time, late {late}");
+                assert!(rise.0 >= last_rise.0 + 5 * US, "$201, late {late}");
             }
         }
+    }
+}
+
+#[test]
+fn pulses_keep_their_widths_however_late() {
+    check_train::<false>();
+}
+
+#[test]
+fn hardware_pulse_ends_take_one_interrupt_per_step() {
+    // The same train as with fall interrupts, each fall `$0` after its
+    // rise was read. On time, three interrupts fewer for the three steps
+    // (kick, direction, three rises, stop: 6 against 9); late, the fall
+    // scheme chains some falls and rises in one handler, and never needs
+    // fewer than the hardware end.
+    check_train::<true>();
+    let segs = [segment(3, 1, true)];
+    for late in [0, 1, 3, 7, 15].map(|us| us * US) {
+        let (dma, irq) = (run::<true>(late, &segs), run::<false>(late, &segs));
+        if late == 0 {
+            assert_eq!((dma.irqs, irq.irqs), (6, 9));
+        }
+        assert!(
+            dma.irqs <= irq.irqs,
+            "late {late}: {} > {}",
+            dma.irqs,
+            irq.irqs
+        );
     }
 }
 
