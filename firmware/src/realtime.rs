@@ -63,12 +63,14 @@ pub struct Realtime {
     running_speed: AtomicU32,
     running_line: AtomicU32,
     running_cut: AtomicU32,
-    /// Which of a segment's switch reasons make the step event read the
-    /// switches (`stepper::SENSE_*`): its own watch always, hard limits
-    /// while they are armed (`$21` on, not homing, not in alarm: decided
-    /// by the controller each pass). One byte, so the event tests both
-    /// with one load; the board's limit interrupts read it too.
-    switch_sense: AtomicU8,
+    /// What makes the step event leave its plain Bresenham path
+    /// (`stepper::SENSE_*`), against the running segment's own reasons:
+    /// reading the switches for the segment's watch (always) and for hard
+    /// limits (while armed: `$21` on, not homing, not in alarm, decided by
+    /// the controller each pass), and a flush (a new generation, until the
+    /// stepper has seen it). One byte, so the event tests all three with
+    /// one load and one AND; the board's limit interrupts read it too.
+    attention: AtomicU8,
 }
 
 impl Default for Realtime {
@@ -100,7 +102,7 @@ impl Realtime {
             running_speed: AtomicU32::new(0),
             running_line: AtomicU32::new(0),
             running_cut: AtomicU32::new(0),
-            switch_sense: AtomicU8::new(crate::stepper::SENSE_WATCH),
+            attention: AtomicU8::new(crate::stepper::SENSE_WATCH),
         }
     }
 
@@ -174,8 +176,22 @@ impl Realtime {
     pub fn generation(&self) -> u32 {
         self.generation.load(Relaxed)
     }
+    /// A new generation, and the step event told to look (after the
+    /// increment: a stepper that clears the flag in between already sees
+    /// the new generation).
     pub(crate) fn bump_generation(&self) -> u32 {
-        self.generation.fetch_add(1, Relaxed).wrapping_add(1)
+        let g = self.generation.fetch_add(1, Relaxed).wrapping_add(1);
+        self.attention
+            .fetch_or(crate::stepper::SENSE_FLUSH, Relaxed);
+        g
+    }
+    /// The stepper looked at the generation: clears the flush flag
+    /// *before* it compares, so a bump after the clear raises it again.
+    pub(crate) fn take_flush(&self) -> bool {
+        self.attention
+            .fetch_and(!crate::stepper::SENSE_FLUSH, Relaxed)
+            & crate::stepper::SENSE_FLUSH
+            != 0
     }
 
     /// Times the stepper ran dry while motion was still going (the planner
@@ -285,21 +301,24 @@ impl Realtime {
     }
     /// Whether a closed limit switch trips now (see the field).
     pub fn limits_armed(&self) -> bool {
-        self.switch_sense() & crate::stepper::SENSE_HARD != 0
+        self.attention() & crate::stepper::SENSE_HARD != 0
     }
+    /// Read-modify-write, not a store: the flush flag shares the byte.
     pub fn set_limits_armed(&self, armed: bool) {
-        use crate::stepper::{SENSE_HARD, SENSE_WATCH};
-        let sense = if armed {
-            SENSE_WATCH | SENSE_HARD
-        } else {
-            SENSE_WATCH
-        };
-        self.switch_sense.store(sense, Relaxed);
+        use crate::stepper::SENSE_HARD;
+        if armed != self.limits_armed() {
+            if armed {
+                self.attention.fetch_or(SENSE_HARD, Relaxed);
+            } else {
+                self.attention.fetch_and(!SENSE_HARD, Relaxed);
+            }
+        }
     }
-    /// The segment reasons that read the switches now (see the field).
+    /// The reasons that take the step event off its plain path now (see
+    /// the field).
     #[inline(always)]
-    pub(crate) fn switch_sense(&self) -> u8 {
-        self.switch_sense.load(Relaxed)
+    pub(crate) fn attention(&self) -> u8 {
+        self.attention.load(Relaxed)
     }
 
     pub(crate) fn take_new_position(&self) -> Option<[i32; AXES]> {
@@ -369,5 +388,31 @@ mod tests {
         assert_eq!(rt.trip(), Trip::Probe);
         assert_eq!(rt.trip_position(), [5; AXES]);
         assert_ne!(rt.generation(), g, "the stepper still stops");
+    }
+
+    #[test]
+    fn a_flush_stops_the_next_event_whatever_the_limits_setting_does() {
+        let rt = Realtime::new();
+        let mut st = Stepper::new(StepConfig::new(&Settings::default(), 1_000_000));
+        let mut queue = [Some(segment(rt.generation()))];
+        let mut pop = || queue.iter_mut().find_map(Option::take);
+        let open = Switches::default();
+        assert!(st.on_event(&rt, &mut pop, || open).ticks > 0);
+        // A stale flag (no new generation) costs a look, not a stop, and
+        // the look clears it.
+        rt.attention.fetch_or(crate::stepper::SENSE_FLUSH, Relaxed);
+        assert!(st.on_event(&rt, &mut pop, || open).ticks > 0);
+        assert_eq!(rt.attention() & crate::stepper::SENSE_FLUSH, 0);
+        let pos = rt.position();
+        // A flush, then the controller arms and disarms hard limits before
+        // the next event: both only touch their own bit of the byte.
+        rt.halt_stepper();
+        rt.set_limits_armed(true);
+        assert!(rt.limits_armed());
+        rt.set_limits_armed(false);
+        assert!(!rt.limits_armed());
+        let ev = st.on_event(&rt, &mut pop, || open);
+        assert_eq!((ev.ticks, ev.step_mask), (0, 0), "no step after the flush");
+        assert_eq!(rt.position(), pos);
     }
 }

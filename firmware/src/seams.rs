@@ -13,10 +13,14 @@
 /// Each call is one store (one BSRR write on STM32), so the axes of an
 /// event change in the same bus cycle and nothing is read-modified-written.
 pub trait StepPins {
-    /// Direction pins of every axis plus a rising edge on the step pins in
-    /// `step_mask`, in ONE store. `step_mask` 0 is a direction change on
-    /// its own (the stepper gives it `$200` before the first step).
-    fn step_high(&mut self, dir_mask: u8, step_mask: u8);
+    /// A rising edge on the step pins in `step_mask` (not 0), in ONE
+    /// store; the direction pins stay as they are. Directions never change
+    /// in a step's own event: the stepper gives them an event of their own
+    /// ([`StepPins::set_directions`]) and `$200` before the first step.
+    fn step_high(&mut self, step_mask: u8);
+    /// The direction pins of every axis, in one store (no change when
+    /// they already are so); the step pins stay low.
+    fn set_directions(&mut self, dir_mask: u8);
     /// Lower all step pins (end of pulse); directions stay.
     fn step_low(&mut self);
     /// Stepper drivers on/off.
@@ -28,12 +32,14 @@ pub trait StepPins {
     /// the pins in a second interrupt ([`StepPins::step_low`]).
     const ENDS_PULSES: bool = false;
     /// With [`StepPins::ENDS_PULSES`]: lower all step pins when the step
-    /// timer reaches `at`, without the CPU. Returns the latest tick by which
-    /// they are low (`at` plus the hardware's worst latency), which the
-    /// driver takes as the fall for the minimum low time and direction
-    /// changes. Called right after the rising store, so `at` is ahead.
-    fn end_pulse_at(&mut self, at: u32) -> u32 {
-        at
+    /// timer reaches `at`, without the CPU. Called right after the rising
+    /// store, so `at` is ahead.
+    fn end_pulse_at(&mut self, _at: u32) {}
+    /// With [`StepPins::ENDS_PULSES`]: the hardware's worst delay, in timer
+    /// ticks, from `at` to the pins being low. The driver takes the fall
+    /// that late for the minimum low time and direction changes.
+    fn pulse_end_latency(&self) -> u32 {
+        0
     }
     /// Limit and probe pin levels (before the `$5`/`$6` inverts). The
     /// driver reads them right after each rising edge of a move that

@@ -132,7 +132,7 @@ const AXIS_GROUPS: [(u16, Kind); 4] = [
 ];
 
 /// `$201`'s maximum, Hz (see its table entry).
-pub const MAX_STEP_RATE_HZ: f32 = 380_000.0;
+pub const MAX_STEP_RATE_HZ: f32 = 450_000.0;
 
 /// burin's own, `$200`–`$208` and `$210` (documented on the [`Settings`]
 /// fields).
@@ -145,8 +145,8 @@ const BURIN: [(u16, Kind); 10] = [
         },
     ),
     // The ceiling follows the step path's measured cost (`cargo xtask
-    // bench-target`: 215 cycles a step with the DMA pulse end, so 446 kHz
-    // would take the whole F411 at 96 MHz and 391 kHz the F401 at 84 MHz);
+    // bench-target`: 184 cycles a step with the DMA pulse end, so 522 kHz
+    // would take the whole F411 at 96 MHz and 456 kHz the F401 at 84 MHz);
     // the next step-path change moves it.
     (
         201,

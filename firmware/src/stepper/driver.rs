@@ -6,10 +6,11 @@
 //! is a rise that also arms the pulse end and schedules the next rise;
 //! otherwise (the QEMU build) two alternating actions:
 //!
-//! - **rise**: one store puts the direction pins and the rising step edges
-//!   of the pending event, the counter is read right after it, the fall is
-//!   scheduled at that *actual* rise time + `$0`, and only then the next
-//!   event is computed ([`Stepper::on_event`]) while the pulse is high;
+//! - **rise**: one store puts the rising step edges of the pending event
+//!   (directions change only in events of their own), the counter is read
+//!   right after it, the fall is scheduled at that *actual* rise time +
+//!   `$0`, and only then the next event is computed ([`Stepper::on_event`])
+//!   while the pulse is high;
 //! - **fall**: the step pins go low, the counter is read, and the next rise
 //!   is scheduled at its planned time, but never before the fall + the
 //!   minimum low time ([`StepConfig::min_low_ticks`]) nor sooner than
@@ -80,6 +81,14 @@ pub struct StepDriver {
     last_fall: u32,
     /// Direction pins as last written (logical).
     dirs: u8,
+    /// Where the hardware ends pulses: ticks from a rise to the latest
+    /// moment its pulse is over (`$0` + the hardware's latency), and the
+    /// shortest rise-to-rise time that leaves both the minimum low time
+    /// after it and `$201` (the larger of the two). Set at each start from
+    /// rest (the stepper's configuration only changes while stopped), so
+    /// the step event adds one number instead of bounding by two.
+    fall_after: u32,
+    rise_gap: u32,
 }
 
 impl Default for StepDriver {
@@ -107,6 +116,8 @@ impl StepDriver {
             last_rise: 0,
             last_fall: 0,
             dirs: 0,
+            fall_after: 0,
+            rise_gap: 0,
         }
     }
 
@@ -244,6 +255,10 @@ impl StepDriver {
         // Long low and long since the last rise: no bound applies.
         self.last_fall = now.wrapping_sub(cfg.min_low_ticks);
         self.last_rise = now.wrapping_sub(cfg.min_period);
+        self.fall_after = cfg.pulse_ticks.saturating_add(hw.pulse_end_latency());
+        self.rise_gap = cfg
+            .min_period
+            .max(self.fall_after.saturating_add(cfg.min_low_ticks));
         self.phase = Phase::Low;
         self.target = self.planned;
         hw.schedule_at(self.target);
@@ -269,35 +284,38 @@ impl StepDriver {
                 return false;
             }
         }
-        hw.step_high(ev.dir_mask, ev.step_mask);
-        let now = hw.now();
         let cfg = &stepper.cfg;
         let mut next = self.planned.wrapping_add(ev.ticks);
         let steps = ev.step_mask != 0;
-        // Directions change only in an event of their own (the stepper's
-        // direction event before a block's first step), never with a step:
-        // a step and its direction in one store would have no setup time.
-        debug_assert!(
-            !steps || ev.dir_mask == self.dirs,
-            "direction changed with a step"
-        );
-        if !steps && ev.dir_mask != self.dirs {
-            self.dirs = ev.dir_mask;
-            next = later(next, now.wrapping_add(cfg.dir_setup_ticks));
-        }
-        self.planned = next;
+        let now;
         if steps {
+            // Directions change only in an event of their own (the
+            // stepper's direction event before a block's first step), never
+            // with a step: a step and its direction in one store would have
+            // no setup time. So a step's store is the step pins alone.
+            debug_assert!(ev.dir_mask == self.dirs, "direction changed with a step");
+            hw.step_high(ev.step_mask);
+            now = hw.now();
             self.last_rise = now;
             if H::ENDS_PULSES {
                 // `now` was read after the store: the pulse lasts at least
                 // `$0` from the moment the pins really rose.
-                self.last_fall = hw.end_pulse_at(now.wrapping_add(cfg.pulse_ticks));
+                hw.end_pulse_at(now.wrapping_add(cfg.pulse_ticks));
+                self.last_fall = now.wrapping_add(self.fall_after);
             } else {
                 self.phase = Phase::High;
                 self.target = now.wrapping_add(cfg.pulse_ticks);
                 hw.schedule_at(self.target);
             }
+        } else {
+            hw.set_directions(ev.dir_mask);
+            now = hw.now();
+            if ev.dir_mask != self.dirs {
+                self.dirs = ev.dir_mask;
+                next = later(next, now.wrapping_add(cfg.dir_setup_ticks));
+            }
         }
+        self.planned = next;
         // One call site, so the inlined stepper exists once here.
         let ev = stepper.on_event(rt, pop, || hw.switches());
         // Field by field: a whole-struct store packs the padding too.
@@ -305,8 +323,13 @@ impl StepDriver {
         self.pending.dir_mask = ev.dir_mask;
         self.pending.step_mask = ev.step_mask;
         if H::ENDS_PULSES && steps {
-            // What the fall handler does in the two-interrupt scheme.
-            self.target = self.rise_target::<H>(&stepper.cfg);
+            // What the fall handler does in the two-interrupt scheme; a
+            // step after a step is `rise_gap` after this rise at the soonest.
+            self.target = if self.pending.step_mask != 0 {
+                later(self.planned, now.wrapping_add(self.rise_gap))
+            } else {
+                self.rise_target::<H>(&stepper.cfg)
+            };
             hw.schedule_at(self.target);
         } else if !steps {
             // A wait or dwell steps nothing, and may last longer than the

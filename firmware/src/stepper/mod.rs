@@ -153,21 +153,26 @@ struct Running {
     moving: bool,
     /// Position change per step of each axis (±1, from the direction).
     delta: [i32; AXES],
-    /// When the event reads the switches: [`SENSE_WATCH`] (this segment
-    /// watches a limit or the probe) and [`SENSE_HARD`] (hard limits apply
-    /// if armed). Zero: a plain move, no read at all.
+    /// What takes this segment's events off the plain path, against
+    /// [`Realtime`]'s attention byte: [`SENSE_WATCH`] (it watches a limit
+    /// or the probe), [`SENSE_HARD`] (hard limits apply if armed) and
+    /// [`SENSE_FLUSH`] (always: a flush stops any segment).
     sense: u8,
 }
 
+/// Read the switches: the segment watches one (homing, probing).
 pub(crate) const SENSE_WATCH: u8 = 1;
+/// Read the switches: hard limits (while armed).
 pub(crate) const SENSE_HARD: u8 = 2;
+/// A new generation the stepper has not looked at yet.
+pub(crate) const SENSE_FLUSH: u8 = 4;
 
 impl Running {
     fn sense(&self) -> u8 {
         let w = self.watch;
         let watch = (self.moving && w.limits != 0) || w.probe != 0;
         let hard = self.moving && !w.homing;
-        (u8::from(watch) * SENSE_WATCH) | (u8::from(hard) * SENSE_HARD)
+        (u8::from(watch) * SENSE_WATCH) | (u8::from(hard) * SENSE_HARD) | SENSE_FLUSH
     }
 }
 
@@ -222,10 +227,16 @@ impl Stepper {
     pub fn line(&self) -> u32 {
         self.run.line
     }
-    /// Whether a segment left the queue since the last call.
+    /// Whether a segment left the queue since the last call. Tested
+    /// before it is cleared: the step event, which nearly always finds it
+    /// false, then stores nothing.
     #[inline(always)]
     pub fn take_popped(&mut self) -> bool {
-        core::mem::take(&mut self.popped)
+        if self.popped {
+            self.popped = false;
+            return true;
+        }
+        false
     }
     pub fn is_idle(&self) -> bool {
         self.left == 0
@@ -322,13 +333,14 @@ impl Stepper {
         sw: impl FnOnce() -> Switches,
     ) -> StepEvent {
         // A halt leaves `left` at 0, so the one test covers it too.
-        if self.left == 0 || self.run.generation != rt.generation() {
+        if self.left == 0 {
             if let Some(ev) = self.next_segment(rt, pop) {
                 return ev;
             }
         }
-        if self.run.sense & rt.switch_sense() != 0 {
-            if let Some(ev) = self.check_switches(rt, sw()) {
+        // A flush or a switch to read: one load, one AND.
+        if self.run.sense & rt.attention() != 0 {
+            if let Some(ev) = self.attend(rt, pop, sw) {
                 return ev;
             }
         }
@@ -400,9 +412,29 @@ impl Stepper {
         None
     }
 
+    /// The attention byte has one of this segment's reasons: a flush
+    /// (the running segment is dropped at once, not at its end), then the
+    /// switches. `Some`: the event to return instead of a step.
+    #[inline(never)]
+    fn attend(
+        &mut self,
+        rt: &Realtime,
+        pop: &mut impl FnMut() -> Option<Segment>,
+        sw: impl FnOnce() -> Switches,
+    ) -> Option<StepEvent> {
+        if rt.take_flush() && self.run.generation != rt.generation() {
+            if let Some(ev) = self.next_segment(rt, pop) {
+                return Some(ev);
+            }
+        }
+        if self.run.sense & rt.attention() & (SENSE_WATCH | SENSE_HARD) != 0 {
+            return self.check_switches(rt, sw());
+        }
+        None
+    }
+
     /// Homing and probe watches and hard limits, on the levels read now.
     /// `Some`: the event to return instead of a step (a trip).
-    #[inline(never)]
     fn check_switches(&mut self, rt: &Realtime, sw: Switches) -> Option<StepEvent> {
         let generation = self.run.generation;
         let watch = self.run.watch;

@@ -135,19 +135,26 @@ pub struct Wired<'a, const HW_FALL: bool> {
 
 impl<const HW_FALL: bool> StepPins for Wired<'_, HW_FALL> {
     const ENDS_PULSES: bool = HW_FALL;
-    fn end_pulse_at(&mut self, at: u32) -> u32 {
+    fn end_pulse_at(&mut self, at: u32) {
         let hw = &mut *self.hw;
         let latency = hw.irq.pulse_end.unwrap_or(0);
         hw.fall_at(hw.ahead(at) + latency);
-        at.wrapping_add(latency as u32)
     }
-    fn step_high(&mut self, dir_mask: u8, step_mask: u8) {
+    fn pulse_end_latency(&self) -> u32 {
+        self.hw.irq.pulse_end.unwrap_or(0) as u32
+    }
+    fn step_high(&mut self, step_mask: u8) {
         let hw = &mut *self.hw;
         let work = hw.irq.rise - hw.irq.entry;
-        hw.store(step_mask, dir_mask, work);
-        if step_mask != 0 {
-            self.world.step(step_mask, dir_mask);
-        }
+        let dir = hw.dir;
+        hw.store(step_mask, dir, work);
+        self.world.step(step_mask, dir);
+    }
+    /// BSRR's direction word leaves the step pins as they are.
+    fn set_directions(&mut self, dir_mask: u8) {
+        let hw = &mut *self.hw;
+        let work = hw.irq.rise - hw.irq.entry;
+        hw.store(hw.step, dir_mask, work);
     }
     fn step_low(&mut self) {
         let hw = &mut *self.hw;

@@ -50,18 +50,48 @@ const PLANNER_BLOCKS: usize = 64;
 /// Step timer rate the stepper is configured with (TIM5 at 96 MHz).
 const TICK_HZ: u32 = 96_000_000;
 
-/// Stand-ins for the step interrupt's registers: GPIOB BSRR and IDR, and
-/// TIM5's SR, CNT, CCR1 and CCR2. Plain RAM words cost the same
-/// instructions as the registers and keep the measurement independent of
-/// QEMU's models. The compiler forms each stand-in's address on its own
-/// (a movw/movt pair), where the board reaches TIM5's registers from one
-/// base: a few instructions more than the chip runs.
-static BSRR: AtomicU32 = AtomicU32::new(0);
-static IDR: AtomicU32 = AtomicU32::new(0xFFFF);
-static CNT: AtomicU32 = AtomicU32::new(0);
-static CCR1: AtomicU32 = AtomicU32::new(0);
-static CCR2: AtomicU32 = AtomicU32::new(0);
-static SR: AtomicU32 = AtomicU32::new(0);
+/// Stand-ins for the step interrupt's registers, at fixed addresses as the
+/// registers are: TIM5's SR, CNT, CCR1 and CCR2 at their offsets in one
+/// block, and a GPIO port's IDR and BSRR. The board reaches TIM5 from one
+/// base address in a register and the port's BSRR through the address the
+/// step port holds ([`BenchHw::bsrr`]); so do these, so the timed code is
+/// the board's instruction for instruction. Plain RAM words, not QEMU's
+/// peripheral models: a load or store costs the same instructions, and
+/// the harness plays the counter. The window is the top 4 KiB of the
+/// machine's RAM, which `memory-f405.x` keeps out of the linker's RAM.
+mod regs {
+    use core::sync::atomic::AtomicU32;
+
+    const TIM: usize = 0x2001_F000;
+    const GPIO: usize = 0x2001_F400;
+
+    #[inline(always)]
+    fn at(addr: usize) -> &'static AtomicU32 {
+        // SAFETY: register level (stand-ins): `addr` is a word-aligned
+        // address inside the 4 KiB of RAM that memory-f405.x reserves for
+        // these registers; nothing else (no static, no stack) lives there,
+        // and every access goes through this atomic view.
+        unsafe { &*(addr as *const AtomicU32) }
+    }
+    pub fn sr() -> &'static AtomicU32 {
+        at(TIM + 0x10)
+    }
+    pub fn cnt() -> &'static AtomicU32 {
+        at(TIM + 0x24)
+    }
+    pub fn ccr1() -> &'static AtomicU32 {
+        at(TIM + 0x34)
+    }
+    pub fn ccr2() -> &'static AtomicU32 {
+        at(TIM + 0x38)
+    }
+    pub fn idr() -> &'static AtomicU32 {
+        at(GPIO + 0x10)
+    }
+    pub fn bsrr() -> &'static AtomicU32 {
+        at(GPIO + 0x18)
+    }
+}
 static RT: Realtime = Realtime::new();
 /// The stand-in port's step-off word (all four step pins low).
 const STEP_OFF: u32 = 0xF << 28;
@@ -76,6 +106,8 @@ static IDR_READS: AtomicU32 = AtomicU32::new(0);
 /// (the QEMU build). `COUNT`: count the peripheral reads instead of
 /// timing (the counting code is not in the timed build).
 struct BenchHw<const HW: bool, const COUNT: bool> {
+    /// The port's BSRR, as `StepPort` holds its address.
+    bsrr: &'static AtomicU32,
     step_on: [u32; 16],
     dirs: [u32; 16],
     step_off: u32,
@@ -85,19 +117,25 @@ impl<const HW: bool, const COUNT: bool> StepPins for BenchHw<HW, COUNT> {
     const ENDS_PULSES: bool = HW;
     /// As `Tim5::end_pulse_at`: one CCR2 store.
     #[inline(always)]
-    fn end_pulse_at(&mut self, at: u32) -> u32 {
-        CCR2.store(at, Relaxed);
-        at.wrapping_add(32)
+    fn end_pulse_at(&mut self, at: u32) {
+        regs::ccr2().store(at, Relaxed);
+    }
+    fn pulse_end_latency(&self) -> u32 {
+        32
     }
     #[inline(always)]
-    fn step_high(&mut self, dir_mask: u8, step_mask: u8) {
-        let word =
-            self.dirs[usize::from(dir_mask & 0xF)] | self.step_on[usize::from(step_mask & 0xF)];
-        BSRR.store(word, Relaxed);
+    fn step_high(&mut self, step_mask: u8) {
+        self.bsrr
+            .store(self.step_on[usize::from(step_mask & 0xF)], Relaxed);
+    }
+    #[inline(always)]
+    fn set_directions(&mut self, dir_mask: u8) {
+        self.bsrr
+            .store(self.dirs[usize::from(dir_mask & 0xF)], Relaxed);
     }
     #[inline(always)]
     fn step_low(&mut self) {
-        BSRR.store(self.step_off, Relaxed);
+        self.bsrr.store(self.step_off, Relaxed);
     }
     fn set_enabled(&mut self, _on: bool) {}
     #[inline(always)]
@@ -105,7 +143,7 @@ impl<const HW: bool, const COUNT: bool> StepPins for BenchHw<HW, COUNT> {
         if COUNT {
             IDR_READS.fetch_add(1, Relaxed);
         }
-        let closed = !IDR.load(Relaxed);
+        let closed = !regs::idr().load(Relaxed);
         Switches {
             limits: ((closed >> 4) & 0b111) as u8,
             probe: closed & (1 << 3) != 0,
@@ -122,12 +160,12 @@ impl<const HW: bool, const COUNT: bool> StepTimer for BenchHw<HW, COUNT> {
         if COUNT {
             CNT_READS.fetch_add(1, Relaxed);
         }
-        CNT.load(Relaxed)
+        regs::cnt().load(Relaxed)
     }
     #[inline(always)]
     fn schedule_at(&mut self, at: u32) {
-        SR.store(!2, Relaxed);
-        CCR1.store(at, Relaxed);
+        regs::sr().store(!2, Relaxed);
+        regs::ccr1().store(at, Relaxed);
     }
     fn start(&mut self) {}
     fn stop(&mut self) {}
@@ -237,11 +275,16 @@ fn step_event<const HW: bool, const COUNT: bool>(
     const CHUNKS: u32 = 20;
     let settings = Settings::default();
     let mut queue: heapless::spsc::Queue<Segment, 4> = heapless::spsc::Queue::new();
+    // Switches open (pulled up); the counter at 0 and the pins low.
+    regs::idr().store(0xFFFF, Relaxed);
+    regs::cnt().store(0, Relaxed);
+    regs::bsrr().store(STEP_OFF, Relaxed);
     let (mut tx, rx) = queue.split();
     let mut task = Task::<HW, COUNT> {
         driver: StepDriver::new(),
         stepper: Stepper::new(StepConfig::new(&settings, TICK_HZ)),
         hw: BenchHw {
+            bsrr: regs::bsrr(),
             step_on: core::array::from_fn(|m| (m as u32) << 12),
             dirs: core::array::from_fn(|m| ((m as u32) << 4) | ((!m as u32 & 0xF) << 20)),
             step_off: STEP_OFF,
@@ -249,11 +292,11 @@ fn step_event<const HW: bool, const COUNT: bool>(
         queue: rx,
     };
     let (mut rise, mut fall, mut rises, mut falls) = (0u32, 0u32, 0u32, 0u32);
-    let is_high = || BSRR.load(Relaxed) & 0xF000 != 0;
+    let is_high = || regs::bsrr().load(Relaxed) & 0xF000 != 0;
     // The DMA's pulse end, outside the timed region.
     let dma_fall = || {
         if HW {
-            BSRR.store(STEP_OFF, Relaxed);
+            regs::bsrr().store(STEP_OFF, Relaxed);
         }
     };
     let (mut cnt_reads, mut idr_reads) = (0u32, 0u32);
@@ -266,7 +309,7 @@ fn step_event<const HW: bool, const COUNT: bool>(
         isr(&mut task);
         let mut high = is_high();
         while !high {
-            CNT.store(CCR1.load(Relaxed), Relaxed);
+            regs::cnt().store(regs::ccr1().load(Relaxed), Relaxed);
             isr(&mut task);
             high = is_high();
         }
@@ -276,7 +319,7 @@ fn step_event<const HW: bool, const COUNT: bool>(
         while task.driver.is_running() && n < 2 * CHUNK {
             let (c0, i0) = (CNT_READS.load(Relaxed), IDR_READS.load(Relaxed));
             let ticks = clock.time(|| {
-                CNT.store(CCR1.load(Relaxed), Relaxed);
+                regs::cnt().store(regs::ccr1().load(Relaxed), Relaxed);
                 isr(&mut task);
             });
             // A fall leaves the step pins low; the slot after the last
@@ -302,7 +345,7 @@ fn step_event<const HW: bool, const COUNT: bool>(
         }
         black_box(task.stepper.position());
     }
-    black_box(BSRR.load(Relaxed) ^ SR.load(Relaxed) ^ CCR2.load(Relaxed));
+    black_box(regs::bsrr().load(Relaxed) ^ regs::sr().load(Relaxed) ^ regs::ccr2().load(Relaxed));
     if COUNT {
         let per = |n: u32| n as f32 / rises.max(1) as f32;
         return (per(cnt_reads), per(idr_reads));

@@ -148,13 +148,16 @@ impl StepPort {
 }
 
 impl StepPins for StepPort {
-    /// Direction pins of every axis (a no-op unless they changed) plus the
-    /// step pins that rise, in ONE store.
+    /// The step pins that rise, in ONE store (the set half of BSRR only
+    /// for them: the direction pins are not in the word).
     #[inline(always)]
-    fn step_high(&mut self, dir_mask: u8, step_mask: u8) {
-        let word =
-            self.dirs[usize::from(dir_mask & 0xF)] | self.step_on[usize::from(step_mask & 0xF)];
-        self.write(word);
+    fn step_high(&mut self, step_mask: u8) {
+        self.write(self.step_on[usize::from(step_mask & 0xF)]);
+    }
+    /// Direction pins of every axis (a no-op unless they changed).
+    #[inline(always)]
+    fn set_directions(&mut self, dir_mask: u8) {
+        self.write(self.dirs[usize::from(dir_mask & 0xF)]);
     }
     #[inline(always)]
     fn step_low(&mut self) {
@@ -335,9 +338,8 @@ impl Tim5 {
 
     /// Arms compare 2: the step pins go low at `at`.
     #[inline(always)]
-    fn end_pulse_at(&mut self, at: u32) -> u32 {
+    fn end_pulse_at(&mut self, at: u32) {
         self.tim.ccr2().write(|w| w.ccr().set(at));
-        at.wrapping_add(DMA_FALL_LATENCY_TICKS)
     }
 }
 
@@ -352,13 +354,21 @@ impl StepPins for StepHw {
     /// timer model has neither compare channels nor DMA.
     const ENDS_PULSES: bool = cfg!(not(feature = "board-qemu"));
     #[inline(always)]
-    fn step_high(&mut self, dir_mask: u8, step_mask: u8) {
-        self.port.step_high(dir_mask, step_mask);
+    fn step_high(&mut self, step_mask: u8) {
+        self.port.step_high(step_mask);
+    }
+    #[inline(always)]
+    fn set_directions(&mut self, dir_mask: u8) {
+        self.port.set_directions(dir_mask);
     }
     #[cfg(not(feature = "board-qemu"))]
     #[inline(always)]
-    fn end_pulse_at(&mut self, at: u32) -> u32 {
-        self.timer.end_pulse_at(at)
+    fn end_pulse_at(&mut self, at: u32) {
+        self.timer.end_pulse_at(at);
+    }
+    #[cfg(not(feature = "board-qemu"))]
+    fn pulse_end_latency(&self) -> u32 {
+        DMA_FALL_LATENCY_TICKS
     }
     #[inline(always)]
     fn step_low(&mut self) {

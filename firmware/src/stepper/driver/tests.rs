@@ -16,6 +16,8 @@ struct Toy<const HW: bool> {
     enabled: bool,
     /// Interrupts entered (the kick included).
     irqs: usize,
+    /// Direction pins as last set.
+    dir: u8,
 }
 
 impl<const HW: bool> Toy<HW> {
@@ -27,6 +29,7 @@ impl<const HW: bool> Toy<HW> {
             n: 0,
             enabled: false,
             irqs: 0,
+            dir: 0,
         }
     }
     fn push(&mut self, step: u8, dir: u8) {
@@ -42,12 +45,15 @@ impl<const HW: bool> Toy<HW> {
 
 impl<const HW: bool> StepPins for Toy<HW> {
     const ENDS_PULSES: bool = HW;
-    fn end_pulse_at(&mut self, at: u32) -> u32 {
+    fn end_pulse_at(&mut self, at: u32) {
         self.push_at(u64::from(at), 0, 0xFF);
-        at
     }
-    fn step_high(&mut self, dir_mask: u8, step_mask: u8) {
-        self.push(step_mask, dir_mask);
+    fn step_high(&mut self, step_mask: u8) {
+        self.push(step_mask, self.dir);
+    }
+    fn set_directions(&mut self, dir_mask: u8) {
+        self.dir = dir_mask;
+        self.push(0, dir_mask);
     }
     fn step_low(&mut self) {
         self.push(0, 0xFF);
