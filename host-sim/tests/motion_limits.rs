@@ -88,6 +88,24 @@ fn collinear_short_blocks_keep_the_limits() {
     check(&machine(), "short", &polyline(pts, 3000.0), true);
 }
 
+/// Corners with the speed ramping into and out of them: Z valleys and
+/// ridges of a 3-D polyline (Z reverses at every vertex, its limit is a
+/// fifth of X's) and square XY corners. The instant velocity change at a
+/// corner comes on top of the ramps unless the speed holds there for it
+/// (`planner::passes`, corner holds): without the holds Z reached 150 %.
+#[test]
+fn corners_between_ramps_keep_the_axis_limits() {
+    let mut src = String::from("G21 G90 G94\nG1 F4000\n");
+    for k in 1..=12 {
+        let z = if k % 2 == 1 { -1.0 } else { 0.0 };
+        src.push_str(&format!("G1 X{} Z{z}\n", k as f64 * 3.0));
+    }
+    for (x, y) in [(36.0, 20.0), (16.0, 20.0), (16.0, 5.0), (30.0, 5.0)] {
+        src.push_str(&format!("G1 X{x} Y{y}\n"));
+    }
+    check(&machine(), "corners", &src, true);
+}
+
 /// The bench-motion jobs (outside the repo; skipped when absent): step
 /// intervals and end positions hold on every one. Corner accelerations
 /// are reported by the bench, not asserted here (see the README).

@@ -107,6 +107,10 @@ pub struct Block {
     pub floor: f32,
     /// Cornering limit at the junction with the previous block, mm/s.
     pub junction: f32,
+    /// The corner at this block's entry, for its hold (`planner::passes`):
+    /// the largest `|Δu_i| / a_i` over the axes, s²/mm (0: no corner to
+    /// hold, as between chords of one curve).
+    pub hold_m: f32,
     pub max_entry: f32,
     pub entry: f32,
     pub watch: Watch,
@@ -132,6 +136,7 @@ impl Block {
         curve_a: 0.0,
         floor: 0.0,
         junction: 0.0,
+        hold_m: 0.0,
         max_entry: 0.0,
         entry: 0.0,
         watch: Watch {
@@ -169,6 +174,10 @@ pub struct Planner<const N: usize> {
     position: [i32; AXES],
     /// The previous block's commanded direction (see `position_mm`).
     prev_unit_mm: [f32; AXES],
+    /// The direction before that (zero after a stop): a corner that takes
+    /// back the one before it (a zigzag, rounding noise) holds only for
+    /// what the two leave together.
+    prev2_unit_mm: [f32; AXES],
     /// Commanded end of the last block pushed, mm: corners are judged on
     /// the commanded geometry, not on the step-rounded one (a chord of a
     /// step or two can look like a 45° corner in steps).
@@ -176,6 +185,8 @@ pub struct Planner<const N: usize> {
     /// Path speed the previous block's junction may carry (0 after a stop).
     prev_nominal: f32,
     prev_length: f32,
+    /// The curve the previous block was a chord of, if any.
+    prev_curve: Option<Curve>,
     feed_pct: f32,
     rapid_pct: f32,
     /// The step timer's clock; 0 until [`set_tick_hz`](Self::set_tick_hz)
@@ -193,9 +204,11 @@ impl<const N: usize> Planner<N> {
             planned: 0,
             position: [0; AXES],
             prev_unit_mm: [0.0; AXES],
+            prev2_unit_mm: [0.0; AXES],
             position_mm: [0.0; AXES],
             prev_nominal: 0.0,
             prev_length: 0.0,
+            prev_curve: None,
             feed_pct: 1.0,
             rapid_pct: 1.0,
             tick_hz: 0,
@@ -261,6 +274,7 @@ impl<const N: usize> Planner<N> {
     pub fn stop_junction(&mut self) {
         self.prev_nominal = 0.0;
         self.prev_unit_mm = [0.0; AXES];
+        self.prev2_unit_mm = [0.0; AXES];
     }
 
     /// Steps for a machine position in mm: rounded from the absolute target,

@@ -2,6 +2,47 @@
 
 use super::*;
 
+/// The time over which opposite velocity changes at two corners cancel
+/// (`Planner::hold_factor`): the window the step trace's acceleration is
+/// judged over (`host_sim::bench::limits`), s.
+pub(super) const CANCEL_WINDOW_S: f32 = 0.05;
+
+/// A hold's length over the first-order one (`v²·m`). A window centred on
+/// the corner weighs the hold's middle most: a hold of `T` seconds frees
+/// `T/W·(1 − T/4W)` of it, not `T/W`, so it must be longer than the
+/// change's own time `T0 = v·m` by `2(1 − sqrt(1 − x))/x` (`x = T0/W`).
+/// With the corner speed capped at `x ≤ 1/2`, 1.17 covers it.
+pub(super) const HOLD_STRETCH: f32 = 1.17;
+
+// Corner holds.
+//
+// A corner passed at speed `v` changes each axis's velocity at once, by
+// `v·|Δu_i|` (`Δu` the change of the unit direction). A stepper has no
+// other way to turn: the step trace shows that change as acceleration,
+// and over any window of time it adds to whatever the ramps on either
+// side do there. Ramping at an axis's full acceleration right up to the
+// corner and away from it again put Z at 160-173 % of its limit on 3-D
+// jobs (over 50 ms windows), at junction-deviation speeds.
+//
+// So the path speed holds at the corner speed for as long as those
+// changes would take at the axes' own accelerations: `max_i v·|Δu_i|/a_i`
+// seconds, `v²·m` mm with `m = max_i |Δu_i|/a_i` (the block's `hold_m` is
+// that times [`HOLD_STRETCH`]), half before the corner and half after. Over any window the velocity
+// change an axis sees is then the ramps' plus the corner's, and the corner's
+// took the time the ramps give up: at most the axis's acceleration. The
+// hold is the length of the arc junction deviation imagines (`v² = a·R`,
+// arc length `R·|Δu|`), a few hundredths of a millimetre at usual corner
+// speeds; on a polyline curve at the curvature limit (`v² ≤ a·l/φ`) it
+// fills the chords, so the turn alone uses the budget there, and below it
+// the ramps get what the turns leave. Chords of one arc or spline hold
+// nothing: `planner::curve` already shares their budget.
+//
+// In the passes a block entered at `u` and left at `w` must fit
+// `u²·m_in/2 + w²·m_out/2 + ramp(u, w)` in its length
+// ([`Shape::reach_held`]); the backward pass also keeps every entry low
+// enough that the block could hold it at both ends, so the forward pass
+// never has to slow a block it already accepted.
+
 impl<const N: usize> Planner<N> {
     /// Cornering speed at the junction with the previous block.
     ///
@@ -44,6 +85,64 @@ impl<const N: usize> Planner<N> {
         let a_curve = if curve { super::curve::C_MAX * a } else { a };
         let v_curve = libm::sqrtf(a_curve * l / phi);
         v_jd.min(v_curve)
+    }
+
+    /// The hold factor `m` of the corner before a block going `unit` for
+    /// `length` mm (see the module's corner holds): 0 after a stop, on a
+    /// straight continuation, and between chords of one curve that turn no
+    /// more than the curve itself does over the chord (twice `l/r`, for
+    /// rounding), where the curve's own budget applies.
+    pub(super) fn hold_factor(
+        &self,
+        unit: &[f32; AXES],
+        length: f32,
+        curve: Option<Curve>,
+        v_corner: f32,
+    ) -> f32 {
+        if self.prev_nominal <= 0.0 {
+            return 0.0;
+        }
+        let cos = unit
+            .iter()
+            .zip(&self.prev_unit_mm)
+            .map(|(a, b)| a * b)
+            .sum::<f32>();
+        if let (Some(c), Some(p)) = (curve, self.prev_curve) {
+            let phi = libm::acosf(crate::num::clamp(cos, -1.0, 1.0));
+            if c == p && c.radius > 0.0 && phi <= 2.0 * length / c.radius {
+                return 0.0;
+            }
+            if c == p && c.radius <= 0.0 {
+                // A spline (radius unknown) has half of the budget for
+                // its turns already.
+                return 0.0;
+            }
+        }
+        let factor = |before: &[f32; AXES]| {
+            let mut m = 0.0f32;
+            for (i, ax) in self.settings.axes.iter().enumerate() {
+                let d = libm::fabsf(unit[i] - before[i]);
+                if d > 1e-6 {
+                    m = m.max(d / ax.max_accel);
+                }
+            }
+            m
+        };
+        let m = factor(&self.prev_unit_mm);
+        if self.prev2_unit_mm.iter().all(|&u| u == 0.0) {
+            return m;
+        }
+        // Two corners whose changes oppose (a zigzag, rounding noise) leave
+        // together only their sum, plus what the block between them keeps
+        // apart: `Δ·t/W` of each over a window `W`, `t` that block's time
+        // at this corner's speed (`v_corner`, its junction limit).
+        let net = factor(&self.prev2_unit_mm);
+        let t = if v_corner.is_finite() && v_corner > 0.0 {
+            self.prev_length / v_corner
+        } else {
+            0.0
+        };
+        m.min(net + m * (t / CANCEL_WINDOW_S).min(1.0))
     }
 
     /// Cosine of the corner between the reversed previous direction and
@@ -99,22 +198,32 @@ impl<const N: usize> Planner<N> {
             self.planned = 0;
         }
         let shape_of = |b: &Block, s: &Settings| b.shape(s);
-        // Backward: the newest block must be able to stop at its end.
+        // Backward: the newest block must be able to stop at its end, and
+        // every block must fit its corners' holds.
         let mut next_entry = 0.0f32;
+        let mut next_m = 0.0f32;
         let mut k = self.len;
         while k > self.planned + 1 {
             k -= 1;
             let st = self.settings;
             let b = self.at(k);
             let new = if b.kind == BlockKind::Line {
+                let both = b.hold_m + next_m;
+                let held = if both > 0.0 {
+                    libm::sqrtf(2.0 * b.length / both)
+                } else {
+                    f32::INFINITY
+                };
                 b.max_entry
-                    .min(shape_of(b, &st).reach(next_entry, b.length))
+                    .min(held)
+                    .min(shape_of(b, &st).reach_held(next_entry, b.length, next_m, b.hold_m))
             } else {
                 0.0
             };
             let unchanged = new == b.entry;
             b.entry = new;
             next_entry = new;
+            next_m = b.hold_m;
             if unchanged && !full && k + 1 < self.len {
                 break;
             }
@@ -123,11 +232,13 @@ impl<const N: usize> Planner<N> {
         for k in self.planned + 1..self.len {
             let st = self.settings;
             let prev = *self.at(k - 1);
+            let b = self.at(k);
             let reach = match prev.kind {
-                BlockKind::Line => shape_of(&prev, &st).reach(prev.entry, prev.length),
+                BlockKind::Line => {
+                    shape_of(&prev, &st).reach_held(prev.entry, prev.length, prev.hold_m, b.hold_m)
+                }
                 BlockKind::Dwell { .. } => 0.0,
             };
-            let b = self.at(k);
             if reach <= b.entry {
                 b.entry = reach;
                 self.planned = k;

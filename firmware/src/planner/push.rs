@@ -1,6 +1,7 @@
 //! Turning one move into a block: step counts, caps, the speed request,
 //! the corner with the block before, and the merge with it.
 
+use super::passes::{CANCEL_WINDOW_S, HOLD_STRETCH};
 use super::*;
 
 impl<const N: usize> Planner<N> {
@@ -116,10 +117,24 @@ impl<const N: usize> Planner<N> {
             (unit, b.length)
         };
         b.junction = self.junction_speed(&unit_mm, len_mm, curve.is_some());
+        let m = self.hold_factor(&unit_mm, len_mm, curve, b.junction);
+        if m > 0.0 {
+            // The corner's own change within half a window (see `passes`).
+            b.junction = b.junction.min(0.5 * CANCEL_WINDOW_S / m);
+            b.hold_m = HOLD_STRETCH * m;
+            // Both halves of the hold fit: the one before the corner in the
+            // previous block, the one after it in this one.
+            let room = self.prev_length.min(len_mm).min(b.length);
+            b.junction = b.junction.min(libm::sqrtf(2.0 * room / b.hold_m));
+        }
         b.max_entry = b.junction.min(b.nominal).min(self.prev_nominal);
         b.entry = if self.len == 0 { 0.0 } else { b.max_entry };
         let merged = b.junction.is_infinite() && self.merge(&b);
+        if !merged {
+            self.prev2_unit_mm = self.prev_unit_mm;
+        }
         self.prev_unit_mm = unit_mm;
+        self.prev_curve = curve;
         self.prev_nominal = b.nominal;
         self.prev_length = if merged {
             self.prev_length + len_mm

@@ -60,6 +60,40 @@ impl Shape {
         lo
     }
 
+    /// The fastest speed at the far end of a block of `len` mm whose near
+    /// end runs at `known`, when each end holds its speed for a corner:
+    /// `known²·m_known/2` mm at the near end, `x²·m_other/2` at the far
+    /// one (`planner::passes` explains the holds). Read forwards it is the
+    /// fastest exit from an entry, backwards the fastest entry that still
+    /// slows to an exit. Below `known` only when the far end cannot even
+    /// hold `known` (the pass the other way then lowers `known`).
+    pub fn reach_held(&self, known: f32, len: f32, m_known: f32, m_other: f32) -> f32 {
+        let v = known;
+        let avail = (len - 0.5 * m_known * v * v).max(0.0);
+        if m_other <= 0.0 {
+            return self.reach(v, avail);
+        }
+        let half = 0.5 * m_other;
+        if half * v * v > avail {
+            return libm::sqrtf(avail / half);
+        }
+        if self.jerk <= 0.0 {
+            // x²·m/2 + (x² − v²)/2a = avail
+            let k = 0.5 / self.accel;
+            return libm::sqrtf((avail + k * v * v) / (half + k));
+        }
+        let (mut lo, mut hi) = (v, self.reach(v, avail));
+        for _ in 0..24 {
+            let mid = 0.5 * (lo + hi);
+            if half * mid * mid + self.dist(v, mid) <= avail {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        lo
+    }
+
     /// Lowest speed reachable when slowing from `v` within `len` mm.
     pub fn reach_down(&self, v: f32, len: f32) -> f32 {
         if self.jerk <= 0.0 {
@@ -153,11 +187,15 @@ pub struct Phase {
     pub t0: f32,
 }
 
-/// Speed over the rest of a block: up to three phases (change to the peak,
-/// cruise, change to the exit speed).
+/// Phases of a [`Profile`].
+pub const PHASES: usize = 5;
+
+/// Speed over the rest of a block: up to five phases (the entry corner's
+/// hold, change to the peak, cruise, change to the exit speed, the exit
+/// corner's hold).
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct Profile {
-    pub phases: [Phase; 3],
+    pub phases: [Phase; PHASES],
 }
 
 impl Profile {
@@ -173,19 +211,25 @@ impl Profile {
             dist: shape.dist(a, b),
             t0: 0.0,
         };
+        // A phase of no length at speed `v` (keeps the boundary speeds).
+        let at = |v: f32| Phase {
+            v0: v,
+            v1: v,
+            ..Phase::default()
+        };
         let mut v1 = v1.min(vn);
         // Entry too fast to reach the exit speed: slow down as much as possible.
         if v0 > v1 && shape.dist(v0, v1) > len {
             v1 = shape.reach_down(v0, len);
             return Profile {
-                phases: [ramp(v0, v1), Phase::default(), Phase::default()],
+                phases: [at(v0), ramp(v0, v1), at(v1), at(v1), at(v1)],
             };
         }
         // Entry too slow to reach the exit speed: speed up as much as possible.
         if v1 > v0 && shape.dist(v0, v1) > len {
             v1 = shape.reach(v0, len).min(v1);
             return Profile {
-                phases: [ramp(v0, v1), Phase::default(), Phase::default()],
+                phases: [at(v0), ramp(v0, v1), at(v1), at(v1), at(v1)],
             };
         }
         let (up, down) = (shape.dist(v0, vn), shape.dist(vn, v1));
@@ -220,7 +264,38 @@ impl Profile {
             dist: cruise_len,
             t0: 0.0,
         };
-        Profile { phases: [a, b, c] }
+        Profile {
+            phases: [at(v0), a, b, c, at(v1)],
+        }
+    }
+
+    /// [`Profile::plan`] with the corners' holds: `hold0` mm at `v0` first
+    /// and `hold1` mm at the exit speed last (each cut to what `len`
+    /// leaves), the speed changes in between.
+    pub fn plan_held(
+        shape: &Shape,
+        v0: f32,
+        vn: f32,
+        v1: f32,
+        len: f32,
+        hold0: f32,
+        hold1: f32,
+    ) -> Profile {
+        let len = len.max(0.0);
+        let hold0 = hold0.max(0.0).min(len);
+        let hold1 = hold1.max(0.0).min(len - hold0);
+        let mut p = Profile::plan(shape, v0, vn, v1, len - hold0 - hold1);
+        let cruise = |v: f32, dist: f32| Phase {
+            v0: v,
+            v1: v,
+            time: if dist > 0.0 { dist / v.max(1e-6) } else { 0.0 },
+            dist,
+            t0: 0.0,
+        };
+        let exit = p.exit_speed();
+        p.phases[0] = cruise(v0, hold0);
+        p.phases[PHASES - 1] = cruise(exit, hold1);
+        p
     }
 
     pub fn total_dist(&self) -> f32 {
@@ -232,6 +307,6 @@ impl Profile {
             .iter()
             .rev()
             .find(|p| p.time > 0.0)
-            .map_or(self.phases[0].v1, |p| p.v1)
+            .map_or(self.phases[PHASES - 1].v1, |p| p.v1)
     }
 }

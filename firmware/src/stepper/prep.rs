@@ -52,6 +52,9 @@ pub struct Preparer {
     s_phase0: f32,
     profile_exit: f32,
     profile_nominal: f32,
+    /// Where the entry corner's hold ends, mm into the block
+    /// (`planner::passes`).
+    hold_end: f32,
     tick_carry: f32,
     /// Profile time walked past the last step handed out, s: the next
     /// segment's steps are timed from that step's instant.
@@ -95,6 +98,7 @@ impl Preparer {
             s_phase0: 0.0,
             profile_exit: 0.0,
             profile_nominal: 0.0,
+            hold_end: 0.0,
             tick_carry: 0.0,
             since_step: 0.0,
             dwell_left: 0,
@@ -152,7 +156,7 @@ impl Preparer {
     /// Bounded work: each pass of the loop pushes a segment or ends it, so
     /// at most the queue's free slots; each segment costs at most one
     /// planner block per block finished without a step (a ring of `N`) and
-    /// [`MAX_WALKS_PER_SEGMENT`] profile walk steps of at most 3 phases.
+    /// [`MAX_WALKS_PER_SEGMENT`] profile walk steps of at most 5 phases.
     ///
     /// A limit or e-stop interrupt may preempt this at any point: it records
     /// the trip, then bumps the generation. Taking the generation first and
@@ -201,6 +205,14 @@ impl Preparer {
         }
     }
 
+    /// The exit corner's hold factor (0 when motion stops there).
+    fn exit_hold_m<const N: usize>(pl: &Planner<N>) -> f32 {
+        match pl.block(1) {
+            Some(b) if b.kind == BlockKind::Line => b.hold_m,
+            _ => 0.0,
+        }
+    }
+
     fn set_profile(&mut self, p: Profile) {
         self.pshape = self.shape();
         self.profile = p;
@@ -212,12 +224,14 @@ impl Preparer {
     fn replan<const N: usize>(&mut self, pl: &Planner<N>) {
         let Some(b) = self.block else { return };
         let exit = Self::exit_target(pl);
-        let p = Profile::plan(
+        let p = Profile::plan_held(
             &self.shape(),
             self.v,
             b.nominal,
             exit,
             b.length - self.s_done,
+            self.hold_end - self.s_done,
+            0.5 * exit * exit * Self::exit_hold_m(pl),
         );
         self.profile_exit = exit;
         self.profile_nominal = b.nominal;
@@ -244,6 +258,7 @@ impl Preparer {
                 // block may not have reached this one's (lower) planned
                 // entry, and cutting the speed here would be a jump.
                 self.v = self.v.min(b.junction.min(b.cap));
+                self.hold_end = 0.5 * self.v * self.v * b.hold_m;
                 if self.hold == Hold::Decelerating {
                     self.plan_hold();
                 } else {

@@ -31,6 +31,9 @@ pub struct TraceLimits {
     pub peak_vel: [f64; AXES],
     /// Peak |acceleration| per axis over the windows, mm/s².
     pub peak_acc: [f64; AXES],
+    /// Where each peak acceleration was: the middle of its two windows,
+    /// in timer ticks (the trace's clock).
+    pub peak_acc_tick: [u64; AXES],
     /// Step intervals shorter than the axis' rate limit allows, per axis.
     pub short_intervals: [u64; AXES],
     /// The shortest step interval seen per axis, ticks.
@@ -98,7 +101,11 @@ impl LimitMeter {
             for i in 0..AXES {
                 let d2 = (x2[i] - 2 * x1[i] + x0[i]) as f64;
                 let a = d2 / self.steps_per_mm[i] / (wt * wt);
-                self.out.peak_acc[i] = self.out.peak_acc[i].max(a.abs());
+                if a.abs() > self.out.peak_acc[i] {
+                    self.out.peak_acc[i] = a.abs();
+                    let back = self.w as u64 * self.grid_ticks;
+                    self.out.peak_acc_tick[i] = self.next_grid.saturating_sub(back);
+                }
             }
         }
     }

@@ -1,6 +1,7 @@
 //! Feed hold and motion cancel (probe contact): ramp down along the path.
 
 use super::{Hold, Preparer};
+use crate::planner::ramp::PHASES;
 use crate::planner::{Phase, Profile};
 
 impl Preparer {
@@ -49,7 +50,7 @@ impl Preparer {
         let sh = self.shape();
         let a = if sh.jerk > 0.0 { self.accel_now() } else { 0.0 };
         let zero = Phase::default();
-        let mut phases = [zero; 3];
+        let mut phases = [zero; PHASES];
         let mut v = self.v;
         let mut k = 0;
         if libm::fabsf(a) > 1e-3 {
@@ -81,7 +82,7 @@ impl Preparer {
     pub(super) fn can_replan(&self) -> bool {
         self.settings.profile == crate::settings::Profile::Trapezoid
             || self.tau == 0.0
-            || self.phase >= 3
+            || self.phase >= PHASES
             || self
                 .profile
                 .phases

@@ -23,6 +23,7 @@
 //!   at the timer's reach, so only slow ramps get there.
 
 use super::{Preparer, DWELL_CHUNK_S, SEGMENT_S};
+use crate::planner::ramp::PHASES;
 use crate::planner::Block;
 use crate::realtime::Realtime;
 use crate::stepper::{Segment, MAX_AMASS};
@@ -61,11 +62,11 @@ impl Preparer {
     }
 
     /// Walk the profile for `dt` seconds; returns the time actually walked
-    /// and whether the profile ended. The loop crosses at most the three
-    /// phases.
+    /// and whether the profile ended. The loop crosses at most the
+    /// [`PHASES`] phases.
     pub(super) fn advance(&mut self, mut dt: f32) -> (f32, bool) {
         let mut used = 0.0;
-        while dt > 0.0 && self.phase < 3 {
+        while dt > 0.0 && self.phase < PHASES {
             let ph = self.profile.phases[self.phase];
             let rem = ph.time - self.tau;
             if dt < rem {
@@ -80,7 +81,7 @@ impl Preparer {
                 self.tau = 0.0;
             }
         }
-        if self.phase < 3 {
+        if self.phase < PHASES {
             let ph = self.profile.phases[self.phase];
             let (v, s) = if ph.v0 == ph.v1 {
                 (ph.v0, ph.v0 * self.tau)
