@@ -2,9 +2,9 @@
 //! `cargo xtask bench-motion` measures them (`host_sim::bench::limits`):
 //! no single step interval below an axis' rate limit (`$110`… and `$201`,
 //! one timer tick of slack), every job ends exactly on its commanded
-//! position in steps, and, on jobs that turn only along curves and
-//! straight through, no axis accelerates more than 5 % over its limit over
-//! 50 ms windows. No timings: speed is a bench figure.
+//! position in steps, and no axis accelerates more than 5 % over its
+//! limit over 50 ms windows, at corners too. No timings: speed is a bench
+//! figure.
 
 use host_sim::bench::{axis_limits, run_job, JobFigures};
 use host_sim::config::MachineConfig;
@@ -15,7 +15,7 @@ fn machine() -> MachineConfig {
     MachineConfig::load(p).unwrap()
 }
 
-fn check(cfg: &MachineConfig, name: &str, src: &str, accel: bool) -> JobFigures {
+fn check(cfg: &MachineConfig, name: &str, src: &str) -> JobFigures {
     let f = run_job(cfg, src);
     assert!(
         f.summary.errors.is_empty(),
@@ -39,14 +39,12 @@ fn check(cfg: &MachineConfig, name: &str, src: &str, accel: bool) -> JobFigures 
             l.peak_vel[i],
             vmax[i]
         );
-        if accel {
-            assert!(
-                l.peak_acc[i] <= amax[i] * 1.05,
-                "{name}: axis {i} at {:.1} mm/s², limit {:.1}",
-                l.peak_acc[i],
-                amax[i]
-            );
-        }
+        assert!(
+            l.peak_acc[i] <= amax[i] * 1.05,
+            "{name}: axis {i} at {:.1} mm/s², limit {:.1}",
+            l.peak_acc[i],
+            amax[i]
+        );
     }
     f
 }
@@ -63,7 +61,7 @@ fn polyline(pts: impl Iterator<Item = (f64, f64)>, feed: f64) -> String {
 fn near_diagonal_moves_at_the_rate_limit_keep_every_step_interval() {
     let src =
         "G21 G90\nG1 X100 Y95 F20000\nG1 X0 Y3\nG0 X-80 Y-76\nG0 X0 Y0\nG4 P0\nG0 Z2\nG0 Z0\n";
-    check(&machine(), "diagonal", src, true);
+    check(&machine(), "diagonal", src);
 }
 
 #[test]
@@ -73,19 +71,19 @@ fn dense_g1_circle_keeps_the_limits() {
         let t = k as f64 / n as f64 * std::f64::consts::TAU;
         (10.0 * t.cos() - 10.0, 10.0 * t.sin())
     });
-    check(&machine(), "g1-circle", &polyline(pts, 5000.0), true);
+    check(&machine(), "g1-circle", &polyline(pts, 5000.0));
 }
 
 #[test]
 fn small_arcs_and_helices_keep_the_limits() {
     let src = "G21 G90 G17\nG1 X2 F3000\nG2 X2 Y0 I-2 J0\nG3 X2 Y0 I-2 J0 Z-1\nG2 X2 Y0 I-1 J0 Z-2\nG1 X20\nG2 X20 Y0 I-8 J0\nG0 X0 Y0 Z0\n";
-    check(&machine(), "arcs", src, true);
+    check(&machine(), "arcs", src);
 }
 
 #[test]
 fn collinear_short_blocks_keep_the_limits() {
     let pts = (1..=400).map(|k| (k as f64 * 0.025, k as f64 * 0.0125));
-    check(&machine(), "short", &polyline(pts, 3000.0), true);
+    check(&machine(), "short", &polyline(pts, 3000.0));
 }
 
 /// Corners with the speed ramping into and out of them: Z valleys and
@@ -103,12 +101,25 @@ fn corners_between_ramps_keep_the_axis_limits() {
     for (x, y) in [(36.0, 20.0), (16.0, 20.0), (16.0, 5.0), (30.0, 5.0)] {
         src.push_str(&format!("G1 X{x} Y{y}\n"));
     }
-    check(&machine(), "corners", &src, true);
+    check(&machine(), "corners", &src);
+}
+
+/// A helix that ends climbing at its feed into a move down in Z (from
+/// linuxcnc/tort.ngc). The corner's hold costs more than a stop would
+/// (`m > 1/a`), so the chord before it must be entered slower than the
+/// incremental replan had already settled: before the backward pass could
+/// lower settled entries, that chord kept its speed and Z reached 112 %.
+#[test]
+fn a_helix_into_a_plunge_slows_the_chord_before_the_corner() {
+    let src = "G21\nG0 X6.894910 Y26.787653 Z29.282038\nF690\n\
+               G17 G2 I-4.330127 J2.500000 X3.858878 Y24.458024 Z31.282038\n\
+               G1 X0 Y0 Z20\n";
+    check(&machine(), "helix-plunge", src);
 }
 
 /// The bench-motion jobs (outside the repo; skipped when absent): step
-/// intervals and end positions hold on every one. Corner accelerations
-/// are reported by the bench, not asserted here (see the README).
+/// intervals, end positions and the per-axis acceleration (≤ 105 % over
+/// 50 ms windows, corners included) hold on every one.
 #[test]
 fn bench_motion_jobs_keep_step_intervals_and_end_exactly() {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/bench-motion");
@@ -125,7 +136,7 @@ fn bench_motion_jobs_keep_step_intervals_and_end_exactly() {
             continue;
         }
         let src = std::fs::read_to_string(&p).unwrap();
-        check(&cfg, &p.display().to_string(), &src, false);
+        check(&cfg, &p.display().to_string(), &src);
         ran += 1;
     }
     assert!(ran > 0);

@@ -129,7 +129,9 @@ impl<const N: usize> Planner<N> {
             m
         };
         let m = factor(&self.prev_unit_mm);
-        if self.prev2_unit_mm.iter().all(|&u| u == 0.0) {
+        // After a chord the turn before this corner was the curve's own
+        // (budgeted there), not a change this one could take back.
+        if self.prev_curve.is_some() || self.prev2_unit_mm.iter().all(|&u| u == 0.0) {
             return m;
         }
         // Two corners whose changes oppose (a zigzag, rounding noise) leave
@@ -199,15 +201,23 @@ impl<const N: usize> Planner<N> {
         }
         let shape_of = |b: &Block, s: &Settings| b.shape(s);
         // Backward: the newest block must be able to stop at its end, and
-        // every block must fit its corners' holds.
+        // every block must fit its corners' holds. Appending a block never
+        // lowers an entry without holds (the block before it was planned to
+        // stop, which is the most an exit can ask). With them it can: a
+        // corner whose hold costs more distance than stopping would
+        // (`m > 1/a`) lowers the entry of the block before it. So the pass
+        // may go on below `planned`, only lowering there, and stops at the
+        // first entry that does not change.
+        let planned = self.planned;
+        let mut lowered = None;
         let mut next_entry = 0.0f32;
         let mut next_m = 0.0f32;
         let mut k = self.len;
-        while k > self.planned + 1 {
+        while k > 1 {
             k -= 1;
             let st = self.settings;
             let b = self.at(k);
-            let new = if b.kind == BlockKind::Line {
+            let mut new = if b.kind == BlockKind::Line {
                 let both = b.hold_m + next_m;
                 let held = if both > 0.0 {
                     libm::sqrtf(2.0 * b.length / both)
@@ -220,13 +230,22 @@ impl<const N: usize> Planner<N> {
             } else {
                 0.0
             };
+            if k <= planned {
+                new = new.min(b.entry);
+                if new != b.entry {
+                    lowered = Some(k);
+                }
+            }
             let unchanged = new == b.entry;
             b.entry = new;
             next_entry = new;
             next_m = b.hold_m;
-            if unchanged && !full && k + 1 < self.len {
+            if unchanged && (k <= planned || (!full && k + 1 < self.len)) {
                 break;
             }
+        }
+        if let Some(k) = lowered {
+            self.planned = k - 1;
         }
         // Forward: no block may be entered faster than the previous can reach.
         for k in self.planned + 1..self.len {
