@@ -141,3 +141,37 @@ fn bench_motion_jobs_keep_step_intervals_and_end_exactly() {
     }
     assert!(ran > 0);
 }
+
+/// The same jobs with S-curve ramps: the limits hold and no job crawls
+/// (at most 3× its trapezoid bound; the worst is circle_small at 2.1×).
+/// An exit hold planned for a corner the ramp could not reach ran at a
+/// near-zero speed: Cereal took 107,863 s and stellabee 29,860 s.
+#[test]
+fn bench_motion_jobs_in_s_curve_mode_keep_the_limits_and_their_pace() {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/bench-motion");
+    let Ok(rd) = std::fs::read_dir(&dir) else {
+        println!("{}: not found, skipped", dir.display());
+        return;
+    };
+    let mut cfg = machine();
+    cfg.settings.profile = burin::settings::Profile::SCurve;
+    let mut ran = 0;
+    for e in rd.flatten() {
+        let p = e.path();
+        let ext = p.extension().and_then(|x| x.to_str()).unwrap_or("");
+        if !matches!(ext, "ngc" | "nc" | "gcode") {
+            continue;
+        }
+        let src = std::fs::read_to_string(&p).unwrap();
+        let f = check(&cfg, &p.display().to_string(), &src);
+        assert!(
+            f.time_s <= 3.0 * f.bound_s,
+            "{}: {:.2} s against a bound of {:.2} s",
+            p.display(),
+            f.time_s,
+            f.bound_s
+        );
+        ran += 1;
+    }
+    assert!(ran > 0);
+}

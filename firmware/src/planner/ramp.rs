@@ -270,8 +270,12 @@ impl Profile {
     }
 
     /// [`Profile::plan`] with the corners' holds: `hold0` mm at `v0` first
-    /// and `hold1` mm at the exit speed last (each cut to what `len`
-    /// leaves), the speed changes in between.
+    /// (cut to what `len` leaves), and at the end the exit corner's hold
+    /// for the speed the block really leaves at, `x²·m1/2` mm at `x`.
+    /// Planned for the asked exit `v1`; when the ramp cannot reach it (an
+    /// entry slower than planned), the hold shrinks to the slower corner
+    /// and the ramp gets the rest, so a hold never crawls: its time is at
+    /// most `x·m1/2` (it took 10⁴ s at a near-zero exit speed).
     pub fn plan_held(
         shape: &Shape,
         v0: f32,
@@ -279,12 +283,19 @@ impl Profile {
         v1: f32,
         len: f32,
         hold0: f32,
-        hold1: f32,
+        m1: f32,
     ) -> Profile {
         let len = len.max(0.0);
         let hold0 = hold0.max(0.0).min(len);
-        let hold1 = hold1.max(0.0).min(len - hold0);
-        let mut p = Profile::plan(shape, v0, vn, v1, len - hold0 - hold1);
+        let rest = len - hold0;
+        let target = v1.min(vn).max(0.0);
+        let mut hold1 = (0.5 * target * target * m1.max(0.0)).min(rest);
+        let mut p = Profile::plan(shape, v0, vn, v1, rest - hold1);
+        let exit = p.exit_speed();
+        if hold1 > 0.0 && exit < target {
+            hold1 = (0.5 * exit * exit * m1).min(rest);
+            p = Profile::plan(shape, v0, vn, v1, rest - hold1);
+        }
         let cruise = |v: f32, dist: f32| Phase {
             v0: v,
             v1: v,

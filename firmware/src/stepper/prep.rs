@@ -231,7 +231,7 @@ impl Preparer {
             exit,
             b.length - self.s_done,
             self.hold_end - self.s_done,
-            0.5 * exit * exit * Self::exit_hold_m(pl),
+            Self::exit_hold_m(pl),
         );
         self.profile_exit = exit;
         self.profile_nominal = b.nominal;
