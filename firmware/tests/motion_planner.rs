@@ -128,6 +128,38 @@ fn profile_math_consistent() {
     }
 }
 
+/// A block already slowing to stop when its exit corner becomes known,
+/// and whose hold costs more than stopping (`m > 1/a`): it cannot come
+/// down to the corner speed and still hold it, so it leaves at the fastest
+/// corner it can hold (here, at a stop: the stop was planned to the end),
+/// never above the asked exit. It left at 6.0 mm/s against 3.95 before.
+#[test]
+fn a_late_exit_hold_slows_the_block_instead_of_arriving_fast() {
+    for jerk in [0.0f32, 5000.0] {
+        let sh = Shape { accel: 316.0, jerk };
+        let v0 = 23.4;
+        // Trapezoid: a hair short of the stop, as rounding leaves it (it
+        // stops as soon as it can). An S ramp cut short ends far above
+        // zero (its speed falls as t² at the end), so give it the stop.
+        let short = if jerk > 0.0 { 1.0001 } else { 0.999 };
+        let rest = sh.dist(v0, 0.0) * short;
+        let m1 = 0.0074;
+        let p = Profile::plan_held(&sh, v0, 52.7, 3.95, rest, 0.0, m1);
+        assert!(p.exit_speed() <= 3.95, "{jerk}: exit {}", p.exit_speed());
+        assert!((p.total_dist() - rest).abs() < 1e-3, "{}", p.total_dist());
+        assert!(p.phases[4].dist < 1e-4, "{:?}", p.phases[4]);
+        // With room for the hold, the asked corner speed and its hold.
+        let room = sh.dist(v0, 3.95) + 0.5 * 3.95 * 3.95 * m1 + 0.5;
+        let p = Profile::plan_held(&sh, v0, 52.7, 3.95, room, 0.0, m1);
+        assert!((p.exit_speed() - 3.95).abs() < 1e-3, "{}", p.exit_speed());
+        let hold = p.phases[4];
+        assert!(
+            (hold.dist - 0.5 * 3.95 * 3.95 * m1).abs() < 1e-4,
+            "{hold:?}"
+        );
+    }
+}
+
 /// Run the planner-side and the stepper by hand (no host-sim) and count steps.
 fn run_steps(settings: Settings, moves: &[[f32; 4]]) -> ([i32; 4], [u32; 4], u8) {
     let rt = Realtime::new();

@@ -6,6 +6,7 @@
 //! limit over 50 ms windows, at corners too. No timings: speed is a bench
 //! figure.
 
+use burin::settings::Profile;
 use host_sim::bench::{axis_limits, run_job, JobFigures};
 use host_sim::config::MachineConfig;
 use std::path::PathBuf;
@@ -154,7 +155,7 @@ fn bench_motion_jobs_in_s_curve_mode_keep_the_limits_and_their_pace() {
         return;
     };
     let mut cfg = machine();
-    cfg.settings.profile = burin::settings::Profile::SCurve;
+    cfg.settings.profile = Profile::SCurve;
     let mut ran = 0;
     for e in rd.flatten() {
         let p = e.path();
@@ -174,4 +175,37 @@ fn bench_motion_jobs_in_s_curve_mode_keep_the_limits_and_their_pace() {
         ran += 1;
     }
     assert!(ran > 0);
+}
+
+/// Corners and a helix into a plunge streamed over slow links, so blocks
+/// arrive one by one while the one before them already runs: the planner
+/// then settles entries before the corner after them is known, and a hold
+/// that costs more than stopping lowers a settled entry
+/// (`planner::passes`): the running block, already slowing to stop, then
+/// cannot come down to the corner speed and still hold it, and arriving
+/// fast cut the speed at the corner (Z at 122 % at 200 B/s). It now slows
+/// to the fastest corner it can hold (`Profile::plan_held`).
+#[test]
+fn corners_streamed_block_by_block_keep_the_axis_limits() {
+    let mut corners = String::from("G21 G90 G94\nG1 F4000\n");
+    for k in 1..=12 {
+        let z = if k % 2 == 1 { -1.0 } else { 0.0 };
+        corners.push_str(&format!("G1 X{} Z{z}\n", k as f64 * 3.0));
+    }
+    for (x, y) in [(36.0, 20.0), (16.0, 20.0), (16.0, 5.0), (30.0, 5.0)] {
+        corners.push_str(&format!("G1 X{x} Y{y}\n"));
+    }
+    let helix = "G21\nG0 X6.894910 Y26.787653 Z29.282038\nF690\n\
+                 G17 G2 I-4.330127 J2.500000 X3.858878 Y24.458024 Z31.282038\n\
+                 G1 X0 Y0 Z20\nG1 X3 Y1 Z19\nG0 Z25\nG1 X0 Y4 Z20 F900\n";
+    for profile in [Profile::Trapezoid, Profile::SCurve] {
+        for rate in [100, 200, 300, 600, 2_000, 11_520] {
+            let mut cfg = machine();
+            cfg.settings.profile = profile;
+            cfg.host.link_bytes_per_s = rate;
+            let at = format!("at {rate} B/s, {profile:?}");
+            check(&cfg, &format!("corners {at}"), &corners);
+            check(&cfg, &format!("helix-plunge {at}"), helix);
+        }
+    }
 }

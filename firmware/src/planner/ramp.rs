@@ -275,7 +275,9 @@ impl Profile {
     /// Planned for the asked exit `v1`; when the ramp cannot reach it (an
     /// entry slower than planned), the hold shrinks to the slower corner
     /// and the ramp gets the rest, so a hold never crawls: its time is at
-    /// most `x·m1/2` (it took 10⁴ s at a near-zero exit speed).
+    /// most `x·m1/2` (it took 10⁴ s at a near-zero exit speed). When the
+    /// ramp cannot come down to `v1` and still hold it, the block leaves
+    /// slower than asked, at the fastest corner speed it can hold.
     pub fn plan_held(
         shape: &Shape,
         v0: f32,
@@ -295,6 +297,31 @@ impl Profile {
         if hold1 > 0.0 && exit < target {
             hold1 = (0.5 * exit * exit * m1).min(rest);
             p = Profile::plan(shape, v0, vn, v1, rest - hold1);
+        } else if hold1 > 0.0 && exit > target * (1.0 + 1e-4) {
+            // Too fast to come down to the corner and still hold it: the
+            // exit became known late (a starved planner), when the block
+            // was already slowing to stop at its end, and the hold costs
+            // more than stopping does (`m > 1/a`). Arriving above the
+            // corner speed would be a jump at the corner; a slower corner
+            // holds for less, so slow further, to a stop if need be (a
+            // stop always fits: it was planned). Entering the next block
+            // slower than planned is always safe.
+            // (A stop planned to end right here may miss by rounding:
+            // then it stops as soon as it can, with no hold.)
+            let fits = |x: f32| shape.dist(v0, x) + 0.5 * x * x * m1 <= rest;
+            let (mut lo, mut hi) = (0.0f32, target);
+            if fits(0.0) {
+                for _ in 0..24 {
+                    let mid = 0.5 * (lo + hi);
+                    if fits(mid) {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+            }
+            hold1 = (0.5 * lo * lo * m1).min(rest);
+            p = Profile::plan(shape, v0, vn, lo, rest - hold1);
         }
         let cruise = |v: f32, dist: f32| Phase {
             v0: v,
