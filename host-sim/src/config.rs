@@ -63,15 +63,16 @@ impl HostModel {
     };
 }
 
-/// The measured on-target costs (`cargo xtask bench-target`: 2422
-/// instructions per parsed line, 2915 per planned block) at 96 MHz and one
-/// instruction per cycle: 25.2 µs and 30.4 µs. The link is instant: a job
-/// file can be sent at any rate, so its time is not the controller's.
+/// The measured on-target costs (`cargo xtask bench-target`: 2,247
+/// instructions per parsed line, 6,181 per planned block with the corner
+/// holds and their passes) at 96 MHz and the step path's assumed 1.3
+/// cycles per instruction: 30.4 µs and 83.7 µs. The link is instant: a
+/// job file can be sent at any rate, so its time is not the controller's.
 impl Default for HostModel {
     fn default() -> Self {
         HostModel {
-            line_ns: 25_229,
-            block_ns: 30_365,
+            line_ns: 30_428,
+            block_ns: 83_701,
             ..HostModel::INSTANT
         }
     }
