@@ -29,6 +29,9 @@ impl SegmentSink for Preempted<'_> {
     fn is_empty(&self) -> bool {
         self.queue.is_empty()
     }
+    fn len(&self) -> usize {
+        self.queue.len()
+    }
 }
 
 fn long_move(rt: &Realtime) -> Machine<16> {

@@ -7,6 +7,7 @@
 //! the resume sat behind; `tests/data/pty/hold-ends-past-a-step.trace`).
 mod common;
 use burin::command::{Command, Feed};
+use burin::stepper::prep::{HORIZON_S, MIN_QUEUED};
 use common::*;
 use host_sim::engine::Input;
 use proptest::prelude::*;
@@ -40,14 +41,18 @@ proptest! {
         let t_hold = at * t_free;
         let a_min = cfg.settings.axes.iter().map(|a| a.max_accel).fold(f32::MAX, f32::min) as f64;
         let v_max = feed as f64 / 60.0;
-        // Segments already queued still run: up to SEGMENT_SLOTS of them,
-        // each at least 2 ms or one step of the dominant axis.
+        // Segments already queued still run: the preparer runs HORIZON_S
+        // ahead (at least MIN_QUEUED segments), so at most that plus the
+        // segment that crossed it and the one running, each at least 2 ms
+        // or one step of the dominant axis. (All 16 slots ran before:
+        // 0.6 s at 20 mm/min on 80 steps/mm.)
         let d = [dx, dy, dz];
         let len = d.iter().map(|v| (*v as f64).powi(2)).sum::<f64>().sqrt();
         let step_hz = (0..3)
             .map(|i| v_max * (d[i] as f64).abs() / len * cfg.settings.axes[i].steps_per_mm as f64)
             .fold(0.0, f64::max);
-        let queued = host_sim::engine::SEGMENT_SLOTS as f64 * (1.0 / step_hz).max(0.002);
+        let seg = (1.0 / step_hz).max(0.002);
+        let queued = (HORIZON_S as f64 + 2.0 * seg).max((MIN_QUEUED + 1) as f64 * seg);
         let ramp = v_max / a_min + queued + 0.05;
         let t_go = t_hold + ramp + 0.5;
         let r = run(&cfg, &cmds, &[(t_hold, Input::FeedHold), (t_go, Input::CycleStart)]);
@@ -63,4 +68,52 @@ proptest! {
         let bound = t_free + (t_go - t_hold) + 2.0 * ramp + 0.05;
         prop_assert!(t_end <= bound, "ended at {t_end:.3} s, bound {bound:.3} s (free run {t_free:.3} s)");
     }
+}
+
+/// At a slow feed every segment is one step, and a hold acts on the next
+/// segment prepared: the steps already queued run first. With the
+/// preparer running HORIZON_S ahead that is at most MIN_QUEUED steps and
+/// the running one (0.11 s at 20 mm/min on 80 steps/mm), where it was all
+/// 16 slots (0.6 s).
+#[test]
+fn a_hold_at_a_slow_feed_acts_within_a_few_steps() {
+    let cfg = config();
+    let spm = f64::from(cfg.settings.axes[0].steps_per_mm);
+    let feed = 20.0;
+    let cmds = vec![Command::Line {
+        end: [5.0, 0.0, 0.0, 0.0],
+        feed: Feed::PerMin(feed),
+    }];
+    let (t_hold, t_go) = (2.0, 4.0);
+    let r = run(
+        &cfg,
+        &cmds,
+        &[(t_hold, Input::FeedHold), (t_go, Input::CycleStart)],
+    );
+    check_all(&cfg, &r, &cmds, "slow hold");
+    let hz = cfg.tick_hz as f64;
+    let (hold_tick, go_tick) = ((t_hold * hz) as u64, (t_go * hz) as u64);
+    let held: Vec<u64> = r
+        .rec
+        .events
+        .iter()
+        .map(|e| e.tick)
+        .filter(|&t| t >= hold_tick && t < go_tick)
+        .collect();
+    let step_s = 60.0 / (f64::from(feed) * spm);
+    let late = held.last().map_or(0.0, |&t| (t - hold_tick) as f64 / hz);
+    println!(
+        "hold at {feed} mm/min: {} steps after it, the last {late:.3} s later (one step: {step_s:.4} s)",
+        held.len()
+    );
+    assert!(
+        r.rec.events.iter().any(|e| e.tick < hold_tick),
+        "not started"
+    );
+    assert!(
+        held.len() <= MIN_QUEUED + 1,
+        "{} steps after the hold",
+        held.len()
+    );
+    assert!(late <= (MIN_QUEUED + 1) as f64 * step_s, "{late:.3} s");
 }

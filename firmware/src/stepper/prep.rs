@@ -15,6 +15,19 @@ use crate::settings::Settings;
 pub const SEGMENT_S: f32 = 0.002;
 /// Longest event period of a dwell segment, seconds.
 pub(super) const DWELL_CHUNK_S: f32 = 0.01;
+/// How far ahead the preparer runs, seconds of queued segments (once
+/// [`MIN_QUEUED`] are queued). A feed hold or an override acts on the
+/// next segment prepared, so this is their latency. At usual speeds the
+/// 16 slots of 2 ms are about this much anyway; at slow feeds a segment
+/// is at least one step, and 16 of them were 0.6 s at 20 mm/min on 80
+/// steps/mm (GRBL queues 6).
+pub const HORIZON_S: f32 = 0.03;
+/// Segments always kept queued, whatever their length, so the stepper
+/// never waits on the planner task between two of them.
+pub const MIN_QUEUED: usize = 2;
+/// Durations of the segments pushed last, to sum what is still queued
+/// (more than any segment queue holds).
+const PUSHED_RING: usize = 32;
 
 pub use super::sink::SegmentSink;
 
@@ -77,6 +90,10 @@ pub struct Preparer {
     /// Profile walk steps taken so far (wrapping): the work measure that
     /// tests and the bench budget hold against [`MAX_WALKS_PER_SEGMENT`].
     walks: u32,
+    /// Ticks each of the last [`PUSHED_RING`] segments runs, newest at
+    /// `pushed_head - 1` (wrapping).
+    pushed: [u32; PUSHED_RING],
+    pushed_head: usize,
     /// Highest segment speed so far, mm/min.
     pub max_speed_mm_min: f32,
 }
@@ -113,6 +130,8 @@ impl Preparer {
             },
             last_line: 0,
             walks: 0,
+            pushed: [0; PUSHED_RING],
+            pushed_head: 0,
             max_speed_mm_min: 0.0,
         }
     }
@@ -151,7 +170,9 @@ impl Preparer {
         self.walks
     }
 
-    /// Push segments until the queue is full or there is nothing to prepare.
+    /// Push segments until the queue is full, or holds [`HORIZON_S`] of
+    /// motion (and at least [`MIN_QUEUED`] segments), or there is nothing
+    /// to prepare.
     ///
     /// Bounded work: each pass of the loop pushes a segment or ends it, so
     /// at most the queue's free slots; each segment costs at most one
@@ -175,17 +196,34 @@ impl Preparer {
         if rt.trip() == Trip::HardLimit {
             return;
         }
+        let horizon = (HORIZON_S * self.cfg.tick_hz as f32) as u64;
         while !sink.is_full() {
+            let queued = sink.len();
+            if queued >= MIN_QUEUED && self.queued_ticks(queued) >= horizon {
+                break;
+            }
             match self.next_segment(pl, rt) {
                 Some(mut seg) => {
                     seg.generation = generation;
+                    let ticks = u64::from(seg.events) * u64::from(seg.period);
                     if sink.push(seg).is_err() {
                         break;
                     }
+                    self.pushed[self.pushed_head % PUSHED_RING] =
+                        ticks.min(u64::from(u32::MAX)) as u32;
+                    self.pushed_head = (self.pushed_head + 1) % PUSHED_RING;
                 }
                 None => break,
             }
         }
+    }
+
+    /// Ticks the newest `queued` segments run (the oldest of them may be
+    /// part-run already: an overestimate by less than one segment).
+    fn queued_ticks(&self, queued: usize) -> u64 {
+        (1..=queued.min(PUSHED_RING))
+            .map(|k| u64::from(self.pushed[(self.pushed_head + PUSHED_RING - k) % PUSHED_RING]))
+            .sum()
     }
 
     fn shape(&self) -> Shape {

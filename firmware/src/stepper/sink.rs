@@ -8,6 +8,9 @@ pub trait SegmentSink {
     fn push(&mut self, s: Segment) -> Result<(), Segment>;
     fn is_full(&self) -> bool;
     fn is_empty(&self) -> bool;
+    /// Segments queued and not yet taken by the stepper (the one it runs
+    /// now is already taken).
+    fn len(&self) -> usize;
 }
 
 impl SegmentSink for heapless::spsc::Producer<'_, Segment> {
@@ -18,7 +21,10 @@ impl SegmentSink for heapless::spsc::Producer<'_, Segment> {
         !self.ready()
     }
     fn is_empty(&self) -> bool {
-        self.len() == 0
+        heapless::spsc::Producer::len(self) == 0
+    }
+    fn len(&self) -> usize {
+        heapless::spsc::Producer::len(self)
     }
 }
 
@@ -31,5 +37,8 @@ impl<const N: usize> SegmentSink for heapless::spsc::Queue<Segment, N> {
     }
     fn is_empty(&self) -> bool {
         heapless::spsc::Queue::is_empty(self)
+    }
+    fn len(&self) -> usize {
+        heapless::spsc::Queue::len(self)
     }
 }
