@@ -94,6 +94,10 @@ fn collinear_short_blocks_keep_the_limits() {
 /// (`planner::passes`, corner holds): without the holds Z reached 150 %.
 #[test]
 fn corners_between_ramps_keep_the_axis_limits() {
+    check(&machine(), "corners", &corners_job());
+}
+
+fn corners_job() -> String {
     let mut src = String::from("G21 G90 G94\nG1 F4000\n");
     for k in 1..=12 {
         let z = if k % 2 == 1 { -1.0 } else { 0.0 };
@@ -102,7 +106,7 @@ fn corners_between_ramps_keep_the_axis_limits() {
     for (x, y) in [(36.0, 20.0), (16.0, 20.0), (16.0, 5.0), (30.0, 5.0)] {
         src.push_str(&format!("G1 X{x} Y{y}\n"));
     }
-    check(&machine(), "corners", &src);
+    src
 }
 
 /// A helix that ends climbing at its feed into a move down in Z (from
@@ -123,24 +127,10 @@ fn a_helix_into_a_plunge_slows_the_chord_before_the_corner() {
 /// 50 ms windows, corners included) hold on every one.
 #[test]
 fn bench_motion_jobs_keep_step_intervals_and_end_exactly() {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/bench-motion");
-    let Ok(rd) = std::fs::read_dir(&dir) else {
-        println!("{}: not found, skipped", dir.display());
-        return;
-    };
     let cfg = machine();
-    let mut ran = 0;
-    for e in rd.flatten() {
-        let p = e.path();
-        let ext = p.extension().and_then(|x| x.to_str()).unwrap_or("");
-        if !matches!(ext, "ngc" | "nc" | "gcode") {
-            continue;
-        }
-        let src = std::fs::read_to_string(&p).unwrap();
-        check(&cfg, &p.display().to_string(), &src);
-        ran += 1;
+    for (name, src) in bench_jobs() {
+        check(&cfg, &name, &src);
     }
-    assert!(ran > 0);
 }
 
 /// The same jobs with S-curve ramps: the limits hold and no job crawls
@@ -149,32 +139,44 @@ fn bench_motion_jobs_keep_step_intervals_and_end_exactly() {
 /// near-zero speed: Cereal took 107,863 s and stellabee 29,860 s.
 #[test]
 fn bench_motion_jobs_in_s_curve_mode_keep_the_limits_and_their_pace() {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/bench-motion");
-    let Ok(rd) = std::fs::read_dir(&dir) else {
-        println!("{}: not found, skipped", dir.display());
-        return;
-    };
     let mut cfg = machine();
     cfg.settings.profile = Profile::SCurve;
-    let mut ran = 0;
-    for e in rd.flatten() {
-        let p = e.path();
-        let ext = p.extension().and_then(|x| x.to_str()).unwrap_or("");
-        if !matches!(ext, "ngc" | "nc" | "gcode") {
-            continue;
-        }
-        let src = std::fs::read_to_string(&p).unwrap();
-        let f = check(&cfg, &p.display().to_string(), &src);
+    for (name, src) in bench_jobs() {
+        let f = check(&cfg, &name, &src);
         assert!(
             f.time_s <= 3.0 * f.bound_s,
-            "{}: {:.2} s against a bound of {:.2} s",
-            p.display(),
+            "{name}: {:.2} s against a bound of {:.2} s",
             f.time_s,
             f.bound_s
         );
-        ran += 1;
     }
-    assert!(ran > 0);
+}
+
+/// `../shared/bench-motion`'s jobs as (path, text); none, with a
+/// "skipped" line, when it is not there.
+fn bench_jobs() -> Vec<(String, String)> {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/bench-motion");
+    let Ok(rd) = std::fs::read_dir(&dir) else {
+        println!("{}: not found, skipped", dir.display());
+        return Vec::new();
+    };
+    let mut jobs: Vec<(String, String)> = rd
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| {
+            let ext = p.extension().and_then(|x| x.to_str()).unwrap_or("");
+            matches!(ext, "ngc" | "nc" | "gcode")
+        })
+        .map(|p| {
+            (
+                p.display().to_string(),
+                std::fs::read_to_string(&p).unwrap(),
+            )
+        })
+        .collect();
+    jobs.sort();
+    assert!(!jobs.is_empty(), "{}: no jobs", dir.display());
+    jobs
 }
 
 /// Corners and a helix into a plunge streamed over slow links, so blocks
@@ -187,14 +189,7 @@ fn bench_motion_jobs_in_s_curve_mode_keep_the_limits_and_their_pace() {
 /// to the fastest corner it can hold (`Profile::plan_held`).
 #[test]
 fn corners_streamed_block_by_block_keep_the_axis_limits() {
-    let mut corners = String::from("G21 G90 G94\nG1 F4000\n");
-    for k in 1..=12 {
-        let z = if k % 2 == 1 { -1.0 } else { 0.0 };
-        corners.push_str(&format!("G1 X{} Z{z}\n", k as f64 * 3.0));
-    }
-    for (x, y) in [(36.0, 20.0), (16.0, 20.0), (16.0, 5.0), (30.0, 5.0)] {
-        corners.push_str(&format!("G1 X{x} Y{y}\n"));
-    }
+    let corners = corners_job();
     let helix = "G21\nG0 X6.894910 Y26.787653 Z29.282038\nF690\n\
                  G17 G2 I-4.330127 J2.500000 X3.858878 Y24.458024 Z31.282038\n\
                  G1 X0 Y0 Z20\nG1 X3 Y1 Z19\nG0 Z25\nG1 X0 Y4 Z20 F900\n";
