@@ -372,7 +372,7 @@ impl<Q: SegmentSink, const N: usize> MotionPort for Core<'_, Q, N> {
         s.set(n, value)?;
         let pos = self.machine.commanded_position();
         let tick_hz = self.machine.step_config().tick_hz;
-        *self.machine = Machine::new(s, tick_hz);
+        self.machine.rebuild(s, tick_hz);
         if self.machine.set_position(self.rt, &pos).is_err() {
             let _ = self.machine.set_position(self.rt, &[0.0; crate::AXES]);
         }

@@ -168,6 +168,43 @@ impl<const N: usize> Machine<N> {
         }
     }
 
+    /// [`Machine::new`], in place (`$n=`): the planner keeps its ring's
+    /// storage ([`Planner::reset`]), so no second machine is built on the
+    /// stack (`Machine::new`'s frame is 15.6 KB on the F401 image).
+    pub fn rebuild(&mut self, settings: Settings, tick_hz: u32) {
+        self.planner.reset(settings);
+        self.planner.set_tick_hz(tick_hz);
+        let Machine {
+            planner: _,
+            prep,
+            cfg,
+            pending,
+            alarm,
+            position_lost,
+            homed,
+            commanded,
+            override_epoch,
+            switches,
+            probe_result,
+            script,
+            tool_event,
+            tool_reference,
+        } = Machine::<0>::new(settings, tick_hz);
+        self.prep = prep;
+        self.cfg = cfg;
+        self.pending = pending;
+        self.alarm = alarm;
+        self.position_lost = position_lost;
+        self.homed = homed;
+        self.commanded = commanded;
+        self.override_epoch = override_epoch;
+        self.switches = switches;
+        self.probe_result = probe_result;
+        self.script = script;
+        self.tool_event = tool_event;
+        self.tool_reference = tool_reference;
+    }
+
     pub fn settings(&self) -> &Settings {
         &self.planner.settings
     }

@@ -216,6 +216,45 @@ impl<const N: usize> Planner<N> {
         }
     }
 
+    /// [`Planner::new`], in place: every field as `new` sets it but the
+    /// ring's storage, which nothing reads while `len` is 0. `$n=`
+    /// rebuilds the machine deep in the parse task's stack, and a second
+    /// ring of blocks built there took the F401's stack within a few
+    /// hundred bytes of its end.
+    pub fn reset(&mut self, settings: Settings) {
+        let Planner {
+            blocks: _,
+            tail,
+            len,
+            planned,
+            position,
+            prev_unit_mm,
+            prev2_unit_mm,
+            position_mm,
+            prev_nominal,
+            prev_length,
+            prev_curve,
+            feed_pct,
+            rapid_pct,
+            tick_hz,
+            settings,
+        } = Planner::<0>::new(settings);
+        self.tail = tail;
+        self.len = len;
+        self.planned = planned;
+        self.position = position;
+        self.prev_unit_mm = prev_unit_mm;
+        self.prev2_unit_mm = prev2_unit_mm;
+        self.position_mm = position_mm;
+        self.prev_nominal = prev_nominal;
+        self.prev_length = prev_length;
+        self.prev_curve = prev_curve;
+        self.feed_pct = feed_pct;
+        self.rapid_pct = rapid_pct;
+        self.tick_hz = tick_hz;
+        self.settings = settings;
+    }
+
     /// The step timer's clock: with it, feeds whose steps would be further
     /// apart than the 32-bit timer reaches are refused
     /// ([`PlanError::FeedTooSlow`]). The executor sets it; a bare planner
