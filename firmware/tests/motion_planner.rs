@@ -160,6 +160,21 @@ fn a_late_exit_hold_slows_the_block_instead_of_arriving_fast() {
     }
 }
 
+/// A feed hold that stopped inside a corner's entry hold resumes from
+/// rest: nothing is left to hold there. Held at (nearly) no speed, the
+/// hold took 10⁶ s per millimetre (a resume after a hold near a corner
+/// sat for 9,176 s).
+#[test]
+fn a_resume_from_rest_holds_nothing() {
+    for jerk in [0.0f32, 5000.0] {
+        let sh = Shape { accel: 500.0, jerk };
+        let p = Profile::plan_held(&sh, 0.0, 50.0, 0.0, 3.0, 0.05, 0.004);
+        let time: f32 = p.phases.iter().map(|ph| ph.time).sum();
+        assert!(time < 1.0, "{jerk}: {time} s for 3 mm");
+        assert_eq!(p.phases[0].dist, 0.0, "{:?}", p.phases[0]);
+    }
+}
+
 /// Run the planner-side and the stepper by hand (no host-sim) and count steps.
 fn run_steps(settings: Settings, moves: &[[f32; 4]]) -> ([i32; 4], [u32; 4], u8) {
     let rt = Realtime::new();

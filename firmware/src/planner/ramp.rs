@@ -288,7 +288,13 @@ impl Profile {
         m1: f32,
     ) -> Profile {
         let len = len.max(0.0);
-        let hold0 = hold0.max(0.0).min(len);
+        // A hold at (nearly) no speed would never end: a corner passed
+        // that slowly has nothing to hold.
+        let hold0 = if v0 > 1e-3 {
+            hold0.max(0.0).min(len)
+        } else {
+            0.0
+        };
         let rest = len - hold0;
         let target = v1.min(vn).max(0.0);
         let mut hold1 = (0.5 * target * target * m1.max(0.0)).min(rest);

@@ -68,6 +68,12 @@ pub struct Preparer {
     /// Where the entry corner's hold ends, mm into the block
     /// (`planner::passes`).
     hold_end: f32,
+    /// The exit corner's hold factor (`Block::hold_m` of the next block;
+    /// 0 when motion stops there).
+    exit_m: f32,
+    /// The running profile is a feed hold's ramp to a stop (not the
+    /// planned profile a hold follows up to a corner, see `prep::hold`).
+    hold_ramp: bool,
     tick_carry: f32,
     /// Profile time walked past the last step handed out, s: the next
     /// segment's steps are timed from that step's instant.
@@ -116,6 +122,8 @@ impl Preparer {
             profile_exit: 0.0,
             profile_nominal: 0.0,
             hold_end: 0.0,
+            exit_m: 0.0,
+            hold_ramp: false,
             tick_carry: 0.0,
             since_step: 0.0,
             dwell_left: 0,
@@ -252,6 +260,7 @@ impl Preparer {
     }
 
     fn set_profile(&mut self, p: Profile) {
+        self.hold_ramp = false;
         self.pshape = self.shape();
         self.profile = p;
         self.phase = 0;
@@ -262,17 +271,23 @@ impl Preparer {
     fn replan<const N: usize>(&mut self, pl: &Planner<N>) {
         let Some(b) = self.block else { return };
         let exit = Self::exit_target(pl);
+        // What is left of the entry corner's hold, for the speed there is
+        // now (`v²·m/2`): a feed hold that stopped inside it resumes from
+        // rest, where there is nothing left to hold (held at the entry
+        // speed it crawled at 10⁻⁶ mm/s for hours).
+        let hold0 = (self.hold_end - self.s_done).min(0.5 * self.v * self.v * b.hold_m);
         let p = Profile::plan_held(
             &self.shape(),
             self.v,
             b.nominal,
             exit,
             b.length - self.s_done,
-            self.hold_end - self.s_done,
+            hold0,
             Self::exit_hold_m(pl),
         );
         self.profile_exit = exit;
         self.profile_nominal = b.nominal;
+        self.exit_m = Self::exit_hold_m(pl);
         self.set_profile(p);
     }
 
@@ -297,9 +312,8 @@ impl Preparer {
                 // entry, and cutting the speed here would be a jump.
                 self.v = self.v.min(b.junction.min(b.cap));
                 self.hold_end = 0.5 * self.v * self.v * b.hold_m;
-                if self.hold == Hold::Decelerating {
-                    self.plan_hold();
-                } else {
+                self.exit_m = Self::exit_hold_m(pl);
+                if self.hold != Hold::Decelerating || !self.plan_hold(false) {
                     self.replan(pl);
                 }
             }

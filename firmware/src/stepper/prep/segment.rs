@@ -26,9 +26,8 @@ impl Preparer {
             time += dt;
             walks += 1;
             self.walks = self.walks.wrapping_add(1);
-            let block_end =
-                self.s_done >= b.length - 1e-6 || (ended && self.hold != Hold::Decelerating);
-            let hold_done = ended && self.hold == Hold::Decelerating && !block_end;
+            let block_end = self.s_done >= b.length - 1e-6 || (ended && !self.hold_ramp);
+            let hold_done = ended && self.hold_ramp && !block_end;
             let target = if block_end {
                 b.count
             } else {
