@@ -60,7 +60,33 @@ pub fn run_file_watched(
     recorder: &mut dyn Recorder,
     watch: &mut dyn FnMut(Progress),
 ) -> Summary {
+    run_file_with(config, source, recorder, watch, &[])
+}
+
+/// [`run_file`] with realtime input (feed hold, cycle start, overrides,
+/// reset) acting at given virtual times, seconds from the start, as the
+/// panel buttons or realtime bytes would: holds and overrides on whole
+/// jobs.
+pub fn run_file_with_inputs(
+    config: &MachineConfig,
+    source: &str,
+    recorder: &mut dyn Recorder,
+    inputs: &[(f64, crate::engine::Input)],
+) -> Summary {
+    run_file_with(config, source, recorder, &mut |_| {}, inputs)
+}
+
+fn run_file_with(
+    config: &MachineConfig,
+    source: &str,
+    recorder: &mut dyn Recorder,
+    watch: &mut dyn FnMut(Progress),
+    inputs: &[(f64, crate::engine::Input)],
+) -> Summary {
     let mut dev = VirtualDevice::new(config, recorder);
+    for (t, i) in inputs {
+        dev.sim.input_at((t * f64::from(config.tick_hz)) as u64, *i);
+    }
     // The power-up banner went out before the sender connected.
     let _ = dev.take_output();
     let (host, mut pipe) = MemPipe::pair();

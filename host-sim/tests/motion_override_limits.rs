@@ -118,3 +118,51 @@ fn run(cfg: &MachineConfig, cmds: &[Command], inputs: &[(f64, Input)]) -> TraceL
     }
     meter.out
 }
+
+/// Every bench-motion job (outside the repo; skipped when absent), a
+/// hold and a resume at two points of each, streamed through the
+/// virtual board as `cargo xtask sim` streams them. (Overrides too are
+/// not asserted here: a drop from 100 to 30 % in the middle of Cereal's
+/// G1 curves took Z to 110 %, the tangential slow-down on top of a
+/// curvature limit that uses the whole budget; see the bench notes.)
+#[test]
+fn bench_jobs_with_holds_keep_the_limits() {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/bench-motion");
+    let Ok(rd) = std::fs::read_dir(&dir) else {
+        println!("{}: not found, skipped", dir.display());
+        return;
+    };
+    let mut jobs: Vec<PathBuf> = rd
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| {
+            matches!(
+                p.extension().and_then(|x| x.to_str()),
+                Some("ngc" | "nc" | "gcode")
+            )
+        })
+        .collect();
+    jobs.sort();
+    assert!(!jobs.is_empty());
+    for path in &jobs {
+        let name = path.file_name().unwrap().to_string_lossy();
+        let src = std::fs::read_to_string(path).unwrap();
+        for profile in [Profile::Trapezoid, Profile::SCurve] {
+            let mut cfg = machine();
+            cfg.settings.profile = profile;
+            let plain = host_sim::bench::run_job(&cfg, &src);
+            let mut worst = [0.0f64; 3];
+            for k in [1.0, 2.0] {
+                let t = plain.time_s * k / 3.0;
+                let inputs = [(t, Input::FeedHold), (t + 0.5, Input::CycleStart)];
+                let mut meter = LimitMeter::new(cfg.settings.max_step_rate_hz);
+                let summary =
+                    host_sim::offline::run_file_with_inputs(&cfg, &src, &mut meter, &inputs);
+                assert!(summary.errors.is_empty(), "{name}: {:?}", summary.errors);
+                let what = format!("{name}, {profile:?}, hold at {t:.2} s");
+                check(&cfg, &meter.out, &plain.limits, &what, &mut worst);
+            }
+            println!("{name} {profile:?}: worst acceleration X/Y/Z {worst:.3?} of the limits");
+        }
+    }
+}
