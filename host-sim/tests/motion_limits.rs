@@ -204,3 +204,26 @@ fn corners_streamed_block_by_block_keep_the_axis_limits() {
         }
     }
 }
+
+/// Bench jobs of short lines streamed at a serial line's pace and slower:
+/// the link, not the motion, sets their pace (circle_small takes 186 s at
+/// 1,500 B/s against 20 s), so the planner runs starved and corners
+/// become known while the block before them already runs. The limits
+/// hold as they do with the whole job queued.
+#[test]
+fn bench_jobs_streamed_slowly_keep_the_limits() {
+    for (name, src) in bench_jobs() {
+        if !["stellabee", "zigzag", "circle_small", "short_segments"]
+            .iter()
+            .any(|j| name.contains(j))
+        {
+            continue;
+        }
+        for rate in [1_500, 11_520] {
+            let mut cfg = machine();
+            cfg.host.link_bytes_per_s = rate;
+            let f = check(&cfg, &format!("{name} at {rate} B/s"), &src);
+            println!("{name} at {rate} B/s: {:.2} s", f.time_s);
+        }
+    }
+}
