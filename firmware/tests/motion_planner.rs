@@ -160,6 +160,34 @@ fn a_late_exit_hold_slows_the_block_instead_of_arriving_fast() {
     }
 }
 
+/// A feed override drop lowers a block's exit below anything it can
+/// still reach: it cannot even stop at its end. It leaves at the slowest
+/// speed at which it can still hold its corner, with that hold, not at
+/// the slowest speed with no hold (the corner then came on top of the
+/// slow-down: Z at 110 % in Cereal's curves).
+#[test]
+fn an_unreachable_exit_still_holds_its_corner() {
+    for jerk in [0.0f32, 5000.0] {
+        let sh = Shape { accel: 119.0, jerk };
+        let (v0, m1) = (16.0f32, 0.0008f32);
+        let rest = 0.4;
+        assert!(sh.dist(v0, 0.0) > rest, "{jerk}: the block could stop");
+        let p = Profile::plan_held(&sh, v0, 4.0, 4.0, rest, 0.0, m1);
+        let x = p.exit_speed();
+        let hold = p.phases[4];
+        assert!(x > 4.0 && x < v0, "{jerk}: exit {x}");
+        assert!(
+            (hold.dist - 0.5 * x * x * m1).abs() < 1e-5 && hold.dist > 0.0,
+            "{jerk}: {hold:?}"
+        );
+        assert!(
+            (p.total_dist() - rest).abs() < 1e-3,
+            "{jerk}: {}",
+            p.total_dist()
+        );
+    }
+}
+
 /// A feed hold that stopped inside a corner's entry hold resumes from
 /// rest: nothing is left to hold there. Held at (nearly) no speed, the
 /// hold took 10⁶ s per millimetre (a resume after a hold near a corner

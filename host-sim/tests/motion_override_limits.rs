@@ -120,13 +120,14 @@ fn run(cfg: &MachineConfig, cmds: &[Command], inputs: &[(f64, Input)]) -> TraceL
 }
 
 /// Every bench-motion job (outside the repo; skipped when absent), a
-/// hold and a resume at two points of each, streamed through the
-/// virtual board as `cargo xtask sim` streams them. (Overrides too are
-/// not asserted here: a drop from 100 to 30 % in the middle of Cereal's
-/// G1 curves took Z to 110 %, the tangential slow-down on top of a
-/// curvature limit that uses the whole budget; see the bench notes.)
+/// hold, a resume and feed override changes (30 %, 180 %, 100 %) at two
+/// points of each, streamed through the virtual board as `cargo xtask
+/// sim` streams them. An override drop lowers the exits of blocks that
+/// can no longer reach them: they crossed their corners with no exit hold
+/// (Z at 110 % in Cereal's curves) until `Profile::plan_held` left at the
+/// slowest speed that still holds the corner.
 #[test]
-fn bench_jobs_with_holds_keep_the_limits() {
+fn bench_jobs_with_holds_and_overrides_keep_the_limits() {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/bench-motion");
     let Ok(rd) = std::fs::read_dir(&dir) else {
         println!("{}: not found, skipped", dir.display());
@@ -154,7 +155,13 @@ fn bench_jobs_with_holds_keep_the_limits() {
             let mut worst = [0.0f64; 3];
             for k in [1.0, 2.0] {
                 let t = plain.time_s * k / 3.0;
-                let inputs = [(t, Input::FeedHold), (t + 0.5, Input::CycleStart)];
+                let inputs = [
+                    (t, Input::FeedHold),
+                    (t + 0.5, Input::CycleStart),
+                    (t + 1.0, Input::FeedOverride(30)),
+                    (t + 1.7, Input::FeedOverride(180)),
+                    (t + 2.5, Input::FeedOverride(100)),
+                ];
                 let mut meter = LimitMeter::new(cfg.settings.max_step_rate_hz);
                 let summary =
                     host_sim::offline::run_file_with_inputs(&cfg, &src, &mut meter, &inputs);

@@ -312,22 +312,42 @@ impl Profile {
             // holds for less, so slow further, to a stop if need be (a
             // stop always fits: it was planned). Entering the next block
             // slower than planned is always safe.
-            // (A stop planned to end right here may miss by rounding:
-            // then it stops as soon as it can, with no hold.)
+            //
+            // Or it cannot even stop here: a feed override drop lowered
+            // the exit below anything this block can reach. Then it leaves
+            // at the slowest speed it can still hold its corner at (the
+            // hold costs less than the speed it saves, `m < 1/a`); with no
+            // hold at the exit the corner's velocity change came on top of
+            // the slow-down (Z at 110 % in Cereal's curves after a drop to
+            // 30 %). If no hold fits at all (or a stop planned to end
+            // right here misses by rounding), it slows as much as it can.
             let fits = |x: f32| shape.dist(v0, x) + 0.5 * x * x * m1 <= rest;
-            let (mut lo, mut hi) = (0.0f32, target);
-            if fits(0.0) {
+            let bisect = |mut lo: f32, mut hi: f32, below_fits: bool| {
                 for _ in 0..24 {
                     let mid = 0.5 * (lo + hi);
-                    if fits(mid) {
+                    if fits(mid) == below_fits {
                         lo = mid;
                     } else {
                         hi = mid;
                     }
                 }
-            }
-            hold1 = (0.5 * lo * lo * m1).min(rest);
-            p = Profile::plan(shape, v0, vn, lo, rest - hold1);
+                if below_fits {
+                    lo
+                } else {
+                    hi
+                }
+            };
+            let x = if fits(0.0) {
+                // The fastest corner speed that fits, up to the asked one.
+                bisect(0.0, target, true)
+            } else if fits(v0) {
+                // The slowest one that fits.
+                bisect(0.0, v0, false)
+            } else {
+                0.0
+            };
+            hold1 = (0.5 * x * x * m1).min(rest);
+            p = Profile::plan(shape, v0, vn, x, rest - hold1);
         }
         let cruise = |v: f32, dist: f32| Phase {
             v0: v,
