@@ -6,14 +6,14 @@
 //! limit over 50 ms windows, at corners too. No timings: speed is a bench
 //! figure.
 
+mod common;
 use burin::settings::Profile;
+use common::bench_jobs;
 use host_sim::bench::{axis_limits, run_job, JobFigures};
 use host_sim::config::MachineConfig;
-use std::path::PathBuf;
 
 fn machine() -> MachineConfig {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("machines/grbl_match.toml");
-    MachineConfig::load(p).unwrap()
+    common::grbl_match()
 }
 
 fn check(cfg: &MachineConfig, name: &str, src: &str) -> JobFigures {
@@ -150,33 +150,6 @@ fn bench_motion_jobs_in_s_curve_mode_keep_the_limits_and_their_pace() {
             f.bound_s
         );
     }
-}
-
-/// `../shared/bench-motion`'s jobs as (path, text); none, with a
-/// "skipped" line, when it is not there.
-fn bench_jobs() -> Vec<(String, String)> {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/bench-motion");
-    let Ok(rd) = std::fs::read_dir(&dir) else {
-        println!("{}: not found, skipped", dir.display());
-        return Vec::new();
-    };
-    let mut jobs: Vec<(String, String)> = rd
-        .flatten()
-        .map(|e| e.path())
-        .filter(|p| {
-            let ext = p.extension().and_then(|x| x.to_str()).unwrap_or("");
-            matches!(ext, "ngc" | "nc" | "gcode")
-        })
-        .map(|p| {
-            (
-                p.display().to_string(),
-                std::fs::read_to_string(&p).unwrap(),
-            )
-        })
-        .collect();
-    jobs.sort();
-    assert!(!jobs.is_empty(), "{}: no jobs", dir.display());
-    jobs
 }
 
 /// Corners and a helix into a plunge streamed over slow links, so blocks

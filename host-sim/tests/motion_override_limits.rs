@@ -5,17 +5,13 @@
 //! acceleration ≤ 105 % over 50 ms windows, no step interval below the
 //! rate limit, and the job ends where it was commanded to.
 
+mod common;
 use burin::command::{Command, Feed};
 use burin::settings::Profile;
+use common::{bench_jobs, grbl_match as machine};
 use host_sim::bench::limits::{LimitMeter, TraceLimits};
 use host_sim::config::MachineConfig;
 use host_sim::engine::{Input, Sim};
-use std::path::PathBuf;
-
-fn machine() -> MachineConfig {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("machines/grbl_match.toml");
-    MachineConfig::load(p).unwrap()
-}
 
 /// Z valleys and ridges, then square XY corners (as `motion_limits`).
 fn corners() -> Vec<Command> {
@@ -128,26 +124,8 @@ fn run(cfg: &MachineConfig, cmds: &[Command], inputs: &[(f64, Input)]) -> TraceL
 /// slowest speed that still holds the corner.
 #[test]
 fn bench_jobs_with_holds_and_overrides_keep_the_limits() {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/bench-motion");
-    let Ok(rd) = std::fs::read_dir(&dir) else {
-        println!("{}: not found, skipped", dir.display());
-        return;
-    };
-    let mut jobs: Vec<PathBuf> = rd
-        .flatten()
-        .map(|e| e.path())
-        .filter(|p| {
-            matches!(
-                p.extension().and_then(|x| x.to_str()),
-                Some("ngc" | "nc" | "gcode")
-            )
-        })
-        .collect();
-    jobs.sort();
-    assert!(!jobs.is_empty());
-    for path in &jobs {
-        let name = path.file_name().unwrap().to_string_lossy();
-        let src = std::fs::read_to_string(path).unwrap();
+    for (path, src) in bench_jobs() {
+        let name = path.rsplit('/').next().unwrap_or(&path);
         for profile in [Profile::Trapezoid, Profile::SCurve] {
             let mut cfg = machine();
             cfg.settings.profile = profile;

@@ -268,21 +268,25 @@ impl Preparer {
         self.s_phase0 = self.s_done;
     }
 
+    /// What is left of the entry corner's hold, mm, for the speed there
+    /// is now (`v²·m/2`): a feed hold that stopped inside it resumes from
+    /// rest, where there is nothing left to hold (held at the entry speed
+    /// it crawled at 10⁻⁶ mm/s for hours).
+    fn entry_hold_left(&self) -> f32 {
+        let m = self.block.map_or(0.0, |b| b.hold_m);
+        (self.hold_end - self.s_done).min(0.5 * self.v * self.v * m)
+    }
+
     fn replan<const N: usize>(&mut self, pl: &Planner<N>) {
         let Some(b) = self.block else { return };
         let exit = Self::exit_target(pl);
-        // What is left of the entry corner's hold, for the speed there is
-        // now (`v²·m/2`): a feed hold that stopped inside it resumes from
-        // rest, where there is nothing left to hold (held at the entry
-        // speed it crawled at 10⁻⁶ mm/s for hours).
-        let hold0 = (self.hold_end - self.s_done).min(0.5 * self.v * self.v * b.hold_m);
         let p = Profile::plan_held(
             &self.shape(),
             self.v,
             b.nominal,
             exit,
             b.length - self.s_done,
-            hold0,
+            self.entry_hold_left(),
             Self::exit_hold_m(pl),
         );
         self.profile_exit = exit;

@@ -11,6 +11,40 @@ use host_sim::record::{MoveKind, PinEvent, Recorder, RunInfo, Summary};
 
 pub const TICK_HZ: u32 = 96_000_000;
 
+/// `machines/grbl_match.toml`: the machine issue 12's bench compares
+/// burin and GRBL on.
+pub fn grbl_match() -> MachineConfig {
+    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/grbl_match.toml");
+    MachineConfig::load(p).unwrap()
+}
+
+/// `../shared/bench-motion`'s jobs as (path, text), in name order; none,
+/// with a "skipped" line, when it is not there.
+pub fn bench_jobs() -> Vec<(String, String)> {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/bench-motion");
+    let Ok(rd) = std::fs::read_dir(&dir) else {
+        println!("{}: not found, skipped", dir.display());
+        return Vec::new();
+    };
+    let mut jobs: Vec<(String, String)> = rd
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| {
+            let ext = p.extension().and_then(|x| x.to_str()).unwrap_or("");
+            matches!(ext, "ngc" | "nc" | "gcode")
+        })
+        .map(|p| {
+            (
+                p.display().to_string(),
+                std::fs::read_to_string(&p).unwrap(),
+            )
+        })
+        .collect();
+    jobs.sort();
+    assert!(!jobs.is_empty(), "{}: no jobs", dir.display());
+    jobs
+}
+
 pub fn config() -> MachineConfig {
     MachineConfig {
         tick_hz: TICK_HZ,

@@ -69,8 +69,7 @@ impl Preparer {
         let mut phases = [zero; PHASES];
         let mut v = self.v;
         let mut k = 0;
-        let m_in = self.block.map_or(0.0, |b| b.hold_m);
-        let hold0 = (self.hold_end - self.s_done).min(0.5 * v * v * m_in);
+        let hold0 = self.entry_hold_left();
         if hold0 > 0.0 && v > 1e-3 && libm::fabsf(a) <= 1e-3 {
             phases[0] = Phase {
                 v0: v,
