@@ -200,3 +200,35 @@ fn bench_jobs_streamed_slowly_keep_the_limits() {
         }
     }
 }
+
+/// Zigzags whose corners stop holding once quiet blocks surround them
+/// (`planner::quiet`), between long fast moves on both sides, in XY and
+/// in XZ (Z's limit is a fifth of X's), at pitches and amplitudes from
+/// quiet (every corner released) to loud (every corner held), and one
+/// whose amplitude grows from one to the other. No window may see more
+/// than the axis's acceleration. (With a spread of 2 and a quiet time of
+/// 0.3 window, which the argument does not allow, Z reaches 108 %.)
+#[test]
+fn zigzags_between_long_moves_keep_the_axis_limits() {
+    let cfg = machine();
+    for plane in ['Y', 'Z'] {
+        for pitch in [0.02, 0.05, 0.1] {
+            for amp in [0.01, 0.025, 0.05, 0.1, 0.3, -1.0] {
+                let mut src = String::from("G21 G90 G94\nG1 F5000\nG1 X-20\n");
+                src.push_str(&format!("G1 X0 {plane}0\n"));
+                for k in 1..=120 {
+                    // amp < 0: growing from 0.005 to 0.6 mm.
+                    let a = if amp < 0.0 {
+                        0.005 * k as f64 / 1.2
+                    } else {
+                        amp
+                    };
+                    let side = if k % 2 == 1 { a } else { -a };
+                    src.push_str(&format!("G1 X{:.4} {plane}{side:.4}\n", k as f64 * pitch));
+                }
+                src.push_str(&format!("G1 X{:.4} {plane}0\nG1 X40\n", 121.0 * pitch));
+                check(&cfg, &format!("zigzag {plane} {pitch} {amp}"), &src);
+            }
+        }
+    }
+}

@@ -36,6 +36,7 @@ impl<const N: usize> Planner<N> {
             || p.dir_mask != b.dir_mask
             || p.rapid != b.rapid
             || p.programmed != b.programmed
+            || p.cap != b.cap
         {
             return false;
         }

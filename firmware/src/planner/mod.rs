@@ -13,6 +13,7 @@ pub mod interval;
 mod merge;
 mod passes;
 mod push;
+mod quiet;
 pub mod ramp;
 
 use crate::command::Pos;
@@ -111,6 +112,15 @@ pub struct Block {
     /// the largest `|Δu_i| / a_i` over the axes, s²/mm (0: no corner to
     /// hold, as between chords of one curve).
     pub hold_m: f32,
+    /// The corner's limit before its hold lowers it (junction deviation
+    /// and curvature), mm/s.
+    pub corner: f32,
+    /// `hold_m` once the axes in `release` stop holding (`planner::quiet`).
+    pub hold_m_fixed: f32,
+    /// Axes whose velocity the block keeps small (bit per axis), and the
+    /// axes its entry corner holds only until quiet blocks follow.
+    pub quiet: u8,
+    pub release: u8,
     pub max_entry: f32,
     pub entry: f32,
     pub watch: Watch,
@@ -137,6 +147,10 @@ impl Block {
         floor: 0.0,
         junction: 0.0,
         hold_m: 0.0,
+        corner: 0.0,
+        hold_m_fixed: 0.0,
+        quiet: 0,
+        release: 0,
         max_entry: 0.0,
         entry: 0.0,
         watch: Watch {
@@ -185,6 +199,9 @@ pub struct Planner<const N: usize> {
     /// Path speed the previous block's junction may carry (0 after a stop).
     prev_nominal: f32,
     prev_length: f32,
+    /// Per axis: how long (at least, s) the blocks since the last one in
+    /// which the axis's velocity may be large have taken (`planner::quiet`).
+    quiet_time: [f32; AXES],
     /// The curve the previous block was a chord of, if any.
     prev_curve: Option<Curve>,
     feed_pct: f32,
@@ -208,6 +225,7 @@ impl<const N: usize> Planner<N> {
             position_mm: [0.0; AXES],
             prev_nominal: 0.0,
             prev_length: 0.0,
+            quiet_time: [f32::INFINITY; AXES],
             prev_curve: None,
             feed_pct: 1.0,
             rapid_pct: 1.0,
@@ -233,6 +251,7 @@ impl<const N: usize> Planner<N> {
             position_mm,
             prev_nominal,
             prev_length,
+            quiet_time,
             prev_curve,
             feed_pct,
             rapid_pct,
@@ -248,6 +267,7 @@ impl<const N: usize> Planner<N> {
         self.position_mm = position_mm;
         self.prev_nominal = prev_nominal;
         self.prev_length = prev_length;
+        self.quiet_time = quiet_time;
         self.prev_curve = prev_curve;
         self.feed_pct = feed_pct;
         self.rapid_pct = rapid_pct;
@@ -314,6 +334,8 @@ impl<const N: usize> Planner<N> {
         self.prev_nominal = 0.0;
         self.prev_unit_mm = [0.0; AXES];
         self.prev2_unit_mm = [0.0; AXES];
+        // From rest: nothing moved before the next block.
+        self.quiet_time = [f32::INFINITY; AXES];
     }
 
     /// Steps for a machine position in mm: rounded from the absolute target,

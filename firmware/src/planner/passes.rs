@@ -98,7 +98,9 @@ impl<const N: usize> Planner<N> {
         length: f32,
         curve: Option<Curve>,
         v_corner: f32,
+        quiet: u8,
     ) -> f32 {
+        // `quiet`: axes whose change here needs no hold (`planner::quiet`).
         if self.prev_nominal <= 0.0 {
             return 0.0;
         }
@@ -122,7 +124,7 @@ impl<const N: usize> Planner<N> {
             let mut m = 0.0f32;
             for (i, ax) in self.settings.axes.iter().enumerate() {
                 let d = libm::fabsf(unit[i] - before[i]);
-                if d > 1e-6 {
+                if d > 1e-6 && quiet & (1 << i) == 0 {
                     m = m.max(d / ax.max_accel);
                 }
             }
@@ -193,6 +195,13 @@ impl<const N: usize> Planner<N> {
 
     /// Backward then forward pass. `full` ignores the early stop.
     pub fn replan(&mut self, full: bool) {
+        self.replan_to(full, self.len);
+    }
+
+    /// [`Planner::replan`], with the backward pass going on at least down
+    /// to block `down_to` (a corner there stopped holding: its entry and
+    /// the block's before it may rise).
+    pub(super) fn replan_to(&mut self, full: bool, down_to: usize) {
         if self.len == 0 {
             return;
         }
@@ -240,7 +249,7 @@ impl<const N: usize> Planner<N> {
             b.entry = new;
             next_entry = new;
             next_m = b.hold_m;
-            if unchanged && (k <= planned || (!full && k + 1 < self.len)) {
+            if unchanged && k < down_to && (k <= planned || (!full && k + 1 < self.len)) {
                 break;
             }
         }

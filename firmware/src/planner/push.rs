@@ -1,7 +1,7 @@
 //! Turning one move into a block: step counts, caps, the speed request,
 //! the corner with the block before, and the merge with it.
 
-use super::passes::{CANCEL_WINDOW_S, HOLD_STRETCH};
+use super::passes::HOLD_STRETCH;
 use super::*;
 
 impl<const N: usize> Planner<N> {
@@ -116,20 +116,37 @@ impl<const N: usize> Planner<N> {
         } else {
             (unit, b.length)
         };
-        b.junction = self.junction_speed(&unit_mm, len_mm, curve.is_some());
-        let m = self.hold_factor(&unit_mm, len_mm, curve, b.junction);
-        if m > 0.0 {
-            // The corner's own change within half a window (see `passes`).
-            b.junction = b.junction.min(0.5 * CANCEL_WINDOW_S / m);
-            b.hold_m = HOLD_STRETCH * m;
-            // Both halves of the hold fit: the one before the corner in the
-            // previous block, the one after it in this one.
-            let room = self.prev_length.min(len_mm).min(b.length);
-            b.junction = b.junction.min(libm::sqrtf(2.0 * room / b.hold_m));
-        }
+        b.corner = self.junction_speed(&unit_mm, len_mm, curve.is_some());
+        b.junction = b.corner;
+        let (quiet, release) = self.quiet_axes(&mut b, &unit);
+        let turned = (0..AXES).fold(0u8, |t, i| {
+            let d = libm::fabsf(unit_mm[i] - self.prev_unit_mm[i]);
+            if self.prev_nominal > 0.0 && d > 1e-6 {
+                t | 1 << i
+            } else {
+                t
+            }
+        });
+        b.quiet = quiet;
+        b.release = release & turned;
+        // Both halves of the hold fit: the one before the corner in the
+        // previous block, the one after it in this one.
+        let room = self.prev_length.min(len_mm).min(b.length);
+        let m = self.hold_factor(&unit_mm, len_mm, curve, b.corner, 0);
+        b.hold_m_fixed = if b.release != 0 {
+            HOLD_STRETCH * self.hold_factor(&unit_mm, len_mm, curve, b.corner, b.release)
+        } else {
+            HOLD_STRETCH * m
+        };
+        b.hold(HOLD_STRETCH * m, room);
         b.max_entry = b.junction.min(b.nominal).min(self.prev_nominal);
         b.entry = if self.len == 0 { 0.0 } else { b.max_entry };
         let merged = b.junction.is_infinite() && self.merge(&b);
+        if merged {
+            let k = self.len - 1;
+            self.at(k).quiet &= quiet;
+        }
+        self.count_quiet(b.min_time(), quiet);
         if !merged {
             self.prev2_unit_mm = self.prev_unit_mm;
         }
@@ -148,7 +165,8 @@ impl<const N: usize> Planner<N> {
             *self.at(k) = b;
             self.len += 1;
         }
-        self.replan(false);
+        let released = self.release_quiet();
+        self.replan_to(false, released);
         Ok(())
     }
 }
