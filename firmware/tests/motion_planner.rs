@@ -128,6 +128,35 @@ fn profile_math_consistent() {
     }
 }
 
+/// An S ramp's distance is not monotone in where it ends: from 83.3 mm/s
+/// a stop takes 11.1 mm, a ramp down to 28 mm/s 11.7. A block cruising
+/// with 11.5 mm left whose exit has just risen to 28 mm/s cannot reach
+/// it, but need not stop either: it slows to the fastest speed below 28
+/// that fits (about 9.7). It stopped dead mid-run before (short_segments
+/// in S-curve mode, then 166 % of the jerk limit where it went on).
+#[test]
+fn an_s_ramp_that_misses_its_exit_does_not_stop_dead() {
+    let sh = Shape {
+        accel: 500.0,
+        jerk: 5000.0,
+    };
+    let p = Profile::plan(&sh, 83.333, 83.333, 27.97, 11.5);
+    let exit = p.exit_speed();
+    assert!(exit > 9.0 && exit <= 27.97, "left at {exit}");
+    assert!(
+        (p.total_dist() - 11.5).abs() < 1e-3 * 11.5,
+        "{}",
+        p.total_dist()
+    );
+    // A trapezoid has no such gap: the slowest it can reach, above 28.
+    let tr = Shape {
+        accel: 500.0,
+        jerk: 0.0,
+    };
+    let exit = Profile::plan(&tr, 83.333, 83.333, 20.0, 6.0).exit_speed();
+    assert!((exit - tr.reach_down(83.333, 6.0)).abs() < 1e-3, "{exit}");
+}
+
 /// A block already slowing to stop when its exit corner becomes known,
 /// and whose hold costs more than stopping (`m > 1/a`): it cannot come
 /// down to the corner speed and still hold it, so it leaves at the fastest

@@ -9,6 +9,7 @@
 mod common;
 use burin::settings::Profile;
 use common::bench_jobs;
+use host_sim::bench::limits::jerk_quantum;
 use host_sim::bench::{axis_limits, run_job, JobFigures};
 use host_sim::config::MachineConfig;
 
@@ -48,6 +49,42 @@ fn check(cfg: &MachineConfig, name: &str, src: &str) -> JobFigures {
         );
     }
     f
+}
+
+/// S-curve mode: no axis's jerk over 50 ms windows of the trace above
+/// `$203` by more than 5 % plus the step quantisation of the figure
+/// (`host_sim::bench::limits`: 400 mm/s³ on an 80 steps/mm axis).
+fn check_jerk(cfg: &MachineConfig, name: &str, f: &JobFigures) {
+    let j = f64::from(cfg.settings.jerk);
+    for i in 0..3 {
+        let q = jerk_quantum(f64::from(cfg.settings.axes[i].steps_per_mm));
+        assert!(
+            f.limits.peak_jerk[i] <= 1.05 * j + q,
+            "{name}: axis {i} jerk {:.0} mm/s³, limit {j:.0} (+{q:.0})",
+            f.limits.peak_jerk[i]
+        );
+    }
+}
+
+/// S-curve ramps keep the jerk limit where the path itself jerks: round
+/// small holes at a steady speed, four turns each. Each axis's
+/// acceleration turns with the tool, a jerk of `v³/r²`: at the speeds the
+/// acceleration allows, X/Y read 150/156 % of `$203`; `planner::curve`
+/// caps the speed there (`cbrt(j·r²)`).
+#[test]
+fn s_curve_keeps_the_jerk_limit_round_small_holes() {
+    let mut cfg = machine();
+    cfg.settings.profile = Profile::SCurve;
+    let mut holes = String::from("G21 G90 G17\nG1 F3000\n");
+    for (k, r) in [0.3, 0.5, 1.0, 3.0].iter().enumerate() {
+        let x = 10.0 * k as f64;
+        holes.push_str(&format!(
+            "G0 X{x} Y0\nG1 X{:.3}\nG2 I{:.3} J0 P4\n",
+            x + r,
+            -r
+        ));
+    }
+    check_jerk(&cfg, "holes", &check(&cfg, "holes", &holes));
 }
 
 fn polyline(pts: impl Iterator<Item = (f64, f64)>, feed: f64) -> String {
@@ -133,7 +170,8 @@ fn bench_motion_jobs_keep_step_intervals_and_end_exactly() {
     }
 }
 
-/// The same jobs with S-curve ramps: the limits hold and no job crawls
+/// The same jobs with S-curve ramps: the limits hold, jerk included
+/// (`check_jerk`), and no job crawls
 /// (at most 3× its trapezoid bound; the worst is circle_small at 2.1×).
 /// An exit hold planned for a corner the ramp could not reach ran at a
 /// near-zero speed: Cereal took 107,863 s and stellabee 29,860 s.
@@ -143,6 +181,7 @@ fn bench_motion_jobs_in_s_curve_mode_keep_the_limits_and_their_pace() {
     cfg.settings.profile = Profile::SCurve;
     for (name, src) in bench_jobs() {
         let f = check(&cfg, &name, &src);
+        check_jerk(&cfg, &name, &f);
         assert!(
             f.time_s <= 3.0 * f.bound_s,
             "{name}: {:.2} s against a bound of {:.2} s",

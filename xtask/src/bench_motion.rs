@@ -8,6 +8,7 @@
 //! the outside reference.
 
 use anyhow::Result;
+use host_sim::bench::limits::jerk_quantum;
 use host_sim::bench::{axis_limits, run_job, JobFigures};
 use host_sim::config::MachineConfig;
 use std::path::PathBuf;
@@ -58,21 +59,27 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
         a.jobs
     };
     let (vmax, amax) = axis_limits(&cfg);
+    let jmax = f64::from(cfg.settings.jerk);
     println!("bench-motion on {}", machine.display());
     println!(
         "limits: rate X/Y/Z {:.1}/{:.1}/{:.1} mm/s, accel {:.0}/{:.0}/{:.0} mm/s^2; \
-         v and a over {} ms windows of the step trace; short = step intervals below the rate limit \
-         (1 tick slack)",
+         jerk {:.0} mm/s^3 ($203, reached only in S-curve mode); v, a and j over {} ms windows of \
+         the step trace (j within {:.0}/{:.0}/{:.0} mm/s^3 of step quantisation); short = step \
+         intervals below the rate limit (1 tick slack)",
         vmax[0],
         vmax[1],
         vmax[2],
         amax[0],
         amax[1],
         amax[2],
+        jmax,
         host_sim::bench::limits::WINDOW_S * 1000.0,
+        jerk_quantum(f64::from(cfg.settings.axes[0].steps_per_mm)),
+        jerk_quantum(f64::from(cfg.settings.axes[1].steps_per_mm)),
+        jerk_quantum(f64::from(cfg.settings.axes[2].steps_per_mm)),
     );
     println!(
-        "{:<44} {:>8} {:>8} {:>6} {:>8} {:>6} | {:>14} | {:>14} | {:>11}",
+        "{:<44} {:>8} {:>8} {:>6} {:>8} {:>6} | {:>14} | {:>14} | {:>14} | {:>11}",
         "job",
         "burin s",
         "bound s",
@@ -81,12 +88,14 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
         "/GRBL",
         "peak v % X/Y/Z",
         "peak a % X/Y/Z",
+        "peak j % X/Y/Z",
         "short X/Y/Z"
     );
     let mut tot = (0.0, 0.0, 0.0, 0u64);
     let mut all_grbl = true;
     let mut worst_v = [0.0f64; 3];
     let mut worst_a = [0.0f64; 3];
+    let mut worst_j = [0.0f64; 3];
     let mut failed = 0;
     for job in &jobs {
         let name = job
@@ -106,13 +115,15 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
         let pct = |v: f64, lim: f64| 100.0 * v / lim;
         let v: [f64; 3] = std::array::from_fn(|i| pct(l.peak_vel[i], vmax[i]));
         let acc: [f64; 3] = std::array::from_fn(|i| pct(l.peak_acc[i], amax[i]));
+        let jerk: [f64; 3] = std::array::from_fn(|i| pct(l.peak_jerk[i], jmax));
         for i in 0..3 {
             worst_v[i] = worst_v[i].max(v[i]);
             worst_a[i] = worst_a[i].max(acc[i]);
+            worst_j[i] = worst_j[i].max(jerk[i]);
         }
         let short = l.short_intervals;
         println!(
-            "{:<44} {:>8.2} {:>8.2} {:>6.3} {:>8} {:>6} | {:>4.0} {:>4.0} {:>4.0} | {:>4.0} {:>4.0} {:>4.0} | {:>3} {:>3} {:>3}",
+            "{:<44} {:>8.2} {:>8.2} {:>6.3} {:>8} {:>6} | {:>4.0} {:>4.0} {:>4.0} | {:>4.0} {:>4.0} {:>4.0} | {:>4.0} {:>4.0} {:>4.0} | {:>3} {:>3} {:>3}",
             name,
             f.time_s,
             f.bound_s,
@@ -125,6 +136,9 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
             acc[0],
             acc[1],
             acc[2],
+            jerk[0],
+            jerk[1],
+            jerk[2],
             short[0],
             short[1],
             short[2],
@@ -144,7 +158,7 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
         }
     }
     println!(
-        "{:<44} {:>8.2} {:>8.2} {:>6.3} {:>8} {:>6} | {:>4.0} {:>4.0} {:>4.0} | {:>4.0} {:>4.0} {:>4.0} | {:>11}",
+        "{:<44} {:>8.2} {:>8.2} {:>6.3} {:>8} {:>6} | {:>4.0} {:>4.0} {:>4.0} | {:>4.0} {:>4.0} {:>4.0} | {:>4.0} {:>4.0} {:>4.0} | {:>11}",
         "total (peaks: worst job)",
         tot.0,
         tot.1,
@@ -157,6 +171,9 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
         worst_a[0],
         worst_a[1],
         worst_a[2],
+        worst_j[0],
+        worst_j[1],
+        worst_j[2],
         tot.3,
     );
     if failed > 0 {

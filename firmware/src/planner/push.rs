@@ -79,7 +79,10 @@ impl<const N: usize> Planner<N> {
         b.line_accel = accel;
         b.accel = accel;
         match curve.map(|c| c.budget(s)) {
-            Some(Some((ar, a))) => (b.curve_ar, b.curve_a) = (ar, a),
+            Some(Some((ar, a))) => {
+                (b.curve_ar, b.curve_a) = (ar, a);
+                b.cap = b.cap.min(self.curve_jerk_cap(ar / a));
+            }
             // Unknown radius: half the budget each way (the sum stays
             // within every axis limit).
             Some(None) => b.accel = accel * 0.5,
@@ -133,11 +136,12 @@ impl<const N: usize> Planner<N> {
         // previous block, the one after it in this one.
         let room = self.prev_length.min(len_mm).min(b.length);
         let m = self.hold_factor(&unit_mm, len_mm, curve, b.corner, 0);
-        b.hold_m_fixed = if b.release != 0 {
-            HOLD_STRETCH * self.hold_factor(&unit_mm, len_mm, curve, b.corner, b.release)
-        } else {
-            HOLD_STRETCH * m
-        };
+        b.hold_m_fixed = HOLD_STRETCH
+            * if b.release != 0 {
+                self.hold_factor(&unit_mm, len_mm, curve, b.corner, b.release)
+            } else {
+                m
+            };
         b.hold(HOLD_STRETCH * m, room);
         b.max_entry = b.junction.min(b.nominal).min(self.prev_nominal);
         b.entry = if self.len == 0 { 0.0 } else { b.max_entry };

@@ -94,6 +94,34 @@ impl Shape {
         lo
     }
 
+    /// The speed to slow to from `v` within `len` mm when `target` is out
+    /// of reach: the fastest one at or below `target` that fits, else (not
+    /// even a stop fits) the slowest one above it.
+    ///
+    /// An S ramp's distance is not monotone in where it ends: from
+    /// 83 mm/s (500 mm/s², 5000 mm/s³) a stop takes 11.1 mm and a ramp
+    /// down to 28 mm/s 11.7 mm, since the ramp's fixed `a/j` runs at a
+    /// higher mean speed. A block whose exit rose while it cruised can so
+    /// miss the new exit but still fit a stop: it used to stop dead in the
+    /// middle of a straight run; it now ends at the fastest speed below
+    /// the exit that fits (10 mm/s there). For a trapezoid a stop never
+    /// fits when `target` does not, and this is the slowest reachable speed.
+    pub fn reach_down_to(&self, v: f32, target: f32, len: f32) -> f32 {
+        if self.dist(v, 0.0) > len {
+            return self.reach_down(v, len);
+        }
+        let (mut lo, mut hi) = (0.0, target.clamp(0.0, v));
+        for _ in 0..24 {
+            let mid = 0.5 * (lo + hi);
+            if self.dist(v, mid) <= len {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        lo
+    }
+
     /// Lowest speed reachable when slowing from `v` within `len` mm.
     pub fn reach_down(&self, v: f32, len: f32) -> f32 {
         if self.jerk <= 0.0 {
@@ -220,7 +248,7 @@ impl Profile {
         let mut v1 = v1.min(vn);
         // Entry too fast to reach the exit speed: slow down as much as possible.
         if v0 > v1 && shape.dist(v0, v1) > len {
-            v1 = shape.reach_down(v0, len);
+            v1 = shape.reach_down_to(v0, v1, len);
             return Profile {
                 phases: [at(v0), ramp(v0, v1), at(v1), at(v1), at(v1)],
             };

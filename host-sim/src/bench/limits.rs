@@ -3,11 +3,18 @@
 //! limits allow. Measured on the steps as they left the pins, so it judges
 //! the planner, the preparer and the step driver together.
 //!
-//! Velocity and acceleration are taken over windows of [`WINDOW_S`]: with
-//! `x(t)` the step position, `v = (x(t+W) − x(t))/W` and
-//! `a = (x(t+2W) − 2·x(t+W) + x(t))/W²`, evaluated every [`GRID_S`]. A
-//! window that long averages out the step quantisation (one X step over
-//! 50 ms² is 5 mm/s², 1 % of 500) yet still sees a corner's acceleration.
+//! Velocity, acceleration and jerk are taken over windows of [`WINDOW_S`]:
+//! with `x(t)` the step position, `v = (x(t+W) − x(t))/W`,
+//! `a = (x(t+2W) − 2·x(t+W) + x(t))/W²` and
+//! `j = (x(t+3W) − 3·x(t+2W) + 3·x(t+W) − x(t))/W³`, evaluated every
+//! [`GRID_S`]. Each is a weighted average of the true motion's value over
+//! its windows (the kernels are B-splines of unit weight), so it never
+//! exceeds the true peak; a window that long averages out the step
+//! quantisation (one X step over 50 ms² is 5 mm/s², 1 % of 500) yet still
+//! sees a corner's acceleration. The jerk's quantisation is larger, up to
+//! [`jerk_quantum`] (400 mm/s³ on an 80 steps/mm axis), and a corner's
+//! instant velocity change `Δv` reads as up to `Δv/W²` (2.5 mm/s: 1,000
+//! mm/s³).
 
 use burin::AXES;
 
@@ -31,6 +38,10 @@ pub struct TraceLimits {
     pub peak_vel: [f64; AXES],
     /// Peak |acceleration| per axis over the windows, mm/s².
     pub peak_acc: [f64; AXES],
+    /// Peak |jerk| per axis over the windows, mm/s³, and where (the
+    /// middle of its three windows, timer ticks).
+    pub peak_jerk: [f64; AXES],
+    pub peak_jerk_tick: [u64; AXES],
     /// Where each peak acceleration was: the middle of its two windows,
     /// in timer ticks (the trace's clock).
     pub peak_acc_tick: [u64; AXES],
@@ -40,6 +51,14 @@ pub struct TraceLimits {
     pub min_interval: [u64; AXES],
     /// Final step position.
     pub end_steps: [i64; AXES],
+}
+
+/// The most a jerk figure can be off by step quantisation on an axis of
+/// `steps_per_mm`: each sample trails the true position by less than a
+/// step, and the third difference's weights are +1, +3 and −3, −1, so the
+/// error stays below 4 steps.
+pub fn jerk_quantum(steps_per_mm: f64) -> f64 {
+    4.0 / steps_per_mm / (WINDOW_S * WINDOW_S * WINDOW_S)
 }
 
 /// Recorder that fills [`TraceLimits`] as the run goes.
@@ -52,7 +71,7 @@ pub struct LimitMeter {
     grid_ticks: u64,
     /// Window length in grid samples.
     w: usize,
-    /// Step position at the grid times, newest last (2w+1 kept).
+    /// Step position at the grid times, newest last (3w+1 kept).
     samples: std::collections::VecDeque<[i64; AXES]>,
     next_grid: u64,
     pos: [i64; AXES],
@@ -83,7 +102,7 @@ impl LimitMeter {
 
     fn sample(&mut self) {
         self.samples.push_back(self.pos);
-        if self.samples.len() > 2 * self.w + 1 {
+        if self.samples.len() > 3 * self.w + 1 {
             self.samples.pop_front();
         }
         let n = self.samples.len();
@@ -96,8 +115,20 @@ impl LimitMeter {
             let v = (x2[i] - x1[i]) as f64 / self.steps_per_mm[i] / wt;
             self.out.peak_vel[i] = self.out.peak_vel[i].max(v.abs());
         }
-        if n == 2 * self.w + 1 {
-            let x0 = self.samples[0];
+        if n == 3 * self.w + 1 {
+            let (xm, x0) = (self.samples[n - 1 - 2 * self.w], self.samples[0]);
+            for i in 0..AXES {
+                let d3 = (x2[i] - 3 * x1[i] + 3 * xm[i] - x0[i]) as f64;
+                let j = d3 / self.steps_per_mm[i] / (wt * wt * wt);
+                if j.abs() > self.out.peak_jerk[i] {
+                    self.out.peak_jerk[i] = j.abs();
+                    let back = (3 * self.w as u64 * self.grid_ticks) / 2;
+                    self.out.peak_jerk_tick[i] = self.next_grid.saturating_sub(back);
+                }
+            }
+        }
+        if n > 2 * self.w {
+            let x0 = self.samples[n - 1 - 2 * self.w];
             for i in 0..AXES {
                 let d2 = (x2[i] - 2 * x1[i] + x0[i]) as f64;
                 let a = d2 / self.steps_per_mm[i] / (wt * wt);
@@ -162,7 +193,7 @@ impl Recorder for LimitMeter {
 
     fn finish(&mut self, _summary: &Summary) -> std::io::Result<()> {
         // Standing still after the last step: let the windows see the stop.
-        for _ in 0..=2 * self.w {
+        for _ in 0..=3 * self.w {
             self.sample();
         }
         self.out.end_steps = self.pos;
