@@ -33,6 +33,7 @@ pub use super::sink::SegmentSink;
 
 mod hold;
 mod rate;
+mod run;
 mod segment;
 mod walk;
 
@@ -92,6 +93,11 @@ pub struct Preparer {
     /// The shape the running profile was planned with (a hold ramp that
     /// crosses into the next block is still evaluated with it).
     pshape: Shape,
+    /// Blocks after the running one that its profile still covers (an
+    /// S-curve run, `prep::run`), and the length of the block finished
+    /// last, mm (where the profile's distances continue from).
+    run_blocks: usize,
+    done_len: f32,
     last_line: u32,
     /// Profile walk steps taken so far (wrapping): the work measure that
     /// tests and the bench budget hold against [`MAX_WALKS_PER_SEGMENT`].
@@ -136,6 +142,8 @@ impl Preparer {
                 accel: 1.0,
                 jerk: 0.0,
             },
+            run_blocks: 0,
+            done_len: 0.0,
             last_line: 0,
             walks: 0,
             pushed: [0; PUSHED_RING],
@@ -148,6 +156,7 @@ impl Preparer {
     pub fn reset(&mut self) {
         self.active = false;
         self.block = None;
+        self.run_blocks = 0;
         self.v = 0.0;
         self.tick_carry = 0.0;
         self.since_step = 0.0;
@@ -244,8 +253,10 @@ impl Preparer {
         )
     }
 
-    fn exit_target<const N: usize>(pl: &Planner<N>) -> f32 {
-        match pl.block(1) {
+    /// The speed the running profile should end at: the entry of the block
+    /// after it (after its run, `prep::run`).
+    fn exit_target<const N: usize>(&self, pl: &Planner<N>) -> f32 {
+        match pl.block(self.run_blocks + 1) {
             Some(b) if b.kind == BlockKind::Line => b.entry,
             _ => 0.0,
         }
@@ -279,20 +290,13 @@ impl Preparer {
 
     fn replan<const N: usize>(&mut self, pl: &Planner<N>) {
         let Some(b) = self.block else { return };
-        let exit = Self::exit_target(pl);
-        let p = Profile::plan_held(
-            &self.shape(),
-            self.v,
-            b.nominal,
-            exit,
-            b.length - self.s_done,
-            self.entry_hold_left(),
-            Self::exit_hold_m(pl),
-        );
+        let (p, shape, exit, run) = self.plan_run(pl, &b);
         self.profile_exit = exit;
         self.profile_nominal = b.nominal;
         self.exit_m = Self::exit_hold_m(pl);
         self.set_profile(p);
+        self.pshape = shape;
+        self.run_blocks = run;
     }
 
     fn start_block<const N: usize>(&mut self, pl: &Planner<N>) -> bool {
@@ -310,7 +314,17 @@ impl Preparer {
                 self.dwell_left = ticks;
                 self.v = 0.0;
             }
+            BlockKind::Line if self.run_blocks > 0 && self.hold == Hold::Running => {
+                // The running profile goes on into this block (`prep::run`):
+                // its distances now count from here. No corner hold here.
+                self.run_blocks -= 1;
+                self.s_phase0 -= self.done_len;
+                self.s_done = 0.0;
+                self.hold_end = 0.0;
+                self.exit_m = Self::exit_hold_m(pl);
+            }
             BlockKind::Line => {
+                self.run_blocks = 0;
                 // Only the hard limits: after an override drop the previous
                 // block may not have reached this one's (lower) planned
                 // entry, and cutting the speed here would be a jump.
@@ -326,6 +340,7 @@ impl Preparer {
     }
 
     fn finish_block<const N: usize>(&mut self, pl: &mut Planner<N>) {
+        self.done_len = self.block.map_or(0.0, |b| b.length);
         pl.pop();
         self.active = false;
         self.block = None;
@@ -366,7 +381,7 @@ impl Preparer {
                 continue;
             }
             if self.hold == Hold::Running {
-                let exit = Self::exit_target(pl);
+                let exit = self.exit_target(pl);
                 let changed = exit != self.profile_exit
                     || b.nominal != pl.block(0).map_or(b.nominal, |c| c.nominal);
                 if changed && self.can_replan() {

@@ -23,6 +23,8 @@ impl Preparer {
         // `v` carries across block boundaries: between two blocks the
         // tool is still moving and the hold ramp starts in the next one.
         // So it does when the ramp would run past a corner (`plan_hold`).
+        // A hold plans block by block (`plan_hold`): no run goes on.
+        self.run_blocks = 0;
         if self.v > 1e-6 {
             self.hold = Hold::Decelerating;
             if self.active {

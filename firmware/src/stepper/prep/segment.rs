@@ -22,7 +22,7 @@ impl Preparer {
         let mut time = 0.0f32;
         let mut walks = 0u32;
         let (target, block_end, stopped) = loop {
-            let (dt, ended) = self.advance(self.walk_dt(&b));
+            let (dt, ended) = self.advance(self.clip_to_block(self.walk_dt(&b), b.length));
             time += dt;
             walks += 1;
             self.walks = self.walks.wrapping_add(1);

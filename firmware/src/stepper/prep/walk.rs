@@ -82,17 +82,9 @@ impl Preparer {
             }
         }
         if self.phase < PHASES {
-            let ph = self.profile.phases[self.phase];
-            let (v, s) = if ph.v0 == ph.v1 {
-                (ph.v0, ph.v0 * self.tau)
-            } else if ph.t0 > 0.0 {
-                // The tail of a ramp that started before this profile.
-                let sh = self.pshape;
-                let (v, s) = sh.eval(ph.v0, ph.v1, ph.t0 + self.tau);
-                (v, s - sh.eval(ph.v0, ph.v1, ph.t0).1)
-            } else {
-                self.pshape.eval(ph.v0, ph.v1, self.tau)
-            };
+            // (A phase with `t0 > 0` is the tail of a ramp that started
+            // before this profile.)
+            let (v, s) = self.at(self.phase, self.tau);
             self.v = v;
             self.s_done = self.s_phase0 + s;
             (used, false)
