@@ -202,6 +202,8 @@ pub struct Planner<const N: usize> {
     /// Per axis: how long (at least, s) the blocks since the last one in
     /// which the axis's velocity may be large have taken (`planner::quiet`).
     quiet_time: [f32; AXES],
+    /// Axes some queued corner may still stop holding (a superset).
+    release_pending: u8,
     /// The curve the previous block was a chord of, if any.
     prev_curve: Option<Curve>,
     feed_pct: f32,
@@ -226,6 +228,7 @@ impl<const N: usize> Planner<N> {
             prev_nominal: 0.0,
             prev_length: 0.0,
             quiet_time: [f32::INFINITY; AXES],
+            release_pending: 0,
             prev_curve: None,
             feed_pct: 1.0,
             rapid_pct: 1.0,
@@ -252,6 +255,7 @@ impl<const N: usize> Planner<N> {
             prev_nominal,
             prev_length,
             quiet_time,
+            release_pending,
             prev_curve,
             feed_pct,
             rapid_pct,
@@ -268,6 +272,7 @@ impl<const N: usize> Planner<N> {
         self.prev_nominal = prev_nominal;
         self.prev_length = prev_length;
         self.quiet_time = quiet_time;
+        self.release_pending = release_pending;
         self.prev_curve = prev_curve;
         self.feed_pct = feed_pct;
         self.rapid_pct = rapid_pct;

@@ -132,6 +132,7 @@ impl<const N: usize> Planner<N> {
         });
         b.quiet = quiet;
         b.release = release & turned;
+        self.release_pending |= b.release;
         // Both halves of the hold fit: the one before the corner in the
         // previous block, the one after it in this one.
         let room = self.prev_length.min(len_mm).min(b.length);

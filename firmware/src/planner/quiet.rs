@@ -128,16 +128,24 @@ impl<const N: usize> Planner<N> {
             Some(k) if k >= 2 => k,
             _ => return lowest,
         };
+        let pending = self.release_pending;
+        if pending == 0 {
+            return lowest;
+        }
         let last = self.at(newest).min_time();
+        // Axes still pending in the blocks walked (exact once the walk
+        // reaches the oldest block it may touch).
+        let mut seen = 0u8;
         // Quiet time from each corner to the newest block's end, per axis
         // (negative once a block that is not quiet comes between).
         let mut after = [0.0f32; AXES];
         let mut c = newest;
         while c >= 2 {
             let b = *self.at(c);
+            let time = b.min_time();
             for (i, t) in after.iter_mut().enumerate() {
                 *t = if b.quiet & (1 << i) != 0 && *t >= 0.0 {
-                    *t + b.min_time()
+                    *t + time
                 } else {
                     -1.0
                 };
@@ -155,14 +163,23 @@ impl<const N: usize> Planner<N> {
                 } else if axes.clone().any(|i| after[i] < 0.0) {
                     // A loud block came first: this corner keeps its hold.
                     self.at(c).release = 0;
+                } else {
+                    seen |= b.release;
                 }
             }
             // Corners further back had this much quiet after them at the
-            // last push already, so they were settled then.
-            if after.iter().all(|&t| t < 0.0 || t - last >= TIME * W) {
+            // last push already, so they were settled then. Only the axes
+            // some corner may still release count: an axis that never
+            // moves is quiet all along, and walking back through 37.5 ms
+            // of it took 6,000 instructions a block.
+            let settled = |i: usize| after[i] < 0.0 || after[i] - last >= TIME * W;
+            if (0..AXES).all(|i| pending & (1 << i) == 0 || settled(i)) {
                 break;
             }
             c -= 1;
+        }
+        if c < 2 {
+            self.release_pending = seen;
         }
         if lowest < self.len {
             self.planned = self.planned.min(lowest.saturating_sub(1));
