@@ -169,6 +169,24 @@ pub fn clamp(v: f32, lo: f32, hi: f32) -> f32 {
     v.max(lo).min(hi)
 }
 
+/// Cube root of `x` ≥ 0 (0 for anything else), in `f32` only: libm's
+/// `cbrtf` finishes in `f64`, soft-float on this FPU (the image check
+/// refuses it). A first guess from the exponent bits, then Newton steps
+/// `y ← y − (y³ − x)/(3y²)`, each about doubling the correct bits.
+pub fn cbrt(x: f32) -> f32 {
+    if x.is_nan() || x <= 0.0 {
+        return 0.0;
+    }
+    if x.is_infinite() {
+        return x;
+    }
+    let mut y = f32::from_bits(x.to_bits() / 3 + 0x2a51_37a0);
+    for _ in 0..4 {
+        y -= (y * y * y - x) / (3.0 * y * y);
+    }
+    y
+}
+
 /// Most decimals [`write_fixed`] prints; more are clamped to this.
 pub const MAX_DECIMALS: u8 = 6;
 
@@ -274,6 +292,24 @@ mod tests {
         let mut s = String::new();
         write_short(&mut s, v, d).unwrap();
         s
+    }
+
+    #[test]
+    fn cube_roots_in_f32() {
+        for x in [
+            1e-9f32, 1e-4, 0.09, 0.45, 1.0, 8.0, 27.0, 450.0, 5000.0, 1e9, 3.0e30,
+        ] {
+            let want = (x as f64).cbrt();
+            let got = f64::from(cbrt(x));
+            assert!(
+                (got - want).abs() <= 2e-7 * want,
+                "{x}: {got} against {want}"
+            );
+        }
+        assert_eq!(cbrt(0.0), 0.0);
+        assert_eq!(cbrt(-8.0), 0.0);
+        assert_eq!(cbrt(f32::NAN), 0.0);
+        assert_eq!(cbrt(f32::INFINITY), f32::INFINITY);
     }
 
     #[test]

@@ -70,6 +70,6 @@ impl<const N: usize> Planner<N> {
         if self.settings.profile != crate::settings::Profile::SCurve || !(j > 0.0 && r > 0.0) {
             return f32::INFINITY;
         }
-        libm::cbrtf(j * r * r)
+        crate::num::cbrt(j * r * r)
     }
 }
