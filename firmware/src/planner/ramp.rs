@@ -48,7 +48,13 @@ impl Shape {
             return trap;
         }
         // The S ramp is never faster than the trapezoid: bisect below it.
-        let (mut lo, mut hi) = (v, trap);
+        self.fitting(v, v, trap, len)
+    }
+
+    /// The largest speed in `lo..=hi` that a ramp from `v` ends at within
+    /// `len` mm, by bisection (`lo` when none does); the ramp's distance
+    /// must grow towards `hi` there.
+    fn fitting(&self, v: f32, mut lo: f32, mut hi: f32, len: f32) -> f32 {
         for _ in 0..24 {
             let mid = 0.5 * (lo + hi);
             if self.dist(v, mid) <= len {
@@ -110,16 +116,7 @@ impl Shape {
         if self.dist(v, 0.0) > len {
             return self.reach_down(v, len);
         }
-        let (mut lo, mut hi) = (0.0, target.clamp(0.0, v));
-        for _ in 0..24 {
-            let mid = 0.5 * (lo + hi);
-            if self.dist(v, mid) <= len {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        lo
+        self.fitting(v, 0.0, crate::num::clamp(target, 0.0, v), len)
     }
 
     /// Lowest speed reachable when slowing from `v` within `len` mm.
