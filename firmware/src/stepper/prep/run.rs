@@ -12,9 +12,9 @@
 //! and no corner that needs a hold is crossed on a ramp.
 //!
 //! A run ends before a block that is not a line, watches other inputs,
-//! or has a lower nominal speed (the run's cruise is the first block's
-//! speed, so each block's cap holds in all of it), and after [`MAX_RUN`]
-//! blocks. It is planned from the speed the tool has to the planned entry
+//! or has another nominal speed (the run cruises at most at the first
+//! block's, so every block's cap holds in all of it, and no block is held
+//! below its own), and after [`MAX_RUN`] blocks. It is planned from the speed the tool has to the planned entry
 //! of the block after it: one S ramp over the run's length reaches at
 //! least what a ramp per block reached, so that entry is in reach as it
 //! was. The path acceleration is the smallest of the run's blocks. Then
@@ -106,21 +106,8 @@ impl Preparer {
     }
 
     /// Distance into the block after walking `dt` more seconds.
-    pub(super) fn s_after(&self, mut dt: f32) -> f32 {
-        let (mut phase, mut tau, mut s0) = (self.phase, self.tau, self.s_phase0);
-        while dt > 0.0 && phase < PHASES {
-            let ph = self.profile.phases[phase];
-            let rem = ph.time - tau;
-            if dt < rem {
-                tau += dt;
-                dt = 0.0;
-            } else {
-                dt -= rem.max(0.0);
-                phase += 1;
-                s0 += ph.dist;
-                tau = 0.0;
-            }
-        }
+    pub(super) fn s_after(&self, dt: f32) -> f32 {
+        let (phase, tau, s0, _) = self.walk_to(dt);
         if phase < PHASES {
             s0 + self.at(phase, tau).1
         } else {

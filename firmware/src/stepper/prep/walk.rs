@@ -61,26 +61,11 @@ impl Preparer {
         dt.max(self.tau / TAU_ULPS)
     }
 
-    /// Walk the profile for `dt` seconds; returns the time actually walked
-    /// and whether the profile ended. The loop crosses at most the
-    /// [`PHASES`] phases.
-    pub(super) fn advance(&mut self, mut dt: f32) -> (f32, bool) {
-        let mut used = 0.0;
-        while dt > 0.0 && self.phase < PHASES {
-            let ph = self.profile.phases[self.phase];
-            let rem = ph.time - self.tau;
-            if dt < rem {
-                self.tau += dt;
-                used += dt;
-                dt = 0.0;
-            } else {
-                used += rem.max(0.0);
-                dt -= rem.max(0.0);
-                self.phase += 1;
-                self.s_phase0 += ph.dist;
-                self.tau = 0.0;
-            }
-        }
+    /// Walk the profile for `dt` seconds ([`Preparer::walk_to`]); returns
+    /// the time actually walked and whether the profile ended.
+    pub(super) fn advance(&mut self, dt: f32) -> (f32, bool) {
+        let (phase, tau, s_phase0, used) = self.walk_to(dt);
+        (self.phase, self.tau, self.s_phase0) = (phase, tau, s_phase0);
         if self.phase < PHASES {
             // (A phase with `t0 > 0` is the tail of a ramp that started
             // before this profile.)
@@ -93,6 +78,31 @@ impl Preparer {
             self.s_done = self.s_phase0;
             (used, true)
         }
+    }
+
+    /// Where walking `dt` more seconds lands, without moving: the phase,
+    /// the time into it, the distance at its start, and the time really
+    /// walked (less where the profile ends). [`Preparer::advance`] moves
+    /// there; `prep::run` looks ahead with it to end a walk on a block's
+    /// end. The loop crosses at most the [`PHASES`] phases.
+    pub(super) fn walk_to(&self, mut dt: f32) -> (usize, f32, f32, f32) {
+        let (mut phase, mut tau, mut s0, mut used) = (self.phase, self.tau, self.s_phase0, 0.0);
+        while dt > 0.0 && phase < PHASES {
+            let ph = self.profile.phases[phase];
+            let rem = ph.time - tau;
+            if dt < rem {
+                tau += dt;
+                used += dt;
+                dt = 0.0;
+            } else {
+                used += rem.max(0.0);
+                dt -= rem.max(0.0);
+                phase += 1;
+                s0 += ph.dist;
+                tau = 0.0;
+            }
+        }
+        (phase, tau, s0, used)
     }
 
     /// Start waiting `ticks` (time walked without a step, or the part of
