@@ -118,6 +118,30 @@ fn small_arcs_and_helices_keep_the_limits() {
     check(&machine(), "arcs", src);
 }
 
+/// Arcs in planes whose axes differ (Y and X at 500 mm/s², Z at 100):
+/// each chord turns at what its own normal allows (`planner::curve`), so
+/// where the normal lies along Y the circle runs faster than Z's budget
+/// alone would let it, and every axis still keeps its limit.
+#[test]
+fn arcs_across_unequal_axes_keep_each_axis_limit_and_use_the_faster_one() {
+    let src = "G21 G90 G19\nG1 Y6 F6000\nG2 Y6 Z0 J-3 K0\nG2 Y6 Z0 J-3 K0\nG18 G1 X6\nG3 X6 Z0 I-3 K0\nG0 X0 Y0 Z0\n";
+    let f = check(&machine(), "yz-xz arcs", src);
+    // Held to Z's 100 mm/s² all the way round (one budget for the plane,
+    // the smallest axis's), a circle of 3 mm at `sqrt(0.8·a·r)` takes
+    // this long at the least (1.217 s; that rule ran it in 1.326 s, the
+    // per-chord one in 1.209 s: the speed rises where the normal turns
+    // towards Y, as far as Z's ramp allows before it turns back).
+    let r = 3.0f64;
+    let held = std::f64::consts::TAU * r / (0.8 * 100.0 * r).sqrt();
+    // Line 4: the second YZ circle, entered and left at its own speed.
+    let l = f.losses.iter().find(|l| l.line == 4).expect("arc located");
+    let t = l.bound_s + l.lost_s;
+    assert!(
+        t < held,
+        "YZ circle: {t:.3} s, Z's budget alone {held:.3} s"
+    );
+}
+
 #[test]
 fn collinear_short_blocks_keep_the_limits() {
     let pts = (1..=400).map(|k| (k as f64 * 0.025, k as f64 * 0.0125));

@@ -39,6 +39,10 @@ pub struct BenchMotionArgs {
     /// Machine description (default: host-sim/machines/grbl_match.toml).
     #[arg(long, value_name = "FILE")]
     pub machine: Option<PathBuf>,
+    /// After each job, the N source lines that lose the most time against
+    /// the bound (where the step trace reaches each path vertex).
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub losses: usize,
     /// G-code jobs (default: the 14 jobs in ../shared/bench-motion/).
     pub jobs: Vec<PathBuf>,
 }
@@ -56,7 +60,7 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
         }
         GRBL_S.iter().map(|(n, _)| dir.join(n)).collect()
     } else {
-        a.jobs
+        a.jobs.clone()
     };
     let (vmax, amax) = axis_limits(&cfg);
     let jmax = f64::from(cfg.settings.jerk);
@@ -143,6 +147,27 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
             short[1],
             short[2],
         );
+        if a.losses > 0 {
+            let mut by_kind: Vec<(String, f64, f64)> = Vec::new();
+            for l in &f.losses {
+                let k = format!("{:?}", l.kind);
+                match by_kind.iter_mut().find(|e| e.0 == k) {
+                    Some(e) => (e.1, e.2) = (e.1 + l.lost_s, e.2 + l.bound_s),
+                    None => by_kind.push((k, l.lost_s, l.bound_s)),
+                }
+            }
+            let parts: Vec<String> = by_kind
+                .iter()
+                .map(|(k, lost, b)| format!("{k} {lost:.3} s of {b:.2}"))
+                .collect();
+            println!("    lost by kind: {}", parts.join(", "));
+        }
+        for l in f.losses.iter().take(a.losses) {
+            println!(
+                "    line {:>6} {:>7?} {:>5} pieces: lost {:>8.4} s over the bound's {:>8.4} s",
+                l.line, l.kind, l.pieces, l.lost_s, l.bound_s
+            );
+        }
         if !f.summary.errors.is_empty() {
             failed += 1;
             for e in f.summary.errors.iter().take(3) {

@@ -2,23 +2,28 @@
 //! centripetal and the tangential part.
 //!
 //! On a curve of radius `r` at speed `v` the tool accelerates by `a_n =
-//! v²/r` towards the centre and by `a_t` along the path. The normal `n` and
-//! the tangent `u` are orthogonal unit vectors, so for every axis
-//! `|a_t·u_i + a_n·n_i| ≤ sqrt(a_t² + a_n²)·sqrt(u_i² + n_i²) ≤
-//! sqrt(a_t² + a_n²)`: keeping `sqrt(a_t² + a_n²)` within the smallest limit
-//! `A` of the arc plane's axes keeps every one of them within its own. Axes
-//! outside the plane (a helix's linear axis) only feel `a_t·u_i`, which the
-//! block's straight-line limit already covers.
+//! v²/r` towards the centre (the in-plane normal `n`) and by `a_t` along
+//! the path (the chord's direction `u`). Axis `i` feels `a_t·u_i + a_n·n_i`.
+//! A block speeds up and slows down, so `a_t` takes both signs, and with
+//! `u ⟂ n` in the plane one of the two plane axes always gets the sum of
+//! the magnitudes: the exact per-axis limit is
+//! `|a_t|·|u_i| + a_n·|n_i| ≤ a_i` on each axis. Each chord is judged in
+//! its own direction: a YZ arc at Y 500 / Z 100 mm/s² may turn at 500
+//! where its normal lies along Y, and at 100 only where it lies along Z
+//! (a single isotropic budget, the smallest axis's, held the whole arc to
+//! that axis). Axes outside the plane (a helix's linear axis) only feel
+//! `a_t·u_i`, which the block's straight-line limit already covers.
 //!
-//! The centripetal share `c = a_n/A` follows from the fastest the chord
-//! may run: an arc the feed keeps slow (`v² ≪ A·r`) leaves nearly the whole
-//! budget to speeding up and slowing down; a small arc the budget itself
-//! keeps slow runs at `sqrt(C_MAX·A·r)` and ramps at `sqrt(1 − C_MAX²)·A`.
+//! The centripetal share `c = a_n/A_n` (`A_n = min_i a_i/|n_i|`, the most
+//! the normal direction allows) follows from the fastest the chord may run:
+//! an arc the feed keeps slow leaves nearly the whole budget to speeding up
+//! and slowing down; a small arc the budget itself keeps slow runs at
+//! `sqrt(C_MAX·A_n·r)`, and ramps with what each axis has left.
 
 use super::*;
 
-/// Largest centripetal share of the budget on a curve: the rest
-/// (`sqrt(1 − 0.8²) = 0.6`) is left for the tangential ramps.
+/// Largest centripetal share of the budget on a curve: the rest is left
+/// for the tangential ramps.
 pub const C_MAX: f32 = 0.8;
 
 /// What the planner knows about the curve a chord belongs to.
@@ -31,18 +36,52 @@ pub struct Curve {
     pub plane: u8,
 }
 
+/// A chord's share of the budget (see the module doc).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ChordBudget {
+    /// `A_n·r`, mm²/s²: `C_MAX` of it caps `v²`.
+    pub ar: f32,
+    /// `A_n`, mm/s².
+    pub an: f32,
+    /// Per plane axis, the tangential limit `α − β·a_n` (`α = a_i/|u_i|`,
+    /// `β = |n_i|/|u_i|`); `α` infinite where the chord does not move
+    /// the axis (the centripetal cap already keeps it within its limit).
+    pub tangent: [[f32; 2]; 2],
+}
+
 impl Curve {
-    /// `A·r` and `A` of this curve under `s` (see the module doc); `None`
-    /// when the radius is unknown.
-    pub(super) fn budget(&self, s: &Settings) -> Option<(f32, f32)> {
-        if !(self.radius.is_finite() && self.radius > 0.0) || self.plane == 0 {
+    /// The budget of a chord going `unit` under `s`; `None` when the
+    /// radius is unknown or the plane is not two axes.
+    pub(super) fn budget(&self, s: &Settings, unit: &[f32; AXES]) -> Option<ChordBudget> {
+        if !(self.radius.is_finite() && self.radius > 0.0) || self.plane.count_ones() != 2 {
             return None;
         }
-        let a = (0..AXES)
-            .filter(|i| self.plane >> i & 1 != 0)
-            .map(|i| s.axes[i].max_accel)
-            .fold(f32::INFINITY, f32::min);
-        a.is_finite().then_some((a * self.radius, a))
+        let mut ax = (0..AXES).filter(|i| self.plane >> i & 1 != 0);
+        let (p, q) = (ax.next()?, ax.next()?);
+        let (up, uq) = (unit[p], unit[q]);
+        let norm = libm::sqrtf(up * up + uq * uq);
+        if norm.is_nan() || norm <= 1e-6 {
+            return None;
+        }
+        // In-plane normal: the in-plane direction turned by 90°.
+        let n = [libm::fabsf(uq) / norm, libm::fabsf(up) / norm];
+        let u = [libm::fabsf(up), libm::fabsf(uq)];
+        let a = [s.axes[p].max_accel, s.axes[q].max_accel];
+        let mut an = f32::INFINITY;
+        let mut tangent = [[f32::INFINITY, 0.0]; 2];
+        for k in 0..2 {
+            if n[k] > 1e-6 {
+                an = an.min(a[k] / n[k]);
+            }
+            if u[k] > 1e-6 {
+                tangent[k] = [a[k] / u[k], n[k] / u[k]];
+            }
+        }
+        (an.is_finite() && an > 0.0).then_some(ChordBudget {
+            ar: an * self.radius,
+            an,
+            tangent,
+        })
     }
 }
 
@@ -55,10 +94,14 @@ impl<const N: usize> Planner<N> {
         }
         let vmax = libm::sqrtf(C_MAX * b.curve_ar);
         b.nominal = b.nominal.min(vmax);
-        let c = (b.nominal * b.nominal / b.curve_ar).min(C_MAX);
+        // a_n at the top speed: `v²/r = c·A_n`.
+        let an = (b.nominal * b.nominal / b.curve_ar).min(C_MAX) * b.curve_an;
         b.accel = b
-            .line_accel
-            .min(libm::sqrtf((1.0 - c * c).max(0.0)) * b.curve_a);
+            .curve_tangent
+            .iter()
+            .fold(b.line_accel, |acc, [alpha, beta]| {
+                acc.min(alpha - beta * an)
+            });
     }
 
     /// In S-curve mode, the fastest a curve of radius `r` may be run at a
@@ -71,5 +114,57 @@ impl<const N: usize> Planner<N> {
             return f32::INFINITY;
         }
         crate::num::cbrt(j * r * r)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A YZ arc on a machine whose Z accelerates at a fifth of Y.
+    fn yz() -> (Settings, Curve) {
+        let mut s = Settings::default();
+        s.axes[1].max_accel = 500.0;
+        s.axes[2].max_accel = 100.0;
+        (
+            s,
+            Curve {
+                radius: 3.0,
+                plane: 0b110,
+            },
+        )
+    }
+
+    #[test]
+    fn each_chord_turns_at_what_its_normal_axis_allows() {
+        let (s, c) = yz();
+        // Going along Z the normal lies along Y: 500 to turn, Z's 100 to ramp.
+        let b = c.budget(&s, &[0.0, 0.0, 1.0, 0.0]).unwrap();
+        assert_eq!((b.an, b.ar), (500.0, 1500.0));
+        // tangent[k]: the plane's axes in order, Y then Z.
+        assert_eq!(b.tangent[0][0], f32::INFINITY);
+        assert_eq!(b.tangent[1], [100.0, 0.0]);
+        // Going along Y the normal lies along Z: Z's 100 to turn.
+        let b = c.budget(&s, &[0.0, 1.0, 0.0, 0.0]).unwrap();
+        assert_eq!(b.an, 100.0);
+        assert_eq!(b.tangent[0], [500.0, 0.0]);
+    }
+
+    #[test]
+    fn a_diagonal_chord_keeps_each_axis_within_its_limit_at_the_top_speed() {
+        let (s, c) = yz();
+        let h = core::f32::consts::FRAC_1_SQRT_2;
+        let u = [0.0, h, h, 0.0];
+        let cb = c.budget(&s, &u).unwrap();
+        let mut b = Block::EMPTY;
+        (b.curve_ar, b.curve_an, b.curve_tangent) = (cb.ar, cb.an, cb.tangent);
+        b.nominal = 1e6;
+        b.line_accel = 100.0 / h;
+        Planner::<4>::curve_limits(&mut b);
+        let an = b.nominal * b.nominal / c.radius;
+        // |a_t|·|u_i| + a_n·|n_i| on each plane axis: Z is the tight one.
+        let z = b.accel * h + an * h;
+        assert!((z - 100.0).abs() < 0.01, "Z at {z}");
+        assert!(b.accel > 0.0);
     }
 }

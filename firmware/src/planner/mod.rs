@@ -99,24 +99,28 @@ pub struct Block {
     /// The same along a straight line (a chord of a curve shares it with
     /// the centripetal acceleration: `accel` is less).
     pub line_accel: f32,
-    /// Chord of an arc: `A·r` and `A` of the arc's plane (see
-    /// `planner::curve`); 0 otherwise.
+    /// Chord of an arc: `A_n·r`, `A_n` and the tangential limits of its
+    /// plane axes (`planner::curve::ChordBudget`); `curve_ar` 0 otherwise.
     pub curve_ar: f32,
-    pub curve_a: f32,
+    pub curve_an: f32,
+    pub curve_tangent: [[f32; 2]; 2],
     /// Slowest path speed the step timer can time, mm/s: the feed override
     /// never takes `nominal` below it.
     pub floor: f32,
     /// Cornering limit at the junction with the previous block, mm/s.
     pub junction: f32,
     /// The corner at this block's entry, for its hold (`planner::passes`):
-    /// the largest `|Δu_i| / a_i` over the axes, s²/mm (0: no corner to
-    /// hold, as between chords of one curve).
+    /// the stretched largest `|Δu_i| / a_i` over the axes that move after
+    /// it, s²/mm (0: no corner to hold, as between chords of one curve).
     pub hold_m: f32,
+    /// The same over the axes that move before it: the hold the block
+    /// before this one keeps at its exit.
+    pub hold_pre_m: f32,
     /// The corner's limit before its hold lowers it (junction deviation
     /// and curvature), mm/s.
     pub corner: f32,
-    /// `hold_m` once the axes in `release` stop holding (`planner::quiet`).
-    pub hold_m_fixed: f32,
+    /// The hold once the axes in `release` stop holding (`planner::quiet`).
+    pub hold_fixed: passes::Sides,
     /// Axes whose velocity the block keeps small (bit per axis), and the
     /// axes its entry corner holds only until quiet blocks follow.
     pub quiet: u8,
@@ -143,12 +147,17 @@ impl Block {
         accel: 1.0,
         line_accel: 1.0,
         curve_ar: 0.0,
-        curve_a: 0.0,
+        curve_an: 0.0,
+        curve_tangent: [[f32::INFINITY, 0.0]; 2],
         floor: 0.0,
         junction: 0.0,
         hold_m: 0.0,
+        hold_pre_m: 0.0,
         corner: 0.0,
-        hold_m_fixed: 0.0,
+        hold_fixed: passes::Sides {
+            pre: 0.0,
+            post: 0.0,
+        },
         quiet: 0,
         release: 0,
         max_entry: 0.0,
@@ -199,6 +208,9 @@ pub struct Planner<const N: usize> {
     /// Path speed the previous block's junction may carry (0 after a stop).
     prev_nominal: f32,
     prev_length: f32,
+    /// Per axis: the least time (s) the blocks since the last one that
+    /// moved the axis take (one-sided holds, `planner::passes`).
+    still_time: [f32; AXES],
     /// Per axis: how long (at least, s) the blocks since the last one in
     /// which the axis's velocity may be large have taken (`planner::quiet`).
     quiet_time: [f32; AXES],
@@ -227,6 +239,7 @@ impl<const N: usize> Planner<N> {
             position_mm: [0.0; AXES],
             prev_nominal: 0.0,
             prev_length: 0.0,
+            still_time: [f32::INFINITY; AXES],
             quiet_time: [f32::INFINITY; AXES],
             release_pending: 0,
             prev_curve: None,
@@ -254,6 +267,7 @@ impl<const N: usize> Planner<N> {
             position_mm,
             prev_nominal,
             prev_length,
+            still_time,
             quiet_time,
             release_pending,
             prev_curve,
@@ -271,6 +285,7 @@ impl<const N: usize> Planner<N> {
         self.position_mm = position_mm;
         self.prev_nominal = prev_nominal;
         self.prev_length = prev_length;
+        self.still_time = still_time;
         self.quiet_time = quiet_time;
         self.release_pending = release_pending;
         self.prev_curve = prev_curve;

@@ -7,6 +7,14 @@ use super::*;
 /// judged over (`host_sim::bench::limits`), s.
 pub(super) const CANCEL_WINDOW_S: f32 = 0.05;
 
+/// A corner's hold factors, stretched (`v²·m/2` mm each side): `pre` in
+/// the block before the corner, `post` in the block after it.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Sides {
+    pub pre: f32,
+    pub post: f32,
+}
+
 /// A hold's length over the first-order one (`v²·m`). A window centred on
 /// the corner weighs the hold's middle most: a hold of `T` seconds frees
 /// `T/W·(1 − T/4W)` of it, not `T/W`, so it must be longer than the
@@ -37,8 +45,25 @@ pub(super) const HOLD_STRETCH: f32 = 1.17;
 // the ramps get what the turns leave. Chords of one arc or spline hold
 // nothing: `planner::curve` already shares their budget.
 //
+// One-sided holds. An axis that stands still on one side of the corner (a
+// plunge after a move in XY: Z is still before it, X and Y after it) has
+// no ramp on that side for its change to add to, and the window that
+// meets the corner sees the change plus the ramp on the other side only.
+// Half the change's own time, on the side where the axis moves, is then
+// enough (no stretch): a window starting at the corner holds `J` and the
+// ramp for `W − T0/2`, and `J/W + a·(1 − x/2)·…` peaks at `a` exactly
+// (checked numerically against the meter's kernel for `x` up to 1/2).
+// So each side holds for the axes that move on it: `Sides::pre` (the
+// block before) and `Sides::post` (this block). An XY move between a
+// retract and a plunge then holds only for X's and Y's own changes, a
+// few hundredths of Z's. Only where the still side lasts a window: a
+// change of the same axis at the next corner within it adds to this one
+// (two like changes 10 ms apart at `x` = 0.3 read 111 %; a window apart,
+// 100 %).
+//
 // In the passes a block entered at `u` and left at `w` must fit
-// `u²·m_in/2 + w²·m_out/2 + ramp(u, w)` in its length
+// `u²·m_in/2 + w²·m_out/2 + ramp(u, w)` in its length (`m_in` its own
+// corner's `post`, `m_out` the next corner's `pre`)
 // ([`Shape::reach_held`]); the backward pass also keeps every entry low
 // enough that the block could hold it at both ends, so the forward pass
 // never has to slow a block it already accepted.
@@ -99,10 +124,12 @@ impl<const N: usize> Planner<N> {
         curve: Option<Curve>,
         v_corner: f32,
         quiet: u8,
-    ) -> f32 {
+        long: (u8, bool),
+    ) -> Sides {
         // `quiet`: axes whose change here needs no hold (`planner::quiet`).
+        let none = Sides::default();
         if self.prev_nominal <= 0.0 {
-            return 0.0;
+            return none;
         }
         let cos = unit
             .iter()
@@ -112,12 +139,12 @@ impl<const N: usize> Planner<N> {
         if let (Some(c), Some(p)) = (curve, self.prev_curve) {
             let phi = libm::acosf(crate::num::clamp(cos, -1.0, 1.0));
             if c == p && c.radius > 0.0 && phi <= 2.0 * length / c.radius {
-                return 0.0;
+                return none;
             }
             if c == p && c.radius <= 0.0 {
                 // A spline (radius unknown) has half of the budget for
                 // its turns already.
-                return 0.0;
+                return none;
             }
         }
         let factor = |before: &[f32; AXES]| {
@@ -131,10 +158,36 @@ impl<const N: usize> Planner<N> {
             m
         };
         let m = factor(&self.prev_unit_mm);
+        // Each side holds for the axes that move on it (module doc, one-
+        // sided holds): an axis standing still on one side has no ramp
+        // there for its change to add to.
+        let p = &self.prev_unit_mm;
+        let mut sides = none;
+        for (i, ax) in self.settings.axes.iter().enumerate() {
+            let d = libm::fabsf(unit[i] - p[i]);
+            if d <= 1e-6 || quiet & (1 << i) != 0 {
+                continue;
+            }
+            // An axis counts as still on a side only if it stays still for
+            // a window there (`long`: per axis before, this block after):
+            // another change of the axis within one would add to this one
+            // (a Z valley's floor of one short XY block: 104 %).
+            let (pre, post) = (
+                libm::fabsf(p[i]) > 1e-6 || long.0 & (1 << i) == 0,
+                libm::fabsf(unit[i]) > 1e-6 || !long.1,
+            );
+            let k = if pre && post { HOLD_STRETCH } else { 1.0 } * d / ax.max_accel;
+            if pre {
+                sides.pre = sides.pre.max(k);
+            }
+            if post {
+                sides.post = sides.post.max(k);
+            }
+        }
         // After a chord the turn before this corner was the curve's own
         // (budgeted there), not a change this one could take back.
-        if self.prev_curve.is_some() || self.prev2_unit_mm.iter().all(|&u| u == 0.0) {
-            return m;
+        if m <= 0.0 || self.prev_curve.is_some() || self.prev2_unit_mm.iter().all(|&u| u == 0.0) {
+            return sides;
         }
         // Two corners whose changes oppose (a zigzag, rounding noise) leave
         // together only their sum, plus what the block between them keeps
@@ -146,7 +199,11 @@ impl<const N: usize> Planner<N> {
         } else {
             0.0
         };
-        m.min(net + m * (t / CANCEL_WINDOW_S).min(1.0))
+        let kept = m.min(net + m * (t / CANCEL_WINDOW_S).min(1.0)) / m;
+        Sides {
+            pre: sides.pre * kept,
+            post: sides.post * kept,
+        }
     }
 
     /// Cosine of the corner between the reversed previous direction and
@@ -220,7 +277,7 @@ impl<const N: usize> Planner<N> {
         let planned = self.planned;
         let mut lowered = None;
         let mut next_entry = 0.0f32;
-        let mut next_m = 0.0f32;
+        let mut next_m = 0.0f32; // the next corner's hold before it
         let mut k = self.len;
         while k > 1 {
             k -= 1;
@@ -248,7 +305,7 @@ impl<const N: usize> Planner<N> {
             let unchanged = new == b.entry;
             b.entry = new;
             next_entry = new;
-            next_m = b.hold_m;
+            next_m = b.hold_pre_m;
             if unchanged && k < down_to && (k <= planned || (!full && k + 1 < self.len)) {
                 break;
             }
@@ -262,9 +319,12 @@ impl<const N: usize> Planner<N> {
             let prev = *self.at(k - 1);
             let b = self.at(k);
             let reach = match prev.kind {
-                BlockKind::Line => {
-                    shape_of(&prev, &st).reach_held(prev.entry, prev.length, prev.hold_m, b.hold_m)
-                }
+                BlockKind::Line => shape_of(&prev, &st).reach_held(
+                    prev.entry,
+                    prev.length,
+                    prev.hold_m,
+                    b.hold_pre_m,
+                ),
                 BlockKind::Dwell { .. } => 0.0,
             };
             if reach <= b.entry {

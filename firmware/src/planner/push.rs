@@ -1,7 +1,7 @@
 //! Turning one move into a block: step counts, caps, the speed request,
 //! the corner with the block before, and the merge with it.
 
-use super::passes::HOLD_STRETCH;
+use super::passes::CANCEL_WINDOW_S;
 use super::*;
 
 impl<const N: usize> Planner<N> {
@@ -78,14 +78,14 @@ impl<const N: usize> Planner<N> {
         b.cap = cap;
         b.line_accel = accel;
         b.accel = accel;
-        match curve.map(|c| c.budget(s)) {
-            Some(Some((ar, a))) => {
-                (b.curve_ar, b.curve_a) = (ar, a);
-                b.cap = b.cap.min(self.curve_jerk_cap(ar / a));
+        match curve.map(|c| (c, c.budget(s, &unit))) {
+            Some((c, Some(cb))) => {
+                (b.curve_ar, b.curve_an, b.curve_tangent) = (cb.ar, cb.an, cb.tangent);
+                b.cap = b.cap.min(self.curve_jerk_cap(c.radius));
             }
             // Unknown radius: half the budget each way (the sum stays
             // within every axis limit).
-            Some(None) => b.accel = accel * 0.5,
+            Some((_, None)) => b.accel = accel * 0.5,
             None => {}
         }
         match speed {
@@ -136,14 +136,19 @@ impl<const N: usize> Planner<N> {
         // Both halves of the hold fit: the one before the corner in the
         // previous block, the one after it in this one.
         let room = self.prev_length.min(len_mm).min(b.length);
-        let m = self.hold_factor(&unit_mm, len_mm, curve, b.corner, 0);
-        b.hold_m_fixed = HOLD_STRETCH
-            * if b.release != 0 {
-                self.hold_factor(&unit_mm, len_mm, curve, b.corner, b.release)
-            } else {
-                m
-            };
-        b.hold(HOLD_STRETCH * m, room);
+        // Axes still for a window before the corner, and whether this
+        // block lasts one (one-sided holds, `passes`).
+        let still = (0..AXES).fold(0u8, |m, i| {
+            m | u8::from(self.still_time[i] >= CANCEL_WINDOW_S) << i
+        });
+        let long = (still, b.min_time() >= CANCEL_WINDOW_S);
+        let m = self.hold_factor(&unit_mm, len_mm, curve, b.corner, 0, long);
+        b.hold_fixed = if b.release != 0 {
+            self.hold_factor(&unit_mm, len_mm, curve, b.corner, b.release, long)
+        } else {
+            m
+        };
+        b.hold(m, room);
         b.max_entry = b.junction.min(b.nominal).min(self.prev_nominal);
         b.entry = if self.len == 0 { 0.0 } else { b.max_entry };
         let merged = b.junction.is_infinite() && self.merge(&b);
@@ -163,6 +168,13 @@ impl<const N: usize> Planner<N> {
         } else {
             len_mm
         };
+        for (i, t) in self.still_time.iter_mut().enumerate() {
+            *t = if b.steps[i] == 0 {
+                *t + b.min_time()
+            } else {
+                0.0
+            };
+        }
         self.position = target;
         self.position_mm = *end_mm;
         if !merged {

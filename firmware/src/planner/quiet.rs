@@ -29,7 +29,7 @@
 //! may already have started (the oldest two) are left as they are: holding
 //! is always safe.
 
-use super::passes::{CANCEL_WINDOW_S, HOLD_STRETCH};
+use super::passes::{Sides, CANCEL_WINDOW_S, HOLD_STRETCH};
 use super::*;
 
 /// The velocity spread a quiet block allows, as a share of `a_i·W`.
@@ -41,13 +41,15 @@ const TIME: f32 = 0.75;
 const W: f32 = CANCEL_WINDOW_S;
 
 impl Block {
-    /// Set the corner's hold factor (`m` stretched, see `planner::passes`)
-    /// and the junction limit that goes with it: the corner's own change
-    /// within half a window, and each half of the hold within `room` mm
+    /// Set the corner's hold factors (stretched, see `planner::passes`)
+    /// and the junction limit that goes with them: the corner's own change
+    /// within half a window, and each side of the hold within `room` mm
     /// (the shorter of the two blocks).
-    pub(super) fn hold(&mut self, m: f32, room: f32) {
-        self.hold_m = m;
+    pub(super) fn hold(&mut self, m: Sides, room: f32) {
+        self.hold_m = m.post;
+        self.hold_pre_m = m.pre;
         self.junction = self.corner;
+        let m = m.pre.max(m.post);
         if m > 0.0 {
             self.junction = self.junction.min(0.5 * W * HOLD_STRETCH / m);
             self.junction = self.junction.min(libm::sqrtf(2.0 * room / m));
@@ -156,7 +158,7 @@ impl<const N: usize> Planner<N> {
                     let prev = *self.at(c - 1);
                     let b = self.at(c);
                     b.release = 0;
-                    b.hold(b.hold_m_fixed, prev.length.min(b.length));
+                    b.hold(b.hold_fixed, prev.length.min(b.length));
                     let prev_nominal = prev.nominal;
                     b.max_entry = b.junction.min(b.nominal).min(prev_nominal);
                     lowest = c - 1;

@@ -262,10 +262,11 @@ impl Preparer {
         }
     }
 
-    /// The exit corner's hold factor (0 when motion stops there).
+    /// The exit corner's hold factor on this side (0 when motion stops
+    /// there).
     fn exit_hold_m<const N: usize>(pl: &Planner<N>) -> f32 {
         match pl.block(1) {
-            Some(b) if b.kind == BlockKind::Line => b.hold_m,
+            Some(b) if b.kind == BlockKind::Line => b.hold_pre_m,
             _ => 0.0,
         }
     }

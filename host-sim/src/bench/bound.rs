@@ -33,7 +33,7 @@
 use burin::settings::Settings;
 use burin::AXES;
 
-use crate::record::PathEvent;
+use crate::record::{MoveKind, PathEvent};
 
 /// One straight piece of the path.
 #[derive(Clone, Copy, Debug)]
@@ -48,6 +48,24 @@ struct Piece {
     seconds: Option<f64>,
     /// Motion stops before this piece (a dwell or synced command).
     stop_before: bool,
+    /// Dwell time just before this piece, s.
+    dwell_before: f64,
+    end: [f64; AXES],
+    kind: MoveKind,
+}
+
+/// One piece of the bound's profile, for locating where a run loses time
+/// against it ([`super::losses`]).
+#[derive(Clone, Copy, Debug)]
+pub struct PieceProfile {
+    pub end_mm: [f64; AXES],
+    pub kind: MoveKind,
+    pub len: f64,
+    /// Speeds at the piece's start and end, mm/s.
+    pub v0: f64,
+    pub v1: f64,
+    /// When the piece ends, s from the first step (dwells included).
+    pub end_s: f64,
 }
 
 /// Builds the path from [`PathEvent`]s and answers its best time.
@@ -57,8 +75,6 @@ pub struct Bound {
     pos: Option<[f64; AXES]>,
     pieces: Vec<Piece>,
     stop_pending: bool,
-    /// Dwell time between the first and the last piece.
-    dwell_s: f64,
     /// Dwells seen since the last piece (counted only if motion follows).
     dwell_pending: f64,
 }
@@ -71,7 +87,6 @@ impl Bound {
             pos: Some(start_mm.map(f64::from)),
             pieces: Vec::new(),
             stop_pending: false,
-            dwell_s: 0.0,
             dwell_pending: 0.0,
         }
     }
@@ -86,7 +101,7 @@ impl Bound {
                 to_mm,
                 feed_mm_s,
                 seconds,
-                ..
+                kind,
             } => {
                 let to = to_mm.map(f64::from);
                 let from = self.pos.replace(to).unwrap_or(to);
@@ -103,10 +118,9 @@ impl Bound {
                         accel = accel.min(f64::from(ax.max_accel) / u.abs());
                     }
                 }
-                if !self.pieces.is_empty() {
-                    self.dwell_s += self.dwell_pending;
-                }
-                self.dwell_pending = 0.0;
+                // Dwells before the first motion are not in the job time.
+                let dwell = std::mem::take(&mut self.dwell_pending);
+                let dwell_before = if self.pieces.is_empty() { 0.0 } else { dwell };
                 self.pieces.push(Piece {
                     len,
                     unit,
@@ -114,6 +128,9 @@ impl Bound {
                     accel,
                     seconds: seconds.map(f64::from),
                     stop_before: std::mem::take(&mut self.stop_pending),
+                    dwell_before,
+                    end: to,
+                    kind,
                 });
             }
         }
@@ -151,13 +168,23 @@ impl Bound {
         (acc * r).sqrt().min((acc * l / phi).sqrt())
     }
 
+    /// Number of pieces so far (zero-length moves make none).
+    pub fn pieces(&self) -> usize {
+        self.pieces.len()
+    }
+
     /// Seconds from the first step to the last: the time-optimal profile
     /// plus the dwells in between.
     pub fn time_s(&self) -> f64 {
+        self.profile().last().map_or(0.0, |p| p.end_s)
+    }
+
+    /// The time-optimal profile, piece by piece.
+    pub fn profile(&self) -> Vec<PieceProfile> {
         let p = &self.pieces;
         let n = p.len();
         if n == 0 {
-            return 0.0;
+            return Vec::new();
         }
         let cap = |q: &Piece| match q.seconds {
             Some(t) if t > 0.0 => q.cap.min(q.len / t),
@@ -180,11 +207,21 @@ impl Bound {
         for k in 0..n {
             v[k + 1] = v[k + 1].min((v[k] * v[k] + 2.0 * p[k].accel * p[k].len).sqrt());
         }
-        let mut t = self.dwell_s;
-        for (k, q) in p.iter().enumerate() {
-            t += piece_time(v[k], v[k + 1], cap(q), q.accel, q.len);
-        }
-        t
+        let mut t = 0.0;
+        p.iter()
+            .enumerate()
+            .map(|(k, q)| {
+                t += q.dwell_before + piece_time(v[k], v[k + 1], cap(q), q.accel, q.len);
+                PieceProfile {
+                    end_mm: q.end,
+                    kind: q.kind,
+                    len: q.len,
+                    v0: v[k],
+                    v1: v[k + 1],
+                    end_s: t,
+                }
+            })
+            .collect()
     }
 }
 
@@ -205,7 +242,6 @@ fn piece_time(v0: f64, v1: f64, vc: f64, a: f64, len: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::record::MoveKind;
 
     fn to(x: f32, y: f32, f: f32) -> PathEvent {
         PathEvent::To {

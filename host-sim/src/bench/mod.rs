@@ -5,13 +5,15 @@
 
 pub mod bound;
 pub mod limits;
+pub mod losses;
 
 use burin::AXES;
 
 use crate::config::MachineConfig;
-use crate::record::{PathEvent, PinEvent, Recorder, RunInfo, Summary};
+use crate::record::{MoveKind, PathEvent, PinEvent, Recorder, RunInfo, Summary};
 use bound::Bound;
 use limits::{LimitMeter, TraceLimits};
+use losses::{LineLoss, Locator};
 
 /// One job's figures.
 #[derive(Clone, Debug)]
@@ -24,22 +26,29 @@ pub struct JobFigures {
     pub summary: Summary,
     /// The commanded end of the path, rounded to steps.
     pub bound_end_steps: [i64; AXES],
+    /// Time lost against the bound per source line, worst first.
+    pub losses: Vec<LineLoss>,
 }
 
 struct Both {
     meter: LimitMeter,
-    bound: Bound,
+    bound: Locator,
 }
 
 impl Recorder for Both {
     fn start(&mut self, info: &RunInfo) {
         self.meter.start(info);
+        self.bound.start(info);
     }
     fn step_event(&mut self, ev: &PinEvent) {
         self.meter.step_event(ev);
+        self.bound.step_event(ev);
+    }
+    fn commanded(&mut self, line: u32, kind: MoveKind, to_mm: [f32; AXES]) {
+        self.bound.commanded(line, kind, to_mm);
     }
     fn path(&mut self, ev: &PathEvent) {
-        self.bound.push(ev);
+        self.bound.path(ev);
     }
     fn finish(&mut self, summary: &Summary) -> std::io::Result<()> {
         self.meter.finish(summary)
@@ -51,7 +60,10 @@ impl Recorder for Both {
 pub fn run_job(cfg: &MachineConfig, source: &str) -> JobFigures {
     let mut both = Both {
         meter: LimitMeter::new(cfg.settings.max_step_rate_hz),
-        bound: Bound::new(cfg.settings, cfg.start_position_mm),
+        bound: Locator::new(
+            Bound::new(cfg.settings, cfg.start_position_mm),
+            cfg.settings.axes.map(|a| a.steps_per_mm),
+        ),
     };
     let summary = crate::offline::run_file(cfg, source, &mut both);
     let l = both.meter.out;
@@ -59,12 +71,13 @@ pub fn run_job(cfg: &MachineConfig, source: &str) -> JobFigures {
         Some(t0) => (l.last_tick - t0) as f64 / f64::from(cfg.tick_hz),
         None => 0.0,
     };
-    let end = both.bound.end_mm();
+    let end = both.bound.bound().end_mm();
     let spm = cfg.settings.axes.map(|a| f64::from(a.steps_per_mm));
     JobFigures {
         time_s,
         bound_end_steps: std::array::from_fn(|i| (end[i] * spm[i]).round() as i64),
-        bound_s: both.bound.time_s(),
+        bound_s: both.bound.bound().time_s(),
+        losses: both.bound.losses(),
         limits: l,
         summary,
     }

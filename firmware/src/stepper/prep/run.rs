@@ -49,6 +49,7 @@ impl Preparer {
                     Some(n)
                         if n.kind == BlockKind::Line
                             && n.hold_m <= 0.0
+                            && n.hold_pre_m <= 0.0
                             && n.watch == b.watch
                             && n.nominal == b.nominal =>
                     {
@@ -77,7 +78,7 @@ impl Preparer {
                 shape.jerk *= 0.5;
             }
             let (exit, exit_m) = match pl.block(r + 1) {
-                Some(n) if n.kind == BlockKind::Line => (n.entry, n.hold_m),
+                Some(n) if n.kind == BlockKind::Line => (n.entry, n.hold_pre_m),
                 _ => (0.0, 0.0),
             };
             let p = Profile::plan_held(&shape, self.v, b.nominal, exit, len, hold0, exit_m);
