@@ -69,7 +69,7 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
         "limits: rate X/Y/Z {:.1}/{:.1}/{:.1} mm/s, accel {:.0}/{:.0}/{:.0} mm/s^2; \
          jerk {:.0} mm/s^3 ($203, reached only in S-curve mode); v, a and j over {} ms windows of \
          the step trace (j within {:.0}/{:.0}/{:.0} mm/s^3 of step quantisation); short = step \
-         intervals below the rate limit (1 tick slack)",
+         intervals below the rate limit (1 tick slack); bound a = the same meter on the bound's own profile",
         vmax[0],
         vmax[1],
         vmax[2],
@@ -83,7 +83,7 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
         jerk_quantum(f64::from(cfg.settings.axes[2].steps_per_mm)),
     );
     println!(
-        "{:<44} {:>8} {:>8} {:>6} {:>8} {:>6} | {:>14} | {:>14} | {:>14} | {:>11}",
+        "{:<44} {:>8} {:>8} {:>6} {:>8} {:>6} | {:>14} | {:>14} | {:>14} | {:>11} | {:>14}",
         "job",
         "burin s",
         "bound s",
@@ -93,13 +93,15 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
         "peak v % X/Y/Z",
         "peak a % X/Y/Z",
         "peak j % X/Y/Z",
-        "short X/Y/Z"
+        "short X/Y/Z",
+        "bound a % X/Y/Z"
     );
     let mut tot = (0.0, 0.0, 0.0, 0u64);
     let mut all_grbl = true;
     let mut worst_v = [0.0f64; 3];
     let mut worst_a = [0.0f64; 3];
     let mut worst_j = [0.0f64; 3];
+    let mut worst_ba = [0.0f64; 3];
     let mut failed = 0;
     for job in &jobs {
         let name = job
@@ -120,14 +122,16 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
         let v: [f64; 3] = std::array::from_fn(|i| pct(l.peak_vel[i], vmax[i]));
         let acc: [f64; 3] = std::array::from_fn(|i| pct(l.peak_acc[i], amax[i]));
         let jerk: [f64; 3] = std::array::from_fn(|i| pct(l.peak_jerk[i], jmax));
+        let ba: [f64; 3] = std::array::from_fn(|i| pct(f.bound_limits.peak_acc[i], amax[i]));
         for i in 0..3 {
             worst_v[i] = worst_v[i].max(v[i]);
             worst_a[i] = worst_a[i].max(acc[i]);
             worst_j[i] = worst_j[i].max(jerk[i]);
+            worst_ba[i] = worst_ba[i].max(ba[i]);
         }
         let short = l.short_intervals;
         println!(
-            "{:<44} {:>8.2} {:>8.2} {:>6.3} {:>8} {:>6} | {:>4.0} {:>4.0} {:>4.0} | {:>4.0} {:>4.0} {:>4.0} | {:>4.0} {:>4.0} {:>4.0} | {:>3} {:>3} {:>3}",
+            "{:<44} {:>8.2} {:>8.2} {:>6.3} {:>8} {:>6} | {:>4.0} {:>4.0} {:>4.0} | {:>4.0} {:>4.0} {:>4.0} | {:>4.0} {:>4.0} {:>4.0} | {:>3} {:>3} {:>3} | {:>4.0} {:>4.0} {:>4.0}",
             name,
             f.time_s,
             f.bound_s,
@@ -146,6 +150,9 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
             short[0],
             short[1],
             short[2],
+            ba[0],
+            ba[1],
+            ba[2],
         );
         if a.losses > 0 {
             let mut by_kind: Vec<(String, f64, f64)> = Vec::new();
@@ -183,7 +190,7 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
         }
     }
     println!(
-        "{:<44} {:>8.2} {:>8.2} {:>6.3} {:>8} {:>6} | {:>4.0} {:>4.0} {:>4.0} | {:>4.0} {:>4.0} {:>4.0} | {:>4.0} {:>4.0} {:>4.0} | {:>11}",
+        "{:<44} {:>8.2} {:>8.2} {:>6.3} {:>8} {:>6} | {:>4.0} {:>4.0} {:>4.0} | {:>4.0} {:>4.0} {:>4.0} | {:>4.0} {:>4.0} {:>4.0} | {:>11} | {:>4.0} {:>4.0} {:>4.0}",
         "total (peaks: worst job)",
         tot.0,
         tot.1,
@@ -200,6 +207,9 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
         worst_j[1],
         worst_j[2],
         tot.3,
+        worst_ba[0],
+        worst_ba[1],
+        worst_ba[2],
     );
     if failed > 0 {
         println!("{failed} job(s) reported errors");

@@ -59,13 +59,44 @@ struct Piece {
 #[derive(Clone, Copy, Debug)]
 pub struct PieceProfile {
     pub end_mm: [f64; AXES],
+    pub unit: [f64; AXES],
     pub kind: MoveKind,
     pub len: f64,
     /// Speeds at the piece's start and end, mm/s.
     pub v0: f64,
     pub v1: f64,
+    /// Cruise speed and path acceleration it was timed with.
+    pub cap: f64,
+    pub accel: f64,
     /// When the piece ends, s from the first step (dwells included).
     pub end_s: f64,
+}
+
+impl PieceProfile {
+    /// How long the piece's motion takes, s.
+    pub fn time_s(&self) -> f64 {
+        piece_time(self.v0, self.v1, self.cap, self.accel, self.len)
+    }
+
+    /// Distance along the piece `tau` s after its motion starts, mm.
+    pub fn dist_at(&self, tau: f64) -> f64 {
+        let (v0, v1, a, len) = (self.v0, self.v1, self.accel, self.len);
+        let peak = peak_speed(v0, v1, self.cap, a, len);
+        let t_up = (peak - v0) / a;
+        let d_up = (peak * peak - v0 * v0) / (2.0 * a);
+        let d_down = (peak * peak - v1 * v1) / (2.0 * a);
+        let cruise = (len - d_up - d_down).max(0.0);
+        let t_cruise = cruise / peak.max(1e-12);
+        let d = if tau < t_up {
+            v0 * tau + 0.5 * a * tau * tau
+        } else if tau < t_up + t_cruise {
+            d_up + peak * (tau - t_up)
+        } else {
+            let t = (tau - t_up - t_cruise).min((peak - v1) / a);
+            d_up + cruise + peak * t - 0.5 * a * t * t
+        };
+        d.clamp(0.0, len)
+    }
 }
 
 /// Builds the path from [`PathEvent`]s and answers its best time.
@@ -214,6 +245,9 @@ impl Bound {
                 t += q.dwell_before + piece_time(v[k], v[k + 1], cap(q), q.accel, q.len);
                 PieceProfile {
                     end_mm: q.end,
+                    unit: q.unit,
+                    cap: cap(q),
+                    accel: q.accel,
                     kind: q.kind,
                     len: q.len,
                     v0: v[k],
@@ -225,14 +259,18 @@ impl Bound {
     }
 }
 
+/// Where the up and down ramps meet, capped by the cruise speed.
+fn peak_speed(v0: f64, v1: f64, vc: f64, a: f64, len: f64) -> f64 {
+    ((2.0 * a * len + v0 * v0 + v1 * v1) / 2.0)
+        .sqrt()
+        .min(vc)
+        .max(v0.max(v1))
+}
+
 /// Time of the fastest trapezoid over `len` from `v0` to `v1` (both
 /// reachable), cruising at most at `vc`, accelerating at most at `a`.
 fn piece_time(v0: f64, v1: f64, vc: f64, a: f64, len: f64) -> f64 {
-    // Peak where the up and down ramps meet, capped by the cruise speed.
-    let peak = ((2.0 * a * len + v0 * v0 + v1 * v1) / 2.0)
-        .sqrt()
-        .min(vc)
-        .max(v0.max(v1));
+    let peak = peak_speed(v0, v1, vc, a, len);
     let up = (peak * peak - v0 * v0) / (2.0 * a);
     let down = (peak * peak - v1 * v1) / (2.0 * a);
     let cruise = (len - up - down).max(0.0);

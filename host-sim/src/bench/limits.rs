@@ -100,6 +100,14 @@ impl LimitMeter {
         }
     }
 
+    /// Standing still after the last step: let the windows see the stop.
+    pub fn flush(&mut self) {
+        for _ in 0..=3 * self.w {
+            self.sample();
+        }
+        self.out.end_steps = self.pos;
+    }
+
     fn sample(&mut self) {
         self.samples.push_back(self.pos);
         if self.samples.len() > 3 * self.w + 1 {
@@ -192,11 +200,7 @@ impl Recorder for LimitMeter {
     }
 
     fn finish(&mut self, _summary: &Summary) -> std::io::Result<()> {
-        // Standing still after the last step: let the windows see the stop.
-        for _ in 0..=3 * self.w {
-            self.sample();
-        }
-        self.out.end_steps = self.pos;
+        self.flush();
         Ok(())
     }
 }

@@ -6,6 +6,7 @@
 pub mod bound;
 pub mod limits;
 pub mod losses;
+pub mod replay;
 
 use burin::AXES;
 
@@ -28,9 +29,12 @@ pub struct JobFigures {
     pub bound_end_steps: [i64; AXES],
     /// Time lost against the bound per source line, worst first.
     pub losses: Vec<LineLoss>,
+    /// The same meter on the bound's own profile ([`replay`]).
+    pub bound_limits: TraceLimits,
 }
 
 struct Both {
+    info: Option<RunInfo>,
     meter: LimitMeter,
     bound: Locator,
 }
@@ -39,6 +43,7 @@ impl Recorder for Both {
     fn start(&mut self, info: &RunInfo) {
         self.meter.start(info);
         self.bound.start(info);
+        self.info = Some(info.clone());
     }
     fn step_event(&mut self, ev: &PinEvent) {
         self.meter.step_event(ev);
@@ -59,6 +64,7 @@ impl Recorder for Both {
 /// xtask sim` does) and measures it.
 pub fn run_job(cfg: &MachineConfig, source: &str) -> JobFigures {
     let mut both = Both {
+        info: None,
         meter: LimitMeter::new(cfg.settings.max_step_rate_hz),
         bound: Locator::new(
             Bound::new(cfg.settings, cfg.start_position_mm),
@@ -78,6 +84,15 @@ pub fn run_job(cfg: &MachineConfig, source: &str) -> JobFigures {
         bound_end_steps: std::array::from_fn(|i| (end[i] * spm[i]).round() as i64),
         bound_s: both.bound.bound().time_s(),
         losses: both.bound.losses(),
+        bound_limits: match &both.info {
+            Some(info) => replay::bound_limits(
+                both.bound.bound(),
+                cfg.start_position_mm.map(f64::from),
+                info,
+                cfg.settings.max_step_rate_hz,
+            ),
+            None => TraceLimits::default(),
+        },
         limits: l,
         summary,
     }
