@@ -183,6 +183,56 @@ fn a_helix_into_a_plunge_slows_the_chord_before_the_corner() {
     check(&machine(), "helix-plunge", src);
 }
 
+/// S-curve runs never take in the newest block: the planner may still
+/// merge the next collinear move into it, and a run planned on its old
+/// length went on at speed into the corner it had planned as the path's
+/// end (X at 1,225 % on short_segments, with the host's 145 µs a line).
+/// Here 1,000 collinear 0.025 mm moves end in a square corner, at the
+/// default jerk and at 50,000 mm/s³.
+#[test]
+fn s_curve_runs_wait_for_collinear_moves_to_merge() {
+    let mut src = String::from("G21 G90 G1 F5000\n");
+    for k in 1..=1000 {
+        src += &format!("X{:.3}\n", k as f64 * 0.025);
+    }
+    for k in 1..=400 {
+        src += &format!("Y{:.3}\n", k as f64 * 0.025);
+    }
+    for jerk in [5000.0, 50_000.0] {
+        let mut cfg = machine();
+        cfg.settings.profile = Profile::SCurve;
+        cfg.settings.jerk = jerk;
+        let f = check(&cfg, "collinear-corner", &src);
+        check_jerk(&cfg, "collinear-corner", &f);
+    }
+}
+
+/// Small arcs in planes whose axes differ, entered from rapids and
+/// plunges, in S-curve mode at a stiff jerk (50,000 mm/s³, almost
+/// trapezoids): curves keep one isotropic budget there
+/// (`planner::curve`). With per-chord budgets an S ramp spanning chords
+/// that each allowed another split read 122 % of Z's acceleration here
+/// (a 1 mm YZ helix between a rapid and an XZ arc). Trapezoid mode, with
+/// per-chord budgets, keeps them too.
+#[test]
+fn s_curve_small_arcs_across_unequal_axes_keep_the_limits() {
+    let src = "G21 G90\n\
+               G0 X0 Y0 Z20\n\
+               G0 X-9.5 Y1.66 Z20\n\
+               G0 X-9.0 Y-0.340 Z19.020\n\
+               G19 G2 F900 J0.7071 K0.7071 X-10.5 Y0.8671 Z18.8611\n\
+               G18 G2 F630 I-8.7 K-2.33 X-21.6815 Y1.8671 Z25.1891\n\
+               G1 F1000 X-4.5 Z2\nG2 X-4.7629 Z1.0790 I-1.85 K0.03\nG1 X-10\n";
+    check(&machine(), "small arcs", src);
+    for jerk in [5000.0, 50_000.0] {
+        let mut cfg = machine();
+        cfg.settings.profile = Profile::SCurve;
+        cfg.settings.jerk = jerk;
+        let f = check(&cfg, "s-curve small arcs", src);
+        check_jerk(&cfg, "s-curve small arcs", &f);
+    }
+}
+
 /// The bench-motion jobs (outside the repo; skipped when absent): step
 /// intervals, end positions and the per-axis acceleration (≤ 105 % over
 /// 50 ms windows, corners included) hold on every one.

@@ -18,7 +18,8 @@
 //! the normal direction allows) follows from the fastest the chord may run:
 //! an arc the feed keeps slow leaves nearly the whole budget to speeding up
 //! and slowing down; a small arc the budget itself keeps slow runs at
-//! `sqrt(C_MAX·A_n·r)`, and ramps with what each axis has left.
+//! `sqrt(C_MAX·A_n·r)`, and ramps with what each axis has left. S-curve
+//! mode keeps one isotropic budget for the whole curve (`Curve::budget`).
 
 use super::*;
 
@@ -67,6 +68,21 @@ impl Curve {
         let n = [libm::fabsf(uq) / norm, libm::fabsf(up) / norm];
         let u = [libm::fabsf(up), libm::fabsf(uq)];
         let a = [s.axes[p].max_accel, s.axes[q].max_accel];
+        // S-curve mode keeps the isotropic rule: one budget `A` (the
+        // smallest plane axis's) for the whole curve and `a_t ≤ A − a_n/2`,
+        // below `sqrt(A² − a_n²)` for `a_n ≤ 0.8·A` and equal to it at both
+        // ends. Per-chord budgets read 123 % of Z's acceleration on a 1 mm
+        // YZ helix (tort) and the exact split 114 % on a small XZ arc after
+        // a plunge (blur_torus), both at 50,000 mm/s³: an S ramp spans
+        // chords that each allow a different split.
+        if s.profile == crate::settings::Profile::SCurve {
+            let an = a[0].min(a[1]);
+            return Some(ChordBudget {
+                ar: an * self.radius,
+                an,
+                tangent: [[an, 0.5], [f32::INFINITY, 0.0]],
+            });
+        }
         let mut an = f32::INFINITY;
         let mut tangent = [[f32::INFINITY, 0.0]; 2];
         for k in 0..2 {

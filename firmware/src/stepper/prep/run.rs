@@ -14,7 +14,12 @@
 //! A run ends before a block that is not a line, watches other inputs,
 //! or has another nominal speed (the run cruises at most at the first
 //! block's, so every block's cap holds in all of it, and no block is held
-//! below its own), and after [`MAX_RUN`] blocks. It is planned from the speed the tool has to the planned entry
+//! below its own), after [`MAX_RUN`] blocks, and before the newest block
+//! in the ring: the planner may still merge the next collinear move into
+//! that one (`planner::merge`), and a run planned on its old length ran
+//! on at speed into a corner it had planned as the end of the path (1,225
+//! % of X's acceleration on short_segments when the host took 145 µs a
+//! line). It is planned from the speed the tool has to the planned entry
 //! of the block after it: one S ramp over the run's length reaches at
 //! least what a ramp per block reached, so that entry is in reach as it
 //! was. The path acceleration is the smallest of the run's blocks. Then
@@ -50,6 +55,7 @@ impl Preparer {
                         if n.kind == BlockKind::Line
                             && n.hold_m <= 0.0
                             && n.hold_pre_m <= 0.0
+                            && pl.block(r + 2).is_some()
                             && n.watch == b.watch
                             && n.nominal == b.nominal =>
                     {
