@@ -20,6 +20,7 @@ use crate::command::Pos;
 use crate::settings::Settings;
 use crate::AXES;
 pub use curve::Curve;
+pub use passes::{nominal_near, RUN_BLOCKS};
 pub use ramp::{Phase, Profile, Shape};
 
 /// Why a block was not queued. The executor maps `Full` onto its `Busy` and

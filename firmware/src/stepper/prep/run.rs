@@ -12,29 +12,36 @@
 //! and no corner that needs a hold is crossed on a ramp.
 //!
 //! A run ends before a block that is not a line, watches other inputs,
-//! or has another nominal speed (the run cruises at most at the first
-//! block's, so every block's cap holds in all of it, and no block is held
-//! below its own), after [`MAX_RUN`] blocks, and before the newest block
-//! in the ring: the planner may still merge the next collinear move into
-//! that one (`planner::merge`), and a run planned on its old length ran
-//! on at speed into a corner it had planned as the end of the path (1,225
-//! % of X's acceleration on short_segments when the host took 145 µs a
-//! line). It is planned from the speed the tool has to the planned entry
-//! of the block after it: one S ramp over the run's length reaches at
-//! least what a ramp per block reached, so that entry is in reach as it
-//! was. The path acceleration is the smallest of the run's blocks. Then
-//! each junction inside is checked on the profile: if the run passes one
-//! faster than its limit (`max_entry`), the run ends at that junction, at
-//! its planned entry, and is planned again.
+//! or has a nominal speed more than 5 % away from the first block's
+//! (`planner::nominal_near`: an arc's chords differ by a little as their
+//! direction turns the axes' rate caps; the run cruises at the lowest of
+//! its blocks', so every block's cap holds in all of it), after
+//! [`MAX_RUN`] blocks, and before the newest block in the ring: the
+//! planner may still merge the next collinear move into that one
+//! (`planner::merge`), and a run planned on its old length ran on at speed
+//! into a corner it had planned as the end of the path (1,225 % of X's
+//! acceleration on short_segments when the host took 145 µs a line).
+//!
+//! It is planned from the speed the tool has to the planned entry of the
+//! block after it. The planner's forward pass reckons that entry with the
+//! same kind of run (`Planner::run_reach`), counted from the last junction
+//! that ends one; a run that starts elsewhere, or is cut short (fewer
+//! blocks queued, the newest excluded), may not reach it and enters the
+//! next block slower, which is always safe: every entry stays within what
+//! the backward pass allows for stopping. The path acceleration is the
+//! smallest of the run's blocks. Then each junction inside is checked on
+//! the profile: if the run passes one faster than its limit
+//! (`max_entry`), the run ends at that junction, at its planned entry, and
+//! is planned again.
 
 use super::{Hold, Preparer};
 use crate::planner::ramp::PHASES;
-use crate::planner::{Block, BlockKind, Phase, Planner, Profile, Shape};
+use crate::planner::{nominal_near, Block, BlockKind, Phase, Planner, Profile, Shape, RUN_BLOCKS};
 
 /// Most blocks after the running one that a run takes in: 16 chords of
 /// 0.4 mm (a 10 mm radius at `$12` = 0.002) are 6.4 mm, more than a ramp
 /// from rest to 50 mm/s takes at 500 mm/s² and 5000 mm/s³ (5 mm).
-pub const MAX_RUN: usize = 16;
+pub const MAX_RUN: usize = RUN_BLOCKS - 1;
 
 impl Preparer {
     /// The running block's profile from where the tool is: over a run in
@@ -57,7 +64,7 @@ impl Preparer {
                             && n.hold_pre_m <= 0.0
                             && pl.block(r + 2).is_some()
                             && n.watch == b.watch
-                            && n.nominal == b.nominal =>
+                            && nominal_near(n.nominal, b.nominal) =>
                     {
                         r += 1
                     }
@@ -71,11 +78,13 @@ impl Preparer {
             let mut shape = base;
             let mut len = rest;
             let mut curve = b.curve_ar > 0.0;
+            let mut cruise = b.nominal;
             for k in 1..=r {
                 if let Some(n) = pl.block(k) {
                     shape.accel = shape.accel.min(n.accel);
                     len += n.length;
                     curve |= n.curve_ar > 0.0;
+                    cruise = cruise.min(n.nominal);
                 }
             }
             if r > 0 && curve {
@@ -87,7 +96,7 @@ impl Preparer {
                 Some(n) if n.kind == BlockKind::Line => (n.entry, n.hold_pre_m),
                 _ => (0.0, 0.0),
             };
-            let p = Profile::plan_held(&shape, self.v, b.nominal, exit, len, hold0, exit_m);
+            let p = Profile::plan_held(&shape, self.v, cruise, exit, len, hold0, exit_m);
             // The first junction inside that the profile passes too fast.
             let mut at = rest;
             let mut over = None;
