@@ -15,13 +15,14 @@ mod passes;
 mod push;
 mod quiet;
 pub mod ramp;
+mod run;
 
 use crate::command::Pos;
 use crate::settings::Settings;
 use crate::AXES;
 pub use curve::Curve;
-pub use passes::{nominal_near, RUN_BLOCKS};
 pub use ramp::{Phase, Profile, Shape};
+pub use run::{nominal_near, RUN_BLOCKS};
 
 /// Why a block was not queued. The executor maps `Full` onto its `Busy` and
 /// the rest onto its errors of the same name, so the reported codes do not

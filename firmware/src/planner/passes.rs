@@ -22,18 +22,6 @@ pub struct Sides {
 /// With the corner speed capped at `x ≤ 1/2`, 1.17 covers it.
 pub(super) const HOLD_STRETCH: f32 = 1.17;
 
-/// Most blocks an S-curve run spans: the running one and
-/// `stepper::prep::run::MAX_RUN` after it.
-pub const RUN_BLOCKS: usize = 17;
-
-/// Two nominal speeds close enough for one S-curve run to take both in
-/// (it cruises at the lower): chords of an arc whose direction turns the
-/// axes' rate caps differ by a little from chord to chord, and a run that
-/// stopped at each of them restarted its ramp every 0.6 mm.
-pub fn nominal_near(a: f32, b: f32) -> bool {
-    a.min(b) >= 0.95 * a.max(b)
-}
-
 // Corner holds.
 //
 // A corner passed at speed `v` changes each axis's velocity at once, by
@@ -325,7 +313,9 @@ impl<const N: usize> Planner<N> {
         if let Some(k) = lowered {
             self.planned = k - 1;
         }
-        // Forward: no block may be entered faster than the previous can reach.
+        // Forward: no block may be entered faster than the previous can reach
+        // (in S-curve mode, than the run it ends can, `planner::run`).
+        let mut run = self.run_before(self.planned + 1);
         for k in self.planned + 1..self.len {
             let st = self.settings;
             let prev = *self.at(k - 1);
@@ -339,9 +329,10 @@ impl<const N: usize> Planner<N> {
                 ),
                 BlockKind::Dwell { .. } => 0.0,
             };
-            let b = *b;
-            if let Some(r) = self.run_reach(k, &b) {
-                reach = reach.max(r);
+            if let Some(r) = run.as_mut() {
+                if let Some(v) = r.step(&prev, b, &st) {
+                    reach = reach.max(v);
+                }
             }
             let b = self.at(k);
             if reach <= b.entry {
@@ -351,46 +342,5 @@ impl<const N: usize> Planner<N> {
                 self.planned = k;
             }
         }
-    }
-
-    /// In S-curve mode, the fastest entry of block `k` that one S ramp
-    /// reaches over the run of blocks before it (`stepper::prep::run`: the
-    /// preparer carries a ramp across junctions that hold nothing, between
-    /// blocks of one nominal speed, at most [`RUN_BLOCKS`] of them); `None`
-    /// when the junction before `k` ends a run. Only ever raises a forward
-    /// reach: a block entered slower than planned is always safe.
-    fn run_reach(&self, k: usize, b: &Block) -> Option<f32> {
-        let s = self.settings;
-        let joins = |p: &Block, n: &Block| {
-            p.kind == BlockKind::Line
-                && n.kind == BlockKind::Line
-                && n.hold_m <= 0.0
-                && n.hold_pre_m <= 0.0
-                && nominal_near(n.nominal, p.nominal)
-                && n.watch == p.watch
-        };
-        let prev = self.blocks[(self.tail + k - 1) % N];
-        if s.profile != crate::settings::Profile::SCurve || !joins(&prev, b) {
-            return None;
-        }
-        let mut j = k - 1;
-        let (mut len, mut accel, mut curve) = (prev.length, prev.accel, prev.curve_ar > 0.0);
-        while j > 0 && k - j < RUN_BLOCKS {
-            let p = self.blocks[(self.tail + j - 1) % N];
-            if !joins(&p, &self.blocks[(self.tail + j) % N]) {
-                break;
-            }
-            j -= 1;
-            len += p.length;
-            accel = accel.min(p.accel);
-            curve |= p.curve_ar > 0.0;
-        }
-        if k - j < 2 {
-            return None;
-        }
-        let start = self.blocks[(self.tail + j) % N];
-        let jerk = s.jerk.max(1e-3) * if curve { 0.5 } else { 1.0 };
-        let avail = len - 0.5 * start.hold_m * start.entry * start.entry;
-        Some(Shape { accel, jerk }.reach(start.entry, avail))
     }
 }

@@ -47,8 +47,47 @@ impl Shape {
         if self.jerk <= 0.0 {
             return trap;
         }
-        // The S ramp is never faster than the trapezoid: bisect below it.
+        // The S ramp is never faster than the trapezoid. Solved in closed
+        // form (the passes call this for every block of a full ring: by
+        // bisection an S-curve chord cost 500,000 instructions to plan),
+        // then checked, and bisected only if rounding left it too far.
+        let x = self.s_reach(v, len.max(0.0)).min(trap);
+        let mut back = 0.0;
+        for _ in 0..4 {
+            let y = x - (x - v) * back;
+            if self.dist(v, y) <= len {
+                return y;
+            }
+            back = if back == 0.0 { 1e-6 } else { back * 10.0 };
+        }
         self.fitting(v, v, trap, len)
+    }
+
+    /// The speed an S ramp from `v` ends at after exactly `len` mm.
+    /// With the acceleration reaching `a` (`dv ≥ a²/j`):
+    /// `len = (x² − v²)/2a + (x + v)·a/2j`, a quadratic in `x`. Below
+    /// that, `len = (2v + d)·sqrt(d/j)` with `d = x − v`, which Newton's
+    /// method solves from `d = a²/j` downwards (the cubic `(2v + d)²·d` is
+    /// convex and increasing, so every step stays above the root).
+    fn s_reach(&self, v: f32, len: f32) -> f32 {
+        let (a, j) = (self.accel, self.jerk);
+        let full = a * a / j;
+        let c = v * full - v * v - 2.0 * a * len;
+        let x = 0.5 * (libm::sqrtf((full * full - 4.0 * c).max(0.0)) - full);
+        if x - v >= full {
+            return x;
+        }
+        let target = len * len * j;
+        let mut d = full;
+        for _ in 0..12 {
+            let w = 2.0 * v + d;
+            let f = w * w * d - target;
+            if f <= 0.0 {
+                break;
+            }
+            d -= f / (w * (2.0 * v + 3.0 * d));
+        }
+        v + d.max(0.0)
     }
 
     /// The largest speed in `lo..=hi` that a ramp from `v` ends at within

@@ -2,10 +2,10 @@
 //! reads, so the per-run figure is an average and the tick granularity
 //! (about 6 instructions at 168 MHz) vanishes in the division.
 use burin::interp::Interpreter;
-use burin::planner::{Planner, Speed, Watch};
+use burin::planner::{Curve, Planner, Speed, Watch};
 use burin::realtime::Realtime;
 use burin::seams::{StepPins, StepTimer};
-use burin::settings::Settings;
+use burin::settings::{Profile, Settings};
 use burin::stepper::driver::StepDriver;
 use burin::stepper::{Segment, StepConfig, Stepper, Switches};
 use burin::AXES;
@@ -422,9 +422,25 @@ fn line(clock: &mut Clock) -> f32 {
 /// steps and pushed into a full 64-block ring, look-ahead included. The path
 /// is a 10 mm-radius polygon, so every junction is a shallow corner and no
 /// block reaches full speed within the ring: the backward pass has real work.
-fn plan_block(clock: &mut Clock) -> f32 {
+/// Instructions per block pushed onto a full ring in steady state, on a
+/// 10 mm circle in 0.1 mm moves: G1 lines in trapezoid mode (`scurve`
+/// false), or the chords of one arc in S-curve mode (the chord's own
+/// budget, the jerk cap and the forward pass's run reach).
+fn plan_block(clock: &mut Clock, scurve: bool) -> f32 {
     const REPS: u32 = 256;
-    let mut planner: Planner<PLANNER_BLOCKS> = Planner::new(Settings::default());
+    let settings = if scurve {
+        Settings {
+            profile: Profile::SCurve,
+            ..Settings::default()
+        }
+    } else {
+        Settings::default()
+    };
+    let curve = Curve {
+        radius: 10.0,
+        plane: 0b11,
+    };
+    let mut planner: Planner<PLANNER_BLOCKS> = Planner::new(settings);
     let speed = Speed::Feed(10_000.0 / 60.0);
     let step = 0.01f32; // 0.1 mm chord on a 10 mm radius
     let point = |k: u32| {
@@ -438,6 +454,9 @@ fn plan_block(clock: &mut Clock) -> f32 {
         }
         *k += 1;
         let end = point(*k);
+        if scurve {
+            return planner.push_chord(&end, speed, *k, curve).is_ok();
+        }
         match planner.to_steps(&end) {
             Ok(t) => planner.push_line(t, speed, Watch::default(), *k).is_ok(),
             Err(_) => false,
@@ -507,7 +526,8 @@ pub fn run() -> ! {
     let (q_rise1, q_fall1) = step_event::<false, false>(&mut clock, ONE, 0);
     let (q_cnt, q_idr) = step_event::<false, true>(&mut clock, ONE, 0);
     let line = line(&mut clock);
-    let plan = plan_block(&mut clock);
+    let plan = plan_block(&mut clock, false);
+    let plan_s = plan_block(&mut clock, true);
     // Every cycle one step costs: the handler's instructions and its
     // binding at the assumed CPI, the interrupt's entry and exit, and the
     // peripheral reads' bus stalls (counted).
@@ -529,6 +549,7 @@ pub fn run() -> ! {
     hprintln!("qemu_step_path_cycles_1axis {}", r(q_cycles));
     hprintln!("line_insns {}", r(line));
     hprintln!("plan_block_insns {}", r(plan));
+    hprintln!("plan_chord_scurve_insns {}", r(plan_s));
     hprintln!("step_path_insns_1axis {}", r(path_insns));
     hprintln!("step_path_cycles_1axis {}", r(cycles));
     hprintln!("max_step_rate_hz_1axis {}", r(rate));

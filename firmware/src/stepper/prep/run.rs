@@ -24,7 +24,7 @@
 //!
 //! It is planned from the speed the tool has to the planned entry of the
 //! block after it. The planner's forward pass reckons that entry with the
-//! same kind of run (`Planner::run_reach`), counted from the last junction
+//! same kind of run (`planner::run`), counted from the last junction
 //! that ends one; a run that starts elsewhere, or is cut short (fewer
 //! blocks queued, the newest excluded), may not reach it and enters the
 //! next block slower, which is always safe: every entry stays within what
