@@ -52,13 +52,15 @@ impl Shape {
         // bisection an S-curve chord cost 500,000 instructions to plan),
         // then checked, and bisected only if rounding left it too far.
         let x = self.s_reach(v, len.max(0.0)).min(trap);
-        let mut back = 0.0;
-        for _ in 0..4 {
-            let y = x - (x - v) * back;
+        let mut back = 1e-5;
+        for _ in 0..3 {
+            // A few ulps at least: where the ramp is short next to `v`,
+            // `x − v` carries the rounding of `x`.
+            let y = (x - ((x - v) * back).max(4.0 * f32::EPSILON * x)).max(v);
             if self.dist(v, y) <= len {
                 return y;
             }
-            back = if back == 0.0 { 1e-6 } else { back * 10.0 };
+            back *= 10.0;
         }
         self.fitting(v, v, trap, len)
     }
@@ -67,8 +69,10 @@ impl Shape {
     /// With the acceleration reaching `a` (`dv ≥ a²/j`):
     /// `len = (x² − v²)/2a + (x + v)·a/2j`, a quadratic in `x`. Below
     /// that, `len = (2v + d)·sqrt(d/j)` with `d = x − v`, which Newton's
-    /// method solves from `d = a²/j` downwards (the cubic `(2v + d)²·d` is
-    /// convex and increasing, so every step stays above the root).
+    /// method solves from above (the cubic `(2v + d)²·d` is convex and
+    /// increasing, so every step stays above the root), starting at the
+    /// least of the upper bounds `a²/j`, `len²·j/4v²` and `cbrt(len²·j)`:
+    /// from `a²/j` alone a dozen steps were not always enough.
     fn s_reach(&self, v: f32, len: f32) -> f32 {
         let (a, j) = (self.accel, self.jerk);
         let full = a * a / j;
@@ -78,14 +82,26 @@ impl Shape {
             return x;
         }
         let target = len * len * j;
+        // Start at an upper bound near the root: the cubic is at least
+        // `4v²·d` and at least `d³`.
         let mut d = full;
+        if v > 0.0 {
+            d = d.min(target / (4.0 * v * v));
+        }
+        if d > 2.0 * v {
+            d = d.min(crate::num::cbrt(target));
+        }
         for _ in 0..12 {
             let w = 2.0 * v + d;
             let f = w * w * d - target;
             if f <= 0.0 {
                 break;
             }
-            d -= f / (w * (2.0 * v + 3.0 * d));
+            let step = f / (w * (2.0 * v + 3.0 * d));
+            d -= step;
+            if step <= 1e-7 * (v + d) {
+                break;
+            }
         }
         v + d.max(0.0)
     }
