@@ -50,9 +50,10 @@ pub(super) const HOLD_STRETCH: f32 = 1.17;
 // no ramp on that side for its change to add to, and the window that
 // meets the corner sees the change plus the ramp on the other side only.
 // Half the change's own time, on the side where the axis moves, is then
-// enough (no stretch): a window starting at the corner holds `J` and the
-// ramp for `W − T0/2`, and `J/W + a·(1 − x/2)·…` peaks at `a` exactly
-// (checked numerically against the meter's kernel for `x` up to 1/2).
+// enough (no stretch): with the change `J = x·a·W` and a hold of `h·W`
+// after it, the worst window of the meter's kernel reads
+// `a·(1 + x²/2 − x·h)`, which is `a` at `h = x/2` (checked numerically
+// against the kernel for `x` up to 0.8).
 // So each side holds for the axes that move on it: `Sides::pre` (the
 // block before) and `Sides::post` (this block). An XY move between a
 // retract and a plunge then holds only for X's and Y's own changes, a
