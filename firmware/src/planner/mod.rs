@@ -22,7 +22,7 @@ use crate::settings::Settings;
 use crate::AXES;
 pub use curve::Curve;
 pub use ramp::{Phase, Profile, Shape};
-pub use run::{nominal_near, RUN_BLOCKS};
+pub use run::{joins, CURVE_RUN_JERK, RUN_BLOCKS};
 
 /// Why a block was not queued. The executor maps `Full` onto its `Busy` and
 /// the rest onto its errors of the same name, so the reported codes do not

@@ -158,17 +158,18 @@ impl<const N: usize> Planner<N> {
             }
             m
         };
-        let m = factor(&self.prev_unit_mm);
         // Each side holds for the axes that move on it (module doc, one-
         // sided holds): an axis standing still on one side has no ramp
-        // there for its change to add to.
+        // there for its change to add to. `m`: the largest change, as
+        // `factor` gives it.
         let p = &self.prev_unit_mm;
-        let mut sides = none;
+        let (mut m, mut sides) = (0.0f32, none);
         for (i, ax) in self.settings.axes.iter().enumerate() {
             let d = libm::fabsf(unit[i] - p[i]);
             if d <= 1e-6 || quiet & (1 << i) != 0 {
                 continue;
             }
+            m = m.max(d / ax.max_accel);
             // An axis counts as still on a side only if it stays still for
             // a window there (`long`: per axis before, this block after):
             // another change of the axis within one would add to this one

@@ -33,8 +33,14 @@ pub fn nominal_near(a: f32, b: f32) -> bool {
     a.min(b) >= 0.95 * a.max(b)
 }
 
-/// Whether the junction between `p` and the block `n` after it lies inside
-/// a run.
+/// The share of the jerk a run keeps when it spans a curve's chords: the
+/// tangential ramp's jerk adds to the turning acceleration's own (`v³/r²`,
+/// and `3·v·a_t/r`).
+pub const CURVE_RUN_JERK: f32 = 0.5;
+
+/// Whether a run that `p` is in may take in the block `n` after it (the
+/// preparer asks it of the run's first block, the forward pass of each
+/// junction).
 pub fn joins(p: &Block, n: &Block) -> bool {
     p.kind == BlockKind::Line
         && n.kind == BlockKind::Line
@@ -87,8 +93,7 @@ impl RunAcc {
             self.add(prev);
         }
         let reach = (self.blocks >= 2).then(|| {
-            // Half the jerk over curve chords, as the preparer plans them.
-            let jerk = s.jerk.max(1e-3) * if self.curve { 0.5 } else { 1.0 };
+            let jerk = s.jerk.max(1e-3) * if self.curve { CURVE_RUN_JERK } else { 1.0 };
             let avail = self.len - 0.5 * self.hold_m * self.entry * self.entry;
             Shape {
                 accel: self.accel,

@@ -13,7 +13,7 @@ use std::collections::BTreeMap;
 
 use burin::AXES;
 
-use super::bound::Bound;
+use super::bound::{Bound, PieceProfile};
 use crate::record::{MoveKind, PathEvent, PinEvent, Recorder, RunInfo};
 
 /// How many vertices ahead of the last one hit a step may match.
@@ -63,10 +63,9 @@ impl Locator {
         &self.bound
     }
 
-    /// Losses per source line, worst first, and the total run time less
-    /// the bound's over the vertices that were hit.
-    pub fn losses(&self) -> Vec<LineLoss> {
-        let prof = self.bound.profile();
+    /// Losses per source line, worst first, against `prof`, the bound's
+    /// profile (`Bound::profile` of [`Locator::bound`]).
+    pub fn losses(&self, prof: &[PieceProfile]) -> Vec<LineLoss> {
         let t0 = self.t0.unwrap_or(0);
         let mut per_line: BTreeMap<u32, LineLoss> = BTreeMap::new();
         let (mut last_run, mut last_bound) = (0.0, 0.0);
@@ -145,7 +144,7 @@ mod tests {
         let mut loc = Locator::new(Bound::new(cfg.settings, cfg.start_position_mm), spm);
         let src = "G1 X10 F600\nG1 X20\nG1 X20 Y10\n";
         crate::offline::run_file(&cfg, src, &mut loc);
-        let l = loc.losses();
+        let l = loc.losses(&loc.bound().profile());
         let lines: Vec<u32> = {
             let mut v: Vec<u32> = l.iter().map(|x| x.line).collect();
             v.sort();

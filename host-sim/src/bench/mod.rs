@@ -79,14 +79,16 @@ pub fn run_job(cfg: &MachineConfig, source: &str) -> JobFigures {
     };
     let end = both.bound.bound().end_mm();
     let spm = cfg.settings.axes.map(|a| f64::from(a.steps_per_mm));
+    // The bound's profile once, for its time, the losses and the replay.
+    let prof = both.bound.bound().profile();
     JobFigures {
         time_s,
         bound_end_steps: std::array::from_fn(|i| (end[i] * spm[i]).round() as i64),
-        bound_s: both.bound.bound().time_s(),
-        losses: both.bound.losses(),
+        bound_s: prof.last().map_or(0.0, |p| p.end_s),
+        losses: both.bound.losses(&prof),
         bound_limits: match &both.info {
             Some(info) => replay::bound_limits(
-                both.bound.bound(),
+                &prof,
                 cfg.start_position_mm.map(f64::from),
                 info,
                 cfg.settings.max_step_rate_hz,

@@ -8,17 +8,17 @@
 
 use burin::AXES;
 
-use super::bound::Bound;
+use super::bound::PieceProfile;
 use super::limits::{LimitMeter, TraceLimits};
 use crate::record::{PinEvent, Recorder, RunInfo};
 
 /// Sampling step of the replayed profile, s (the meter's grid is 1 ms).
 const STEP_S: f64 = 1e-4;
 
-/// The meter's figures for the bound's profile of the path in `bound`,
+/// The meter's figures for the bound's profile `prof` (`Bound::profile`),
 /// starting at `start_mm`, on the machine described by `info`.
 pub fn bound_limits(
-    bound: &Bound,
+    prof: &[PieceProfile],
     start_mm: [f64; AXES],
     info: &RunInfo,
     max_step_rate_hz: f32,
@@ -27,7 +27,6 @@ pub fn bound_limits(
     meter.start(info);
     let spm: [f64; AXES] = std::array::from_fn(|i| f64::from(info.axes[i].steps_per_mm));
     let tick_hz = f64::from(info.tick_hz);
-    let prof = bound.profile();
     let mut from = start_mm;
     let mut t = 0.0;
     let mut k = 0;

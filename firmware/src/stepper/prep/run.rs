@@ -13,7 +13,7 @@
 //!
 //! A run ends before a block that is not a line, watches other inputs,
 //! or has a nominal speed more than 5 % away from the first block's
-//! (`planner::nominal_near`: an arc's chords differ by a little as their
+//! (`planner::joins`: an arc's chords differ by a little as their
 //! direction turns the axes' rate caps; the run cruises at the lowest of
 //! its blocks', so every block's cap holds in all of it), after
 //! [`MAX_RUN`] blocks, and before the newest block in the ring: the
@@ -36,7 +36,9 @@
 
 use super::{Hold, Preparer};
 use crate::planner::ramp::PHASES;
-use crate::planner::{nominal_near, Block, BlockKind, Phase, Planner, Profile, Shape, RUN_BLOCKS};
+use crate::planner::{
+    joins, Block, BlockKind, Phase, Planner, Profile, Shape, CURVE_RUN_JERK, RUN_BLOCKS,
+};
 
 /// Most blocks after the running one that a run takes in: 16 chords of
 /// 0.4 mm (a 10 mm radius at `$12` = 0.002) are 6.4 mm, more than a ramp
@@ -58,16 +60,7 @@ impl Preparer {
         if base.jerk > 0.0 && self.hold == Hold::Running {
             while r < MAX_RUN {
                 match pl.block(r + 1) {
-                    Some(n)
-                        if n.kind == BlockKind::Line
-                            && n.hold_m <= 0.0
-                            && n.hold_pre_m <= 0.0
-                            && pl.block(r + 2).is_some()
-                            && n.watch == b.watch
-                            && nominal_near(n.nominal, b.nominal) =>
-                    {
-                        r += 1
-                    }
+                    Some(n) if joins(b, n) && pl.block(r + 2).is_some() => r += 1,
                     _ => break,
                 }
             }
@@ -88,9 +81,7 @@ impl Preparer {
                 }
             }
             if r > 0 && curve {
-                // On a curve the tangential ramp's jerk adds to the turning
-                // acceleration's own (`v³/r²`, and `3·v·a_t/r`).
-                shape.jerk *= 0.5;
+                shape.jerk *= CURVE_RUN_JERK;
             }
             let (exit, exit_m) = match pl.block(r + 1) {
                 Some(n) if n.kind == BlockKind::Line => (n.entry, n.hold_pre_m),
