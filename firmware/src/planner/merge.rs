@@ -36,7 +36,6 @@ impl<const N: usize> Planner<N> {
             || p.dir_mask != b.dir_mask
             || p.rapid != b.rapid
             || p.programmed != b.programmed
-            || p.cap != b.cap
         {
             return false;
         }
@@ -47,15 +46,58 @@ impl<const N: usize> Planner<N> {
         if !proportional || count > u64::from(MAX_BLOCK_STEPS) {
             return false;
         }
-        let m = self.at(k);
-        for i in 0..AXES {
-            m.steps[i] += b.steps[i];
+        // The pieces' caps differ where their commanded lengths round to
+        // different step counts (2, 2, 3, 2 steps for 2.03 each): each one's
+        // own step rate is capped (`interval`), the merged line's is even.
+        // A cap below the line's own (a quiet axis) stays.
+        let steps: [u32; AXES] = core::array::from_fn(|i| p.steps[i] + b.steps[i]);
+        let length = p.length + b.length;
+        let own = |x: &Block| {
+            if x.cap < self.line_cap(&x.steps, x.count, x.length) * (1.0 - 1e-5) {
+                x.cap
+            } else {
+                f32::INFINITY
+            }
+        };
+        let (op, ob) = (own(&p), own(b));
+        // One lowered for a quiet axis and the other not: the merged line
+        // would keep the low cap all along (`planner::quiet`).
+        if op != ob && (op.is_infinite() || ob.is_infinite() || libm::fabsf(op - ob) > 1e-4 * op) {
+            return false;
         }
+        let cap = op.min(ob).min(self.line_cap(&steps, count as u32, length));
+        // A lower cap is safe while the block can still be entered as
+        // planned: it is the newest, planned to stop at its end, and the
+        // blocks before it only see its entry.
+        if cap.is_nan() || cap < p.entry {
+            return false;
+        }
+        let mut m = p;
+        m.steps = steps;
         m.count = count as u32;
         m.target = b.target;
-        m.length += b.length;
+        m.length = length;
+        m.cap = cap;
         m.floor = m.floor.min(b.floor);
         m.line = b.line;
+        m.nominal = self.nominal(&m);
+        m.max_entry = m.max_entry.min(m.nominal);
+        *self.at(k) = m;
         true
+    }
+
+    /// A line's speed cap from its steps alone: each axis's rate over its
+    /// share of the direction in steps, and single intervals (`interval`).
+    pub(super) fn line_cap(&self, steps: &[u32; AXES], count: u32, length: f32) -> f32 {
+        let s = &self.settings;
+        let mm: [f32; AXES] = core::array::from_fn(|i| steps[i] as f32 / s.axes[i].steps_per_mm);
+        let len = libm::sqrtf(mm.iter().map(|v| v * v).sum());
+        let mut cap = interval::speed_cap(s, self.tick_hz, steps, count, length);
+        for (m, ax) in mm.iter().zip(&s.axes) {
+            if *m > 0.0 {
+                cap = cap.min(ax.max_rate / 60.0 * len / m);
+            }
+        }
+        cap
     }
 }

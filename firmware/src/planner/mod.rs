@@ -87,7 +87,11 @@ pub struct Block {
     pub count: u32,
     /// Bit set: axis moves towards negative.
     pub dir_mask: u8,
-    /// Path length, mm.
+    /// Path length, mm: the commanded move's, which the programmed feed
+    /// is a speed along, not the length of its step-rounded ends (a chord
+    /// of 1.3 steps steps as 1 or 2; over a dense curve the stepped
+    /// polyline is 4-5 % longer). The steps are spread over it evenly, and
+    /// `cap` holds each axis's step rate (`interval`).
     pub length: f32,
     /// Requested speed before override, mm/s (infinite for rapids).
     pub programmed: f32,

@@ -47,11 +47,23 @@ impl<const N: usize> Planner<N> {
         if b.count == 0 {
             return Ok(());
         }
-        b.length = libm::sqrtf(len2);
+        // The direction in steps sets the axes' shares (a Bresenham line
+        // moves each axis in proportion); the commanded geometry sets the
+        // length and the corners (see `Block::length`). A zero-length
+        // commanded move that still rounds to a step keeps the step one.
+        let len_steps = libm::sqrtf(len2);
+        let d: [f32; AXES] = core::array::from_fn(|i| end_mm[i] - self.position_mm[i]);
+        let len_mm = libm::sqrtf(d.iter().map(|v| v * v).sum());
+        let (unit_mm, len_mm) = if len_mm.is_finite() && len_mm > 1e-6 {
+            (d.map(|v| v / len_mm), len_mm)
+        } else {
+            (mm.map(|v| v / len_steps), len_steps)
+        };
+        b.length = len_mm;
         let mut unit = [0.0f32; AXES];
         let (mut cap, mut accel) = (f32::INFINITY, f32::INFINITY);
         for i in 0..AXES {
-            unit[i] = mm[i] / b.length;
+            unit[i] = mm[i] / len_steps;
             if b.steps[i] == 0 {
                 continue;
             }
@@ -110,15 +122,7 @@ impl<const N: usize> Planner<N> {
         }
         b.nominal = self.nominal(&b);
         Self::curve_limits(&mut b);
-        // Curvature on the commanded geometry (a zero-length commanded move
-        // that still rounds to a step keeps the step direction).
-        let d: [f32; AXES] = core::array::from_fn(|i| end_mm[i] - self.position_mm[i]);
-        let len_mm = libm::sqrtf(d.iter().map(|v| v * v).sum());
-        let (unit_mm, len_mm) = if len_mm.is_finite() && len_mm > 1e-6 {
-            (d.map(|v| v / len_mm), len_mm)
-        } else {
-            (unit, b.length)
-        };
+        // Corners and curvature on the commanded geometry.
         b.corner = self.junction_speed(&unit_mm, len_mm, curve.is_some());
         b.junction = b.corner;
         let (quiet, release) = self.quiet_axes(&mut b, &unit);
@@ -162,7 +166,12 @@ impl<const N: usize> Planner<N> {
         }
         self.prev_unit_mm = unit_mm;
         self.prev_curve = curve;
-        self.prev_nominal = b.nominal;
+        // A merged block's cap is its whole line's (`merge`).
+        self.prev_nominal = if merged {
+            self.at(self.len - 1).nominal
+        } else {
+            b.nominal
+        };
         self.prev_length = if merged {
             self.prev_length + len_mm
         } else {

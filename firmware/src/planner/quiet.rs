@@ -80,10 +80,13 @@ impl<const N: usize> Planner<N> {
         let entry = if self.prev_nominal <= 0.0 {
             0.0
         } else {
-            b.junction.min(b.cap)
+            b.junction.min(b.cap).min(self.prev_nominal)
         };
         // Its peak if it leaves no faster than it enters (a block between
-        // two like corners): quiet blocks are capped no lower than that.
+        // two like corners), entered at most at its corner's limit and at
+        // the previous block's speed: quiet blocks are capped no lower than
+        // that. (Only the choice to cap rests on this guess; once capped,
+        // the block is quiet whatever its entry.)
         let natural = b.cap.min(libm::sqrtf(entry * entry + b.accel * b.length));
         let (mut quiet, mut release) = (0u8, 0u8);
         let mut cap = b.cap;
