@@ -54,7 +54,13 @@ impl<const N: usize> Planner<N> {
         let len_steps = libm::sqrtf(len2);
         let d: [f32; AXES] = core::array::from_fn(|i| end_mm[i] - self.position_mm[i]);
         let len_mm = libm::sqrtf(d.iter().map(|v| v * v).sum());
-        let (unit_mm, len_mm) = if len_mm.is_finite() && len_mm > 1e-6 {
+        // Both ends round by at most half a step per axis, so the commanded
+        // move is within a step per axis of the stepped one (and `f32`
+        // rounding of far coordinates: 1.25 steps); a commanded
+        // start that is further off (not where the steps are) is not
+        // trusted.
+        let near = (0..AXES).all(|i| libm::fabsf(d[i] - mm[i]) * s.axes[i].steps_per_mm <= 1.25);
+        let (unit_mm, len_mm) = if near && len_mm.is_finite() && len_mm > 1e-6 {
             (d.map(|v| v / len_mm), len_mm)
         } else {
             (mm.map(|v| v / len_steps), len_steps)
