@@ -31,6 +31,7 @@ fn straight_chain_keeps_speed_and_last_block_stops() {
     let shape = Shape {
         accel: 500.0,
         jerk: 0.0,
+        drop: 0.0,
     };
     assert!((p.block(1).unwrap().entry - shape.reach(0.0, 1.0).min(20.0)).abs() < 1e-3);
     // the last block must be able to stop within its length
@@ -101,7 +102,11 @@ fn rapid_capped_by_slowest_axis() {
 #[test]
 fn profile_math_consistent() {
     for jerk in [0.0f32, 5000.0] {
-        let sh = Shape { accel: 500.0, jerk };
+        let sh = Shape {
+            accel: 500.0,
+            jerk,
+            drop: 0.0,
+        };
         for (v0, vn, v1, len) in [
             (0.0, 50.0, 0.0, 100.0),
             (10.0, 50.0, 5.0, 0.5),
@@ -139,6 +144,7 @@ fn an_s_ramp_that_misses_its_exit_does_not_stop_dead() {
     let sh = Shape {
         accel: 500.0,
         jerk: 5000.0,
+        drop: 0.0,
     };
     let p = Profile::plan(&sh, 83.333, 83.333, 27.97, 11.5);
     let exit = p.exit_speed();
@@ -152,6 +158,7 @@ fn an_s_ramp_that_misses_its_exit_does_not_stop_dead() {
     let tr = Shape {
         accel: 500.0,
         jerk: 0.0,
+        drop: 0.0,
     };
     let exit = Profile::plan(&tr, 83.333, 83.333, 20.0, 6.0).exit_speed();
     assert!((exit - tr.reach_down(83.333, 6.0)).abs() < 1e-3, "{exit}");
@@ -165,7 +172,11 @@ fn an_s_ramp_that_misses_its_exit_does_not_stop_dead() {
 #[test]
 fn a_late_exit_hold_slows_the_block_instead_of_arriving_fast() {
     for jerk in [0.0f32, 5000.0] {
-        let sh = Shape { accel: 316.0, jerk };
+        let sh = Shape {
+            accel: 316.0,
+            jerk,
+            drop: 0.0,
+        };
         let v0 = 23.4;
         // Trapezoid: a hair short of the stop, as rounding leaves it (it
         // stops as soon as it can). An S ramp cut short ends far above
@@ -197,7 +208,11 @@ fn a_late_exit_hold_slows_the_block_instead_of_arriving_fast() {
 #[test]
 fn an_unreachable_exit_still_holds_its_corner() {
     for jerk in [0.0f32, 5000.0] {
-        let sh = Shape { accel: 119.0, jerk };
+        let sh = Shape {
+            accel: 119.0,
+            jerk,
+            drop: 0.0,
+        };
         let (v0, m1) = (16.0f32, 0.0008f32);
         let rest = 0.4;
         assert!(sh.dist(v0, 0.0) > rest, "{jerk}: the block could stop");
@@ -224,7 +239,11 @@ fn an_unreachable_exit_still_holds_its_corner() {
 #[test]
 fn a_resume_from_rest_holds_nothing() {
     for jerk in [0.0f32, 5000.0] {
-        let sh = Shape { accel: 500.0, jerk };
+        let sh = Shape {
+            accel: 500.0,
+            jerk,
+            drop: 0.0,
+        };
         let p = Profile::plan_held(&sh, 0.0, 50.0, 0.0, 3.0, 0.05, 0.004);
         let time: f32 = p.phases.iter().map(|ph| ph.time).sum();
         assert!(time < 1.0, "{jerk}: {time} s for 3 mm");

@@ -57,6 +57,7 @@ fn s_curve_ramps_run_on_across_the_chords_of_a_curve() {
     let sh = Shape {
         accel: 500.0,
         jerk: 5000.0,
+        drop: 0.0,
     };
     let mut stair = 0.0;
     for _ in 0..8 {

@@ -64,16 +64,16 @@ impl HostModel {
 }
 
 /// The measured on-target costs (`cargo xtask bench-target`: 2,247
-/// instructions per parsed line, 8,840 per planned block with the corner
+/// instructions per parsed line, 9,303 per planned block with the corner
 /// holds, their passes, the quiet axes and the per-chord arc budget) at
 /// 96 MHz and the step path's assumed 1.3 cycles per instruction: 30.4 µs
-/// and 119.7 µs. The link is instant: a job file can be sent at any rate,
+/// and 126.0 µs. The link is instant: a job file can be sent at any rate,
 /// so its time is not the controller's.
 impl Default for HostModel {
     fn default() -> Self {
         HostModel {
             line_ns: 30_428,
-            block_ns: 119_708,
+            block_ns: 125_978,
             ..HostModel::INSTANT
         }
     }

@@ -23,9 +23,17 @@
 
 use super::*;
 
-/// Largest centripetal share of the budget on a curve: the rest is left
-/// for the tangential ramps.
+/// Largest centripetal share of the budget on a curve in S-curve mode:
+/// the rest is left for the tangential ramps, which run at one
+/// acceleration a chord (the isotropic rule below holds up to 0.8).
 pub const C_MAX: f32 = 0.8;
+
+/// The same in trapezoid mode, where a chord's ramp takes what the speed
+/// it reaches leaves (`Shape::drop`): at `c` the ramps near the top are
+/// slow, but a ramp from rest gets to 99 % of `sqrt(A_n·r)` within
+/// `r·ln(100)/2`. 0.9 / 0.95 / 0.98: bench-motion totals 2005.40 /
+/// 2004.88 / 2004.89 s (0.8 before the in-plane helix speed: 2007.16).
+pub const C_MAX_TRAPEZOID: f32 = 0.95;
 
 /// What the planner knows about the curve a chord belongs to.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
@@ -93,8 +101,12 @@ impl Curve {
                 tangent[k] = [a[k] / u[k], n[k] / u[k]];
             }
         }
+        // On a helix only the in-plane part of the speed turns: at path
+        // speed `v` the plane axes feel `(v·norm)²/r`, so the cap is
+        // `v² ≤ c·A_n·r/norm²` (a hole's helix at a pitch of 0.28 of its
+        // circumference turns 8 % less than its circle would).
         (an.is_finite() && an > 0.0).then_some(ChordBudget {
-            ar: an * self.radius,
+            ar: an * self.radius / (norm * norm),
             an,
             tangent,
         })
@@ -104,14 +116,22 @@ impl Curve {
 impl<const N: usize> Planner<N> {
     /// Cap and path acceleration of a chord block whose nominal speed is
     /// `b.nominal` (called again when the overrides change it).
-    pub(super) fn curve_limits(b: &mut Block) {
+    /// Largest centripetal share under the settings' profile.
+    pub(super) fn c_max(&self) -> f32 {
+        match self.settings.profile {
+            crate::settings::Profile::Trapezoid => C_MAX_TRAPEZOID,
+            crate::settings::Profile::SCurve => C_MAX,
+        }
+    }
+
+    pub(super) fn curve_limits(b: &mut Block, c_max: f32) {
         if b.curve_ar <= 0.0 {
             return;
         }
-        let vmax = libm::sqrtf(C_MAX * b.curve_ar);
+        let vmax = libm::sqrtf(c_max * b.curve_ar);
         b.nominal = b.nominal.min(vmax);
         // a_n at the top speed: `v²/r = c·A_n`.
-        let an = (b.nominal * b.nominal / b.curve_ar).min(C_MAX) * b.curve_an;
+        let an = (b.nominal * b.nominal / b.curve_ar).min(c_max) * b.curve_an;
         b.accel = b
             .curve_tangent
             .iter()
@@ -176,7 +196,7 @@ mod tests {
         (b.curve_ar, b.curve_an, b.curve_tangent) = (cb.ar, cb.an, cb.tangent);
         b.nominal = 1e6;
         b.line_accel = 100.0 / h;
-        Planner::<4>::curve_limits(&mut b);
+        Planner::<4>::curve_limits(&mut b, C_MAX);
         let an = b.nominal * b.nominal / c.radius;
         // |a_t|·|u_i| + a_n·|n_i| on each plane axis: Z is the tight one.
         let z = b.accel * h + an * h;

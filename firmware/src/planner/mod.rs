@@ -181,10 +181,36 @@ impl Block {
             crate::settings::Profile::Trapezoid => 0.0,
             crate::settings::Profile::SCurve => s.jerk.max(1e-3),
         };
+        // A trapezoid chord ramps with what its top speed leaves
+        // (`planner::curve`): the line from the acceleration at rest to
+        // the one at `nominal`, below the exact (concave) limit between.
+        if jerk <= 0.0 && self.curve_ar > 0.0 && self.nominal > 0.0 {
+            let a0 = self.accel0();
+            if a0 > self.accel {
+                return Shape {
+                    accel: a0,
+                    jerk,
+                    drop: (a0 - self.accel) / (self.nominal * self.nominal),
+                };
+            }
+        }
         Shape {
             accel: self.accel,
             jerk,
+            drop: 0.0,
         }
+    }
+
+    /// The path acceleration the block allows at rest: on a trapezoid
+    /// chord, with no centripetal part yet.
+    pub fn accel0(&self) -> f32 {
+        if self.curve_ar <= 0.0 {
+            return self.accel;
+        }
+        self.curve_tangent
+            .iter()
+            .fold(self.line_accel, |acc, [alpha, _]| acc.min(*alpha))
+            .max(self.accel)
     }
 }
 

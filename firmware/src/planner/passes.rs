@@ -108,7 +108,7 @@ impl<const N: usize> Planner<N> {
         let v_jd = libm::sqrtf(a * r);
         let phi = libm::acosf(crate::num::clamp(-cos, -1.0, 1.0)).max(1e-9);
         let l = length.min(self.prev_length);
-        let a_curve = if curve { super::curve::C_MAX * a } else { a };
+        let a_curve = if curve { self.c_max() * a } else { a };
         let v_curve = libm::sqrtf(a_curve * l / phi);
         v_jd.min(v_curve)
     }
@@ -231,10 +231,11 @@ impl<const N: usize> Planner<N> {
         self.feed_pct = feed_pct as f32 / 100.0;
         self.rapid_pct = rapid_pct as f32 / 100.0;
         let mut prev_nominal = None;
+        let c_max = self.c_max();
         for k in 0..self.len {
             let mut b = *self.at(k);
             b.nominal = self.nominal(&b);
-            Self::curve_limits(&mut b);
+            Self::curve_limits(&mut b, c_max);
             if b.kind == BlockKind::Line {
                 let pn = prev_nominal.unwrap_or(b.entry);
                 b.max_entry = b.junction.min(b.nominal).min(pn);

@@ -127,7 +127,7 @@ impl<const N: usize> Planner<N> {
             return Err(PlanError::FeedTooSlow);
         }
         b.nominal = self.nominal(&b);
-        Self::curve_limits(&mut b);
+        Self::curve_limits(&mut b, self.c_max());
         // Corners and curvature on the commanded geometry.
         b.corner = self.junction_speed(&unit_mm, len_mm, curve.is_some());
         b.junction = b.corner;

@@ -61,9 +61,9 @@ impl Block {
     /// below `corner`; after a stop `corner` is 0).
     pub(super) fn min_time(&self) -> f32 {
         let entry = self.corner.min(self.cap);
-        let top = self
-            .cap
-            .min(libm::sqrtf(entry * entry + 2.0 * self.accel * self.length));
+        let top = self.cap.min(libm::sqrtf(
+            entry * entry + 2.0 * self.accel0() * self.length,
+        ));
         if top > 0.0 {
             self.length / top
         } else {
@@ -108,7 +108,7 @@ impl<const N: usize> Planner<N> {
         if cap < b.cap {
             b.cap = cap;
             b.nominal = self.nominal(b);
-            Self::curve_limits(b);
+            Self::curve_limits(b, self.c_max());
         }
         (quiet, release)
     }

@@ -19,9 +19,35 @@ pub struct Shape {
     pub accel: f32,
     /// mm/s³; `0` means unlimited (trapezoid).
     pub jerk: f32,
+    /// Trapezoid chords of a curve: a ramp whose top speed is `v` may
+    /// accelerate at `accel − drop·v²` (`planner::curve`); 0 elsewhere.
+    pub drop: f32,
 }
 
 impl Shape {
+    /// The constant-acceleration shape of a profile whose top speed is
+    /// `top`: the acceleration every speed up to it allows.
+    pub fn at_top(&self, top: f32) -> Shape {
+        Shape {
+            accel: self.accel - self.drop * top * top,
+            jerk: self.jerk,
+            drop: 0.0,
+        }
+    }
+
+    /// The top speed of a trapezoid from `v0` to `v1` (or as close as
+    /// `len` allows) cruising at most at `vn`, with the acceleration its
+    /// own top allows (`drop`). In squares (`w = v²`): the triangle's peak
+    /// solves `2w − w0 − w1 = 2·len·(accel − drop·w)`; an exit out of
+    /// reach ends at `w = (w0 + 2·len·accel)/(1 + 2·len·drop)`, which is
+    /// then below the peak; an entry above both is the top itself.
+    pub fn top(&self, v0: f32, vn: f32, v1: f32, len: f32) -> f32 {
+        let (w0, w1, l) = (v0 * v0, v1 * v1, len.max(0.0));
+        let peak = (w0 + w1 + 2.0 * l * self.accel) / (2.0 + 2.0 * l * self.drop);
+        let reach = (w0 + 2.0 * l * self.accel) / (1.0 + 2.0 * l * self.drop);
+        libm::sqrtf((vn * vn).min(peak).min(reach).max(w0))
+    }
+
     /// Duration of a speed change of `dv` (≥ 0).
     pub fn time(&self, dv: f32) -> f32 {
         let dv = dv.abs();
@@ -43,7 +69,14 @@ impl Shape {
     /// Highest speed reachable from `v` (accelerating or, read backwards,
     /// decelerating) within `len` mm.
     pub fn reach(&self, v: f32, len: f32) -> f32 {
-        let trap = libm::sqrtf(v * v + 2.0 * self.accel * len.max(0.0));
+        let l = len.max(0.0);
+        // With `drop`, the ramp's top is where it ends (read backwards,
+        // where it starts): `x² − v² = 2·l·(accel − drop·x²)`.
+        let trap = if self.drop > 0.0 {
+            libm::sqrtf((v * v + 2.0 * self.accel * l) / (1.0 + 2.0 * self.drop * l))
+        } else {
+            libm::sqrtf(v * v + 2.0 * self.accel * l)
+        };
         if self.jerk <= 0.0 {
             return trap;
         }
@@ -139,9 +172,18 @@ impl Shape {
             return libm::sqrtf(avail / half);
         }
         if self.jerk <= 0.0 {
-            // x²·m/2 + (x² − v²)/2a = avail
-            let k = 0.5 / self.accel;
-            return libm::sqrtf((avail + k * v * v) / (half + k));
+            // x²·m/2 + (x² − v²)/2a = avail. With `drop`, solved at the
+            // acceleration the first answer's speed allows: the second
+            // answer is slower, so its own allows more.
+            let solve = |a: f32| {
+                let k = 0.5 / a;
+                libm::sqrtf((avail + k * v * v) / (half + k))
+            };
+            let x = solve(self.accel);
+            if self.drop <= 0.0 {
+                return x;
+            }
+            return solve(self.accel - self.drop * x * x);
         }
         let (mut lo, mut hi) = (v, self.reach(v, avail));
         for _ in 0..24 {

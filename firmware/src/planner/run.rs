@@ -98,6 +98,7 @@ impl RunAcc {
             Shape {
                 accel: self.accel,
                 jerk,
+                drop: 0.0,
             }
             .reach(self.entry, avail)
         });

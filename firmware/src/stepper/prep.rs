@@ -141,6 +141,7 @@ impl Preparer {
             pshape: Shape {
                 accel: 1.0,
                 jerk: 0.0,
+                drop: 0.0,
             },
             run_blocks: 0,
             done_len: 0.0,
@@ -248,6 +249,7 @@ impl Preparer {
             Shape {
                 accel: 1.0,
                 jerk: 0.0,
+                drop: 0.0,
             },
             |b| b.shape(&self.settings),
         )
@@ -273,7 +275,7 @@ impl Preparer {
 
     fn set_profile(&mut self, p: Profile) {
         self.hold_ramp = false;
-        self.pshape = self.shape();
+        self.pshape = self.shape().at_top(self.v);
         self.profile = p;
         self.phase = 0;
         self.tau = 0.0;

@@ -65,7 +65,8 @@ impl Preparer {
     /// cancel (probe contact) always ramps at once. `planned`: the running
     /// profile is this block's (at a block's start it is the last one's).
     pub(super) fn plan_hold(&mut self, planned: bool) -> bool {
-        let sh = self.shape();
+        // A stop from `v`: `v` is its top speed.
+        let sh = self.shape().at_top(self.v);
         let a = if sh.jerk > 0.0 { self.accel_now() } else { 0.0 };
         let zero = Phase::default();
         let mut phases = [zero; PHASES];
