@@ -15,11 +15,15 @@
 //! `a_t·u_i`, which the block's straight-line limit already covers.
 //!
 //! The centripetal share `c = a_n/A_n` (`A_n = min_i a_i/|n_i|`, the most
-//! the normal direction allows) follows from the fastest the chord may run:
-//! an arc the feed keeps slow leaves nearly the whole budget to speeding up
-//! and slowing down; a small arc the budget itself keeps slow runs at
-//! `sqrt(C_MAX·A_n·r)`, and ramps with what each axis has left. S-curve
-//! mode keeps one isotropic budget for the whole curve (`Curve::budget`).
+//! the normal direction allows) follows from the speed: an arc the feed
+//! keeps slow leaves nearly the whole budget to speeding up and slowing
+//! down; a small arc the budget itself keeps slow runs at up to
+//! `sqrt(C_MAX_TRAPEZOID·A_n·r)`. Its ramps take what each axis has left
+//! at the speed they reach, which falls with `v²` (`Shape::drop`): a ramp
+//! from rest gains speed fast while the turn takes little, and slows as it
+//! nears the cap, so the cap can sit close to the whole budget. A helix
+//! turns only the in-plane part of its speed. S-curve mode keeps one
+//! isotropic budget for the whole curve (`Curve::budget`) and `C_MAX`.
 
 use super::*;
 
