@@ -118,8 +118,6 @@ impl Curve {
 }
 
 impl<const N: usize> Planner<N> {
-    /// Cap and path acceleration of a chord block whose nominal speed is
-    /// `b.nominal` (called again when the overrides change it).
     /// Largest centripetal share under the settings' profile.
     pub(super) fn c_max(&self) -> f32 {
         match self.settings.profile {
@@ -128,6 +126,9 @@ impl<const N: usize> Planner<N> {
         }
     }
 
+    /// Cap and path acceleration of a chord block whose nominal speed is
+    /// `b.nominal` (called again when the overrides change it), with the
+    /// centripetal share at most `c_max` ([`Planner::c_max`]).
     pub(super) fn curve_limits(b: &mut Block, c_max: f32) {
         if b.curve_ar <= 0.0 {
             return;
