@@ -137,12 +137,7 @@ impl<const N: usize> Planner<N> {
         b.nominal = b.nominal.min(vmax);
         // a_n at the top speed: `v²/r = c·A_n`.
         let an = (b.nominal * b.nominal / b.curve_ar).min(c_max) * b.curve_an;
-        b.accel = b
-            .curve_tangent
-            .iter()
-            .fold(b.line_accel, |acc, [alpha, beta]| {
-                acc.min(alpha - beta * an)
-            });
+        b.accel = b.tangent_accel(an);
     }
 
     /// In S-curve mode, the fastest a curve of radius `r` may be run at a

@@ -207,10 +207,18 @@ impl Block {
         if self.curve_ar <= 0.0 {
             return self.accel;
         }
+        self.tangent_accel(0.0).max(self.accel)
+    }
+
+    /// A chord's path acceleration while it turns at `an` mm/s²: each
+    /// plane axis's tangential limit `α − β·a_n` (`planner::curve`), and
+    /// the straight-line limit.
+    pub(super) fn tangent_accel(&self, an: f32) -> f32 {
         self.curve_tangent
             .iter()
-            .fold(self.line_accel, |acc, [alpha, _]| acc.min(*alpha))
-            .max(self.accel)
+            .fold(self.line_accel, |acc, [alpha, beta]| {
+                acc.min(alpha - beta * an)
+            })
     }
 }
 

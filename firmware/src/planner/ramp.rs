@@ -410,13 +410,7 @@ impl Profile {
         m1: f32,
     ) -> Profile {
         let len = len.max(0.0);
-        // A hold at (nearly) no speed would never end: a corner passed
-        // that slowly has nothing to hold.
-        let hold0 = if v0 > 1e-3 {
-            hold0.max(0.0).min(len)
-        } else {
-            0.0
-        };
+        let hold0 = Self::entry_hold(v0, hold0, len);
         let rest = len - hold0;
         let target = v1.min(vn).max(0.0);
         let mut hold1 = (0.5 * target * target * m1.max(0.0)).min(rest);
@@ -482,6 +476,31 @@ impl Profile {
         p.phases[0] = cruise(v0, hold0);
         p.phases[PHASES - 1] = cruise(exit, hold1);
         p
+    }
+
+    /// The entry hold [`Profile::plan_held`] keeps of `hold0` on `len`
+    /// mm entered at `v0`. A hold at (nearly) no speed would never end: a
+    /// corner passed that slowly has nothing to hold.
+    fn entry_hold(v0: f32, hold0: f32, len: f32) -> f32 {
+        if v0 > 1e-3 {
+            hold0.max(0.0).min(len.max(0.0))
+        } else {
+            0.0
+        }
+    }
+
+    /// The constant-acceleration shape [`Profile::plan_held`] is to be
+    /// given for the same arguments, and the preparer's walk evaluated
+    /// with: with `drop`, the acceleration of the top over all the length
+    /// the entry hold leaves, which is at or above every peak `plan_held`
+    /// may plan there (its exit hold only shortens the ramps, its
+    /// fallbacks only lower the exit).
+    pub fn held_shape(shape: &Shape, v0: f32, vn: f32, v1: f32, len: f32, hold0: f32) -> Shape {
+        if shape.drop <= 0.0 {
+            return *shape;
+        }
+        let rest = len.max(0.0) - Self::entry_hold(v0, hold0, len);
+        shape.at_top(shape.top(v0, vn, v1, rest))
     }
 
     pub fn total_dist(&self) -> f32 {

@@ -87,19 +87,8 @@ impl Preparer {
                 Some(n) if n.kind == BlockKind::Line => (n.entry, n.hold_pre_m),
                 _ => (0.0, 0.0),
             };
-            if shape.drop > 0.0 {
-                // A trapezoid chord: the acceleration its top speed allows.
-                // The top over all the length the entry's hold leaves (as
-                // `plan_held` cuts it) is at or above every peak
-                // `plan_held` may plan there (its exit hold only shortens
-                // the ramps, its fallbacks only lower the exit).
-                let hold = if self.v > 1e-3 {
-                    hold0.max(0.0).min(len)
-                } else {
-                    0.0
-                };
-                shape = shape.at_top(shape.top(self.v, cruise, exit, len - hold));
-            }
+            // A trapezoid chord ramps at what its top speed allows.
+            let shape = Profile::held_shape(&shape, self.v, cruise, exit, len, hold0);
             let p = Profile::plan_held(&shape, self.v, cruise, exit, len, hold0, exit_m);
             // The first junction inside that the profile passes too fast.
             let mut at = rest;
