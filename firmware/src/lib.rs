@@ -16,6 +16,7 @@
 
 // In pipeline order; a module imports only from modules above it (the
 // hardware seams and the number and settings types first).
+pub mod chip;
 pub mod num;
 pub mod seams;
 pub mod settings;

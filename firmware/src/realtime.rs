@@ -34,6 +34,9 @@ pub struct Realtime {
     reset: AtomicBool,
     /// The e-stop input is active (set by the board from the pin).
     estop: AtomicBool,
+    /// A failed hardware path ([`crate::chip::HwFault`] code, 0: none):
+    /// latched until the chip resets.
+    hw_fault: AtomicU8,
     feed_override: AtomicU8,
     rapid_override: AtomicU8,
     override_epoch: AtomicU32,
@@ -86,6 +89,7 @@ impl Realtime {
             cycle_start: AtomicBool::new(false),
             reset: AtomicBool::new(false),
             estop: AtomicBool::new(false),
+            hw_fault: AtomicU8::new(0),
             feed_override: AtomicU8::new(100),
             rapid_override: AtomicU8::new(100),
             override_epoch: AtomicU32::new(0),
@@ -126,6 +130,19 @@ impl Realtime {
     }
     pub fn estop(&self) -> bool {
         self.estop.load(Relaxed)
+    }
+    /// A hardware path failed (a boot self-check, or the step path's error
+    /// flags). Like the e-stop it latches the alarm and refuses `$X` and
+    /// homing, but only a reset of the chip clears it: a machine whose
+    /// pulses do not reach the drivers must not be unlocked into motion
+    /// that only the position counters would make. The first fault stays.
+    pub fn set_hw_fault(&self, fault: crate::chip::HwFault) {
+        let _ = self
+            .hw_fault
+            .compare_exchange(0, fault.code(), Relaxed, Relaxed);
+    }
+    pub fn hw_fault(&self) -> Option<crate::chip::HwFault> {
+        crate::chip::HwFault::from_code(self.hw_fault.load(Relaxed))
     }
     pub fn hold_requested(&self) -> bool {
         self.hold.load(Relaxed)
@@ -242,6 +259,12 @@ impl Realtime {
     /// consistent again; this only stops the pulses early.
     pub fn halt_stepper(&self) {
         self.bump_generation();
+    }
+    /// The stepper must stop without one more pulse: a hard-limit trip or
+    /// the e-stop (a plain flush lets the pulse already computed run, the
+    /// executor having counted it).
+    pub(crate) fn halting(&self) -> bool {
+        self.trip() == Trip::HardLimit || self.estop()
     }
     pub(crate) fn clear_trip(&self) {
         self.trip.store(0, Relaxed);

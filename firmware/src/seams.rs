@@ -14,7 +14,9 @@
 /// event change in the same bus cycle and nothing is read-modified-written.
 pub trait StepPins {
     /// A rising edge on the step pins in `step_mask` (not 0), in ONE
-    /// store; the direction pins stay as they are. Directions never change
+    /// store; the direction pins stay as they are. With
+    /// [`StepPins::ENDS_PULSES`] the pulse's end is armed first, in the same
+    /// interrupt-masked window, so the store can never be late for it. Directions never change
     /// in a step's own event: the stepper gives them an event of their own
     /// ([`StepPins::set_directions`]) and `$200` before the first step.
     fn step_high(&mut self, step_mask: u8);
@@ -31,15 +33,25 @@ pub trait StepPins {
     /// of the step-off word to BSRR); QEMU's model has no DMA and lowers
     /// the pins in a second interrupt ([`StepPins::step_low`]).
     const ENDS_PULSES: bool = false;
-    /// With [`StepPins::ENDS_PULSES`]: lower all step pins when the step
-    /// timer reaches `at`, without the CPU. Called right after the rising
-    /// store, so `at` is ahead.
-    fn end_pulse_at(&mut self, _at: u32) {}
+    /// With [`StepPins::ENDS_PULSES`]: the width of every following pulse,
+    /// in step-timer ticks (`$0`). [`StepPins::step_high`] arms the end
+    /// before it raises the pins, so a pulse lasts at least this long from
+    /// the store whatever interrupts it. Called at each start from rest.
+    fn set_pulse_width(&mut self, _ticks: u32) {}
     /// With [`StepPins::ENDS_PULSES`]: the hardware's worst delay, in timer
-    /// ticks, from `at` to the pins being low. The driver takes the fall
+    /// ticks, beyond the width, from the counter read right after the
+    /// rising store to the pins being low (rounding into the pulse timer's
+    /// clock, its margin, the DMA's latency). The driver takes the fall
     /// that late for the minimum low time and direction changes.
     fn pulse_end_latency(&self) -> u32 {
         0
+    }
+    /// With [`StepPins::ENDS_PULSES`]: the pulse-end hardware reports an
+    /// error (a DMA transfer error or a stream the chip disabled). Read at
+    /// each start from rest; a failure latches
+    /// [`crate::chip::HwFault::PulseEndError`].
+    fn pulse_end_failed(&self) -> bool {
+        false
     }
     /// Limit and probe pin levels (before the `$5`/`$6` inverts). The
     /// driver reads them right after each rising edge of a move that

@@ -143,6 +143,10 @@ pub mod alarm {
     pub const ESTOP: u16 = 10;
     /// Host link lost while running (burin): the machine was held.
     pub const LINK_LOST: u16 = 20;
+    /// A hardware path failed its boot check or raised an error while
+    /// running (burin): pulses may not reach the drivers. Only a reset of
+    /// the board clears it.
+    pub const HARDWARE_FAULT: u16 = 21;
 }
 
 #[cfg(test)]

@@ -63,6 +63,9 @@ pub enum MachineError {
     /// 426: the e-stop is pressed. Motion, homing and `$X` are refused
     /// until it is released.
     EStop,
+    /// 427: a hardware path failed its check ([`crate::chip::HwFault`]):
+    /// motion, homing and `$X` are refused until the chip is reset.
+    HardwareFault { fault: crate::chip::HwFault },
 }
 
 impl MachineError {
@@ -90,6 +93,7 @@ impl MachineError {
             ProbeNoContact => 424,
             ResetDuringMotion => 425,
             EStop => 426,
+            HardwareFault { .. } => 427,
         }
     }
 
@@ -170,6 +174,13 @@ impl fmt::Display for MachineError {
             ProbeNoContact => f.write_str("probe: no contact"),
             ResetDuringMotion => f.write_str("reset during motion; position lost"),
             EStop => f.write_str("e-stop pressed; release it, then $X"),
+            HardwareFault { fault } => {
+                write!(
+                    f,
+                    "hardware fault: {}; reset or power-cycle",
+                    fault.message()
+                )
+            }
         }
     }
 }

@@ -377,6 +377,17 @@ impl<const N: usize> Machine<N> {
             rt.clear_hold();
             self.raise_alarm(rt, MachineError::EStop, 0, obs);
         }
+        // A failed hardware path latches its alarm the same way, for good.
+        if let Some(fault) = rt.hw_fault() {
+            let e = MachineError::HardwareFault { fault };
+            if self.alarm != Some(e) && !estop {
+                if !self.motion_idle(rt, sink) {
+                    self.position_lost = true;
+                }
+                rt.clear_hold();
+                self.raise_alarm(rt, e, 0, obs);
+            }
+        }
         let epoch = rt.override_epoch();
         if epoch != self.override_epoch {
             self.override_epoch = epoch;

@@ -25,6 +25,11 @@ impl<const N: usize> Machine<N> {
         if rt.estop() && matches!(cmd, Command::Home { .. } | Command::ClearAlarm) {
             return Err(MachineError::EStop);
         }
+        if let Some(fault) = rt.hw_fault() {
+            if matches!(cmd, Command::Home { .. } | Command::ClearAlarm) {
+                return Err(MachineError::HardwareFault { fault });
+            }
+        }
         self.accept(rt, cmd, line, obs)
     }
 

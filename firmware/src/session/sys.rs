@@ -40,6 +40,7 @@ pub fn alarm_code(e: MachineError) -> u16 {
         MachineError::SoftLimit { .. } => alarm::SOFT_LIMIT,
         MachineError::ResetDuringMotion => alarm::ABORT_CYCLE,
         MachineError::EStop => alarm::ESTOP,
+        MachineError::HardwareFault { .. } => alarm::HARDWARE_FAULT,
         MachineError::ProbeInitialState => alarm::PROBE_FAIL_INITIAL,
         MachineError::ProbeNoContact => alarm::PROBE_FAIL_CONTACT,
         MachineError::HomingPullOff { .. } => alarm::HOMING_FAIL_PULLOFF,
@@ -302,7 +303,7 @@ impl<S: crate::seams::Storage> Device<S> {
                 let _ = o.write_str("$N0=\r\n$N1=\r\n");
             }
             SysCmd::Home(axes) => {
-                if m.rt().estop() {
+                if m.rt().estop() || m.rt().hw_fault().is_some() {
                     return Err(Code::Locked.code());
                 }
                 if !s.homing_enable {
@@ -315,8 +316,9 @@ impl<S: crate::seams::Storage> Device<S> {
                 self.sync = true;
             }
             SysCmd::Unlock => {
-                // The e-stop latch holds while it is pressed.
-                if m.rt().estop() {
+                // The e-stop latch holds while it is pressed; a hardware
+                // fault's until the chip resets.
+                if m.rt().estop() || m.rt().hw_fault().is_some() {
                     return Err(Code::Locked.code());
                 }
                 if m.alarm().is_some() {

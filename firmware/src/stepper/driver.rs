@@ -34,7 +34,7 @@
 //! edge `$207` back; an idle event from the stepper (underrun, end of
 //! motion, halt) stops the timer at its slot, after the last fall.
 
-use super::{Segment, StepConfig, StepEvent, Stepper};
+use super::{Segment, StepConfig, StepEvent, Stepper, SENSE_FLUSH};
 use crate::realtime::Realtime;
 use crate::seams::{StepPins, StepTimer};
 
@@ -241,11 +241,19 @@ impl StepDriver {
         rt: &Realtime,
         pop: &mut impl FnMut() -> Option<Segment>,
     ) -> bool {
+        // The pulse-end hardware's own error flags, once per start: a
+        // broken path latches the alarm instead of a run of pulses that
+        // never end (the boards; host-sim's DMA model alike).
+        if H::ENDS_PULSES && hw.pulse_end_failed() {
+            rt.set_hw_fault(crate::chip::HwFault::PulseEndError);
+            return false;
+        }
         let ev = Self::poll_cold(stepper, rt, pop, || hw.switches());
         if ev.ticks == 0 {
             return false;
         }
         rt.set_stepping(true);
+        hw.set_pulse_width(stepper.cfg.pulse_ticks);
         hw.set_enabled(true);
         hw.start();
         let now = hw.now();
@@ -276,6 +284,16 @@ impl StepDriver {
         pop: &mut impl FnMut() -> Option<Segment>,
     ) -> bool {
         let mut ev = self.pending;
+        if ev.step_mask != 0 && rt.attention() & SENSE_FLUSH != 0 && rt.halting() {
+            // A hard limit or the e-stop halted the stepper after this
+            // step was computed: it never leaves (its count is taken
+            // back), so no pulse follows the trip.
+            stepper.take_back(rt, &ev);
+            ev = Self::poll_cold(stepper, rt, pop, || hw.switches());
+            if ev.ticks == 0 {
+                return false;
+            }
+        }
         if ev.ticks == 0 {
             // The slot after the last event: go on if more was queued
             // meanwhile, else stop.
@@ -298,9 +316,10 @@ impl StepDriver {
             now = hw.now();
             self.last_rise = now;
             if H::ENDS_PULSES {
-                // `now` was read after the store: the pulse lasts at least
-                // `$0` from the moment the pins really rose.
-                hw.end_pulse_at(now.wrapping_add(cfg.pulse_ticks));
+                // The hardware ends the pulse `$0` after the store at the
+                // soonest (`step_high` armed it first), and by
+                // `fall_after` after `now`, read after the store, at the
+                // latest.
                 self.last_fall = now.wrapping_add(self.fall_after);
             } else {
                 self.phase = Phase::High;
@@ -370,6 +389,13 @@ impl StepDriver {
     #[inline(always)]
     fn rise_target<H: StepPins>(&self, cfg: &StepConfig) -> u32 {
         if self.pending.step_mask == 0 {
+            if self.pending.dir_mask != self.dirs {
+                // Direction pins change no sooner than the minimum low
+                // time after the last pulse's end: drivers that latch the
+                // direction at the falling edge need it held there.
+                let settled = self.last_fall.wrapping_add(cfg.min_low_ticks);
+                return later(self.planned, settled);
+            }
             if H::ENDS_PULSES {
                 return later(self.planned, self.last_fall);
             }

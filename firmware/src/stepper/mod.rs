@@ -376,6 +376,20 @@ impl Stepper {
         1 << I
     }
 
+    /// Takes a computed event's steps back out of the position: the driver
+    /// dropped it unpulsed (a halt came between its computation and its
+    /// rise).
+    #[cold]
+    pub fn take_back(&mut self, rt: &Realtime, ev: &StepEvent) {
+        for i in 0..AXES {
+            if ev.step_mask & (1 << i) != 0 {
+                let back = if ev.dir_mask & (1 << i) != 0 { 1 } else { -1 };
+                self.position[i] += back;
+                rt.store_position(i, self.position[i]);
+            }
+        }
+    }
+
     /// The running segment ended or was flushed, or a halt holds: takes the
     /// next segment of the current generation. `Some`: the event to return
     /// instead of a step (idle, or a direction change before the first).

@@ -18,6 +18,8 @@ struct Toy<const HW: bool> {
     irqs: usize,
     /// Direction pins as last set.
     dir: u8,
+    /// The pulse width the driver gave (`HW`).
+    width: u64,
 }
 
 impl<const HW: bool> Toy<HW> {
@@ -30,6 +32,7 @@ impl<const HW: bool> Toy<HW> {
             enabled: false,
             irqs: 0,
             dir: 0,
+            width: 0,
         }
     }
     fn push(&mut self, step: u8, dir: u8) {
@@ -45,11 +48,15 @@ impl<const HW: bool> Toy<HW> {
 
 impl<const HW: bool> StepPins for Toy<HW> {
     const ENDS_PULSES: bool = HW;
-    fn end_pulse_at(&mut self, at: u32) {
-        self.push_at(u64::from(at), 0, 0xFF);
+    fn set_pulse_width(&mut self, ticks: u32) {
+        self.width = u64::from(ticks);
     }
+    /// With `HW`, the end is logged with the rise, at the width asked for.
     fn step_high(&mut self, step_mask: u8) {
         self.push(step_mask, self.dir);
+        if HW {
+            self.push_at(self.t.get() + self.width, 0, 0xFF);
+        }
     }
     fn set_directions(&mut self, dir_mask: u8) {
         self.dir = dir_mask;
@@ -146,7 +153,7 @@ fn run_to<const HW: bool>(late: u64, segments: &[Segment]) -> (Toy<HW>, i32) {
 
 /// Three steps, however late each interrupt: the direction first (no
 /// step), then rise/fall pairs (a fall logged by `step_low` or, with `HW`,
-/// by `end_pulse_at`, both as (0, 0xFF)), each with its widths.
+/// by `step_high` at the width given, both as (0, 0xFF)), each with its widths.
 fn check_train<const HW: bool>() {
     let segs = [segment(3, 1, true)];
     for late in [0, 1, 3, 7, 15].map(|us| us * US) {
