@@ -7,7 +7,7 @@
 mod file;
 mod interrupts;
 
-pub use interrupts::{Interrupts, IrqTicks, MaskPhase, Masks, PulseEnd};
+pub use interrupts::{Interrupts, IrqTicks, MaskPhase, Masks, PulseEnd, BOARD_PULSE_DMA};
 
 use std::fmt;
 use std::path::{Path, PathBuf};

@@ -11,6 +11,7 @@
 //! clocks or hash maps, so two runs of the same job are identical event for
 //! event.
 
+mod dma;
 mod host;
 mod job;
 mod pins;
@@ -18,6 +19,7 @@ mod step_irq;
 mod task;
 mod world;
 
+pub use dma::PulseDma;
 use std::collections::VecDeque;
 
 use burin::command::Command;
@@ -61,7 +63,7 @@ pub struct Sim<'r> {
     pub world: World,
     /// The core's step interrupt, on [`VirtualHw`].
     driver: StepDriver,
-    hw: VirtualHw,
+    pub hw: VirtualHw,
     masks: Masks,
     now: u64,
     /// When the step interrupt enters next (None: not armed).

@@ -42,6 +42,7 @@ fn irq(window_us: f32, pulse_end: PulseEnd) -> Interrupts {
         mask_window_us: window_us,
         mask_period_us: 100.0,
         mask_phase: MaskPhase::Random(7),
+        ..Interrupts::default()
     }
 }
 

@@ -53,9 +53,15 @@ mod inputs;
 #[cfg(target_os = "none")]
 #[path = "burin-fw/outputs.rs"]
 mod outputs;
+#[cfg(all(target_os = "none", not(feature = "board-qemu")))]
+#[path = "burin-fw/pulse_end.rs"]
+mod pulse_end;
 #[cfg(target_os = "none")]
 #[path = "burin-fw/rings.rs"]
 mod rings;
+#[cfg(all(target_os = "none", not(feature = "board-qemu")))]
+#[path = "burin-fw/selfcheck.rs"]
+mod selfcheck;
 #[cfg(target_os = "none")]
 #[path = "burin-fw/stack.rs"]
 mod stack;
@@ -290,12 +296,32 @@ mod app {
 
         // Motion core: executor on the default settings, stepper with the
         // same pin timing, the step port with the same inverts.
-        #[allow(unused_mut)]
-        let mut timer = Tim5::new(dp.TIM5, &mut rcc);
-        // The step pulses end by DMA, at the idle levels `set_invert` chose.
-        #[cfg(not(feature = "board-qemu"))]
-        timer.end_pulses_by_dma(dp.DMA1, &mut rcc, &pins.steppers);
+        let timer = Tim5::new(dp.TIM5, &mut rcc);
         let tick_hz = burin::seams::StepTimer::tick_hz(&timer);
+        // The step pulses end by TIM1 compare 2 and DMA2, at the idle
+        // levels `set_invert` chose; the path is checked against the
+        // chip's bus matrix and by one zero-effect transfer.
+        #[cfg(not(feature = "board-qemu"))]
+        let pulse = {
+            let (word, bsrr) = pins.steppers.step_off_store();
+            let tim1_clk = rcc.clocks.timclk2().raw();
+            let (pulse, check) = crate::pulse_end::PulseEnd::new(
+                dp.DMA2,
+                &mut rcc,
+                board::CHIP,
+                bsrr,
+                word,
+                tim1_clk,
+                tick_hz,
+            );
+            if let Err(fault) = check {
+                defmt::error!("boot check: {}", fault.message());
+                crate::RT.set_hw_fault(fault);
+            }
+            pulse
+        };
+        #[cfg(not(feature = "board-qemu"))]
+        crate::selfcheck::clocks_and_timers(&mut core.DCB, &mut core.DWT, &rcc.clocks, &crate::RT);
         let cfg = burin::stepper::StepConfig::new(&settings, tick_hz);
         let steppers = pins.steppers;
         // Outputs: spindle, coolant, and the enable pin for the idle timer
@@ -316,6 +342,8 @@ mod app {
             StepHw {
                 port: steppers,
                 timer,
+                #[cfg(not(feature = "board-qemu"))]
+                pulse,
             },
             Stepper::new(cfg),
             seg_recv,

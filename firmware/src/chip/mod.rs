@@ -117,6 +117,18 @@ pub fn self_test(hw: &mut impl PulseEndHw) -> Result<(), HwFault> {
     Err(HwFault::PulseEndSelfTest)
 }
 
+/// The pulse-end path at boot, as both shells run it: the path must be
+/// one the chip can run ([`dma::DmaPath::check`]), and a zero-effect
+/// transfer on the enabled stream must complete ([`self_test`]).
+pub fn check_pulse_end(
+    path: &dma::DmaPath,
+    chip: Chip,
+    hw: &mut impl PulseEndHw,
+) -> Result<(), HwFault> {
+    path.check(chip).map_err(|_| HwFault::PulseEndPath)?;
+    self_test(hw)
+}
+
 /// A timer counts at the rate the code assumes: over one measurement,
 /// `ticks` of the timer against `cycles` of the core clock, expected
 /// `timer_hz` / `core_hz`. Off by more than 5 % is a wrong prescaler or

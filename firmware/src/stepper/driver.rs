@@ -241,15 +241,18 @@ impl StepDriver {
         rt: &Realtime,
         pop: &mut impl FnMut() -> Option<Segment>,
     ) -> bool {
-        // The pulse-end hardware's own error flags, once per start: a
-        // broken path latches the alarm instead of a run of pulses that
-        // never end (the boards; host-sim's DMA model alike).
-        if H::ENDS_PULSES && hw.pulse_end_failed() {
-            rt.set_hw_fault(crate::chip::HwFault::PulseEndError);
-            return false;
-        }
         let ev = Self::poll_cold(stepper, rt, pop, || hw.switches());
         if ev.ticks == 0 {
+            return false;
+        }
+        // The pulse-end hardware's own error flags, once per start: a
+        // broken path latches the alarm instead of a run of pulses that
+        // never end (the boards; host-sim's DMA model alike). The event
+        // taken is dropped unpulsed; the alarm's flush drops the rest at
+        // the next kick.
+        if H::ENDS_PULSES && hw.pulse_end_failed() {
+            rt.set_hw_fault(crate::chip::HwFault::PulseEndError);
+            stepper.take_back(rt, &ev);
             return false;
         }
         rt.set_stepping(true);

@@ -19,6 +19,16 @@ pub enum MaskPhase {
     Random(u64),
 }
 
+use burin::chip::bus::addr;
+use burin::chip::dma::DmaPath;
+use burin::chip::Chip;
+
+/// The boards' pulse-end path (`burin::chip::dma::DmaPath::pulse_end`),
+/// with the step-off word at a representative SRAM address (the board's
+/// is a static the linker places).
+pub const BOARD_PULSE_DMA: DmaPath =
+    DmaPath::pulse_end(addr::GPIOB + addr::GPIO_BSRR, addr::SRAM + 0x100);
+
 /// Who ends each step pulse (`burin::seams::StepPins::ENDS_PULSES`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PulseEnd {
@@ -43,6 +53,10 @@ pub struct Interrupts {
     /// A fall handler from entry to return, ns (with [`PulseEnd::Interrupt`]).
     pub step_fall_ns: u32,
     pub pulse_end: PulseEnd,
+    /// With [`PulseEnd::Hardware`]: the DMA path that ends pulses and the
+    /// chip it runs on (host-sim's DMA model, `engine::PulseDma`, runs it
+    /// by `DmaPath::check`): the boards' path by default.
+    pub pulse_dma: (DmaPath, Chip),
     /// Length of each interrupt-masked window, µs (0: none).
     pub mask_window_us: f32,
     /// One window per this many µs.
@@ -57,6 +71,7 @@ impl Interrupts {
         step_handler_ns: 0,
         step_fall_ns: 0,
         pulse_end: PulseEnd::Hardware { latency_ns: 0 },
+        pulse_dma: (BOARD_PULSE_DMA, Chip::F411),
         mask_window_us: 0.0,
         mask_period_us: 1000.0,
         mask_phase: MaskPhase::Random(1),
@@ -77,6 +92,7 @@ impl Interrupts {
                 PulseEnd::Hardware { latency_ns } => Some(ns(latency_ns)),
                 PulseEnd::Interrupt => None,
             },
+            pulse_dma: self.pulse_dma,
             masks: Masks {
                 window,
                 period,
@@ -103,6 +119,7 @@ pub struct IrqTicks {
     pub fall: u64,
     /// Hardware pulse end and its latency (None: a fall interrupt).
     pub pulse_end: Option<u64>,
+    pub pulse_dma: (DmaPath, Chip),
     pub masks: Masks,
 }
 

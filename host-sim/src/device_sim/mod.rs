@@ -95,6 +95,13 @@ impl<'r> VirtualDevice<'r> {
         booted.settings = boot.settings;
         let mut sim = Sim::new(&booted, rec);
         sim.set_device_mode();
+        // The board's boot check of its pulse-end path, on the DMA model.
+        if sim.hw.hardware_fall() {
+            let (path, chip) = booted.interrupts.pulse_dma;
+            if let Err(f) = burin::chip::check_pulse_end(&path, chip, &mut sim.hw.dma) {
+                sim.rt.set_hw_fault(f);
+            }
+        }
         let ident = Identity {
             board: BOARD,
             caps: protocol::msg::caps::CHECK_MODE | protocol::msg::caps::HOMING,

@@ -15,6 +15,7 @@ use std::cell::Cell;
 use burin::seams::{StepPins, StepTimer};
 use burin::stepper::Switches;
 
+use super::dma::PulseDma;
 use super::World;
 use crate::config::IrqTicks;
 
@@ -42,6 +43,10 @@ pub struct VirtualHw {
     step: u8,
     dir: u8,
     enabled: bool,
+    /// The pulse-end DMA stream (with hardware pulse ends) and the width
+    /// the driver gave it, ticks.
+    pub dma: PulseDma,
+    width: u64,
     /// This handler's stores, for the engine to apply after it returns.
     pub stores: Vec<Edge>,
     /// Every store of the run, when a caller asked for them.
@@ -61,6 +66,8 @@ impl VirtualHw {
             step: 0,
             dir: 0,
             enabled: false,
+            dma: PulseDma::new(irq.pulse_dma.0, irq.pulse_dma.1),
+            width: 0,
             stores: Vec::new(),
             log: None,
         }
@@ -98,10 +105,14 @@ impl VirtualHw {
     }
 
     /// The hardware's pulse end: a store at a later tick, made without the
-    /// CPU (no handler time). It joins this handler's stores; the driver
-    /// never stores again before it (the next rise waits for it).
+    /// CPU (no handler time), if the DMA model's transfer reaches the pins.
+    /// It joins this handler's stores; the driver never stores again
+    /// before it (the next rise waits for it). A failed transfer leaves
+    /// the pins high, as on the chip.
     fn fall_at(&mut self, at: u64) {
-        self.record(at, 0, self.dir);
+        if self.dma.request() {
+            self.record(at, 0, self.dir);
+        }
     }
 
     /// New pin levels at `tick`, into this handler's stores and the log.
@@ -135,20 +146,28 @@ pub struct Wired<'a, const HW_FALL: bool> {
 
 impl<const HW_FALL: bool> StepPins for Wired<'_, HW_FALL> {
     const ENDS_PULSES: bool = HW_FALL;
-    fn end_pulse_at(&mut self, at: u32) {
-        let hw = &mut *self.hw;
-        let latency = hw.irq.pulse_end.unwrap_or(0);
-        hw.fall_at(hw.ahead(at) + latency);
+    fn set_pulse_width(&mut self, ticks: u32) {
+        self.hw.width = u64::from(ticks);
     }
     fn pulse_end_latency(&self) -> u32 {
         self.hw.irq.pulse_end.unwrap_or(0) as u32
     }
+    fn pulse_end_failed(&self) -> bool {
+        self.hw.dma.flags().failed()
+    }
+    /// A driver counts a step at a rising edge only: a pin still high from
+    /// a pulse that never ended moves nothing.
     fn step_high(&mut self, step_mask: u8) {
         let hw = &mut *self.hw;
         let work = hw.irq.rise - hw.irq.entry;
-        let dir = hw.dir;
-        hw.store(step_mask, dir, work);
-        self.world.step(step_mask, dir);
+        let (dir, rising) = (hw.dir, step_mask & !hw.step);
+        let at = hw.t.get();
+        hw.store(hw.step | step_mask, dir, work);
+        self.world.step(rising, dir);
+        if HW_FALL {
+            let end = at + hw.width + hw.irq.pulse_end.unwrap_or(0);
+            hw.fall_at(end);
+        }
     }
     /// BSRR's direction word leaves the step pins as they are.
     fn set_directions(&mut self, dir_mask: u8) {

@@ -78,10 +78,16 @@ impl Sim<'_> {
                 self.stats.step_level = 0;
                 continue;
             }
+            // Only a rising edge is a step: a pin left high by a pulse
+            // that never ended (a failed pulse-end path) moves nothing.
+            let rising = e.step & !self.stats.step_level;
             self.stats.step_level = e.step;
+            if rising == 0 {
+                continue;
+            }
             move_by(&mut pos, e.dir, e.step, 1);
             for i in 0..AXES {
-                self.stats.steps[i] += u64::from(e.step >> i & 1);
+                self.stats.steps[i] += u64::from(rising >> i & 1);
             }
             let _ = self.stats.feed.step(e.tick, pos.map(i64::from));
             self.rec.step_event(&PinEvent {

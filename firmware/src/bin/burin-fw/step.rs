@@ -251,9 +251,7 @@ impl StepTimer for Tim5 {
             .sr()
             .write(|w| w.cc1if().clear_bit().uif().clear_bit());
         #[cfg(not(feature = "board-qemu"))]
-        self.tim
-            .dier()
-            .write(|w| w.cc1ie().set_bit().cc2de().set_bit());
+        self.tim.dier().write(|w| w.cc1ie().set_bit());
         #[cfg(feature = "board-qemu")]
         {
             self.tim.dier().write(|w| w.uie().set_bit());
@@ -261,10 +259,10 @@ impl StepTimer for Tim5 {
         }
     }
     fn stop(&mut self) {
-        // The pulse-end DMA request stays on: a pulse that is still high
-        // ends on time (a stray match only writes the idle levels).
+        // The last pulse still ends on time: its end is TIM1's and DMA2's
+        // (`pulse_end.rs`), not this timer's.
         #[cfg(not(feature = "board-qemu"))]
-        self.tim.dier().write(|w| w.cc2de().set_bit());
+        self.tim.dier().reset();
         #[cfg(feature = "board-qemu")]
         {
             self.tim.dier().reset();
@@ -273,86 +271,32 @@ impl StepTimer for Tim5 {
     }
 }
 
-/// From the compare-2 match to the BSRR write by DMA1, in timer ticks, as
-/// an upper bound: the request, the stream's arbitration, a read on APB1
-/// and a write through the bus matrix take about a dozen AHB cycles
-/// (RM0383 §9.3); 32 leaves room for the CPU holding the bus meanwhile.
-/// Only a scope on a board measures it.
-#[cfg(not(feature = "board-qemu"))]
-const DMA_FALL_LATENCY_TICKS: u32 = 32;
-
-#[cfg(not(feature = "board-qemu"))]
-impl Tim5 {
-    /// Compare channel 2 ends each step pulse without the CPU: its match
-    /// is a DMA request (CC2DE; no interrupt), DMA1 stream 4 channel 6
-    /// (TIM5_CH2, RM0383 table 27) copies one word from TIM5's CCR3 to the
-    /// step port's BSRR. CCR3 holds the step-off word; channel 3 is
-    /// otherwise unused (no output, no interrupt, no DMA). Why that way
-    /// round: DMA1's peripheral port reaches only APB1, where TIM5 sits,
-    /// and its memory port reaches GPIO through the bus matrix (RM0383
-    /// figure 1), so a peripheral-to-memory transfer can write BSRR.
-    /// Circular mode with one item re-arms the stream after each write.
-    pub fn end_pulses_by_dma(&mut self, dma: pac::DMA1, rcc: &mut Rcc, port: &StepPort) {
-        use stm32f4xx_hal::rcc::Enable;
-        let (step_off, bsrr) = port.step_off_store();
-        pac::DMA1::enable(rcc);
-        self.tim.ccr3().write(|w| w.ccr().set(step_off));
-        // DMA request on the compare event, not on the update.
-        self.tim.cr2().modify(|_, w| w.ccds().clear_bit());
-        let st = dma.st(4);
-        st.cr().write(|w| w.en().clear_bit());
-        while st.cr().read().en().bit_is_set() {}
-        dma.hifcr().write(|w| {
-            w.ctcif4().set_bit();
-            w.chtif4().set_bit();
-            w.cteif4().set_bit();
-            w.cdmeif4().set_bit();
-            w.cfeif4().set_bit()
-        });
-        // SAFETY: register level. PAR is TIM5's CCR3 and M0AR the step
-        // port's BSRR, both fixed device addresses: the stream reads one
-        // word that only this module writes and stores it to the set/reset
-        // register of pins only `StepPort` drives.
-        unsafe {
-            st.par()
-                .write(|w| w.pa().bits(self.tim.ccr3().as_ptr() as u32));
-            st.m0ar().write(|w| w.m0a().bits(bsrr));
-        }
-        st.ndtr().write(|w| w.ndt().set(1));
-        st.cr().write(|w| {
-            w.chsel().set(6);
-            w.pl().very_high();
-            w.msize().bits32();
-            w.psize().bits32();
-            w.minc().fixed();
-            w.pinc().fixed();
-            w.circ().enabled();
-            w.dir().peripheral_to_memory();
-            w.en().enabled()
-        });
-        // The stream now waits for requests; the match at a stale CCR2
-        // would only lower pins already low.
-        self.tim.dier().write(|w| w.cc2de().set_bit());
-        // `dma` is dropped: nothing else can take DMA1 from the PAC again.
-    }
-
-    /// Arms compare 2: the step pins go low at `at`.
-    #[inline(always)]
-    fn end_pulse_at(&mut self, at: u32) {
-        self.tim.ccr2().write(|w| w.ccr().set(at));
-    }
-}
-
-/// The pins and the timer as the one hardware object the driver drives.
+/// The pins and the timers as the one hardware object the driver drives.
 pub struct StepHw {
     pub port: StepPort,
     pub timer: Tim5,
+    /// TIM1 compare 2 and DMA2: the pulse's end (`pulse_end.rs`).
+    #[cfg(not(feature = "board-qemu"))]
+    pub pulse: crate::pulse_end::PulseEnd,
 }
 
 impl StepPins for StepHw {
-    /// The boards end pulses by DMA (`Tim5::end_pulses_by_dma`); QEMU's
-    /// timer model has neither compare channels nor DMA.
+    /// The boards end pulses by DMA (`pulse_end.rs`); QEMU's timer model
+    /// has neither compare channels nor DMA.
     const ENDS_PULSES: bool = cfg!(not(feature = "board-qemu"));
+    /// The end is armed before the rise, both with interrupts masked: an
+    /// EXTI handler (priority 4, above this one) landing between the
+    /// counter read and the compare store would otherwise leave the
+    /// compare in the past, and the pin high for a whole PWM period.
+    #[cfg(not(feature = "board-qemu"))]
+    #[inline(always)]
+    fn step_high(&mut self, step_mask: u8) {
+        cortex_m::interrupt::free(|_| {
+            self.pulse.arm_end();
+            self.port.step_high(step_mask);
+        });
+    }
+    #[cfg(feature = "board-qemu")]
     #[inline(always)]
     fn step_high(&mut self, step_mask: u8) {
         self.port.step_high(step_mask);
@@ -362,13 +306,16 @@ impl StepPins for StepHw {
         self.port.set_directions(dir_mask);
     }
     #[cfg(not(feature = "board-qemu"))]
-    #[inline(always)]
-    fn end_pulse_at(&mut self, at: u32) {
-        self.timer.end_pulse_at(at);
+    fn set_pulse_width(&mut self, ticks: u32) {
+        self.pulse.set_width(ticks);
     }
     #[cfg(not(feature = "board-qemu"))]
     fn pulse_end_latency(&self) -> u32 {
-        DMA_FALL_LATENCY_TICKS
+        self.pulse.latency()
+    }
+    #[cfg(not(feature = "board-qemu"))]
+    fn pulse_end_failed(&self) -> bool {
+        self.pulse.failed()
     }
     #[inline(always)]
     fn step_low(&mut self) {

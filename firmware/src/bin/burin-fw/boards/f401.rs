@@ -11,6 +11,9 @@ pub use super::blackpill::{
 /// Human-readable board name for the startup log and `$I`.
 pub const NAME: &str = "WeAct Black Pill STM32F401CCU6";
 
+/// The chip facts this board's code is checked against (`burin::chip`).
+pub const CHIP: burin::chip::Chip = burin::chip::Chip::F401;
+
 /// 25 MHz crystal -> PLL: VCO 336 MHz, /4 = 84 MHz core (the chip's
 /// maximum), /7 = 48 MHz USB. APB1 runs at 42 MHz, so TIM5 ticks at 84 MHz.
 pub fn clocks() -> Config {

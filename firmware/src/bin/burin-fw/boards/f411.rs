@@ -9,6 +9,9 @@ pub use super::blackpill::{
 /// Human-readable board name for the startup log and `$I`.
 pub const NAME: &str = "WeAct Black Pill STM32F411CEU6";
 
+/// The chip facts this board's code is checked against (`burin::chip`).
+pub const CHIP: burin::chip::Chip = burin::chip::Chip::F411;
+
 /// 25 MHz crystal -> PLL: VCO 384 MHz, /4 = 96 MHz core, /8 = 48 MHz USB.
 /// 96 rather than the chip's 100 MHz maximum because USB needs an exact
 /// 48 MHz from the same VCO. APB1 runs at 48 MHz, so TIM5 ticks at 96 MHz.
