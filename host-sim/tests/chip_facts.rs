@@ -83,9 +83,9 @@ fn a_path_the_table_allows_but_the_stream_breaks_is_caught_at_the_next_start() {
     assert!(x > 0);
     r.dev.sim.hw.dma = host_sim::engine::PulseDma::new(DmaPath::before_16ae6d1(), Chip::F411);
     r.dev.sim.hw.dma.request();
-    assert_eq!(r.cmd("G1 X2 F600"), ["ok"]);
+    let reply = r.cmd("G1 X2 F600");
     r.run(50);
     assert_eq!(r.dev.sim.rt.hw_fault(), Some(HwFault::PulseEndError));
-    assert!(r.lines().iter().any(|l| l == "ALARM:21"));
+    assert_eq!(reply[..2], ["ok", "ALARM:21"], "{reply:?}");
     assert_eq!(r.dev.sim.world.steps[0], x, "no pulse after the fault");
 }
