@@ -293,6 +293,7 @@ impl StepDriver {
             // back), so no pulse follows the trip.
             stepper.take_back(rt, &ev);
             ev = Self::poll_cold(stepper, rt, pop, || hw.switches());
+            self.pending = ev;
             if ev.ticks == 0 {
                 return false;
             }

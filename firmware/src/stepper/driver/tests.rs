@@ -227,3 +227,70 @@ fn a_direction_change_waits_for_the_hardware_pulse_end() {
     let turn = log.iter().position(|w| w.2 == 0 && w.1 == 0);
     assert!(turn.is_some(), "no direction store: {log:?}");
 }
+
+/// Drivers that latch the direction at the falling step edge need it to
+/// hold there: a reversal's direction store comes no sooner than the
+/// minimum low time (`$0`, at least 1 µs) after the last pulse's end, with
+/// the hardware's pulse end and with the fall interrupt alike.
+fn reversal_waits_a_low_time<const HW: bool>() {
+    let mut segs = [segment(3, 1, true), segment(3, 0, true)];
+    for s in &mut segs {
+        s.period = 3 * US as u32;
+    }
+    let (hw, pos) = run_to::<HW>(0, &segs);
+    assert_eq!(pos, 0);
+    let log = &hw.log[..hw.n];
+    let min_low = 2 * US; // `$0` = 2 µs in `run_to`
+    let mut fall_at = None;
+    let mut dir = 1;
+    for w in log {
+        if w.1 == 0 && w.2 == 0xFF {
+            fall_at = Some(w.0);
+        } else if w.1 == 0 && w.2 != dir {
+            dir = w.2;
+            if let Some(f) = fall_at {
+                assert!(w.0 >= f + min_low, "direction {} ticks after a fall: {log:?}", w.0 - f);
+            }
+        }
+    }
+    assert_eq!(dir, 0, "no reversal: {log:?}");
+}
+
+#[test]
+fn a_reversal_waits_a_low_time_after_the_pulse_end() {
+    reversal_waits_a_low_time::<true>();
+    reversal_waits_a_low_time::<false>();
+}
+
+/// A hard limit (or the e-stop) that trips between an event's computation
+/// and its rise: that step never leaves, and its count is taken back.
+#[test]
+fn no_pulse_after_a_hard_limit_halt() {
+    let rt = Realtime::new();
+    let s = Settings::default();
+    let mut stepper = Stepper::new(StepConfig::new(&s, 1_000_000 * US as u32));
+    let mut d = StepDriver::new();
+    let mut hw = Toy::<true>::new();
+    let segs = [segment(10, 0, true)];
+    let mut q = segs.iter().copied();
+    let mut pop = || q.next();
+    d.on_interrupt(&mut stepper, &mut hw, &rt, &mut pop);
+    let rises = |hw: &Toy<true>| hw.log[..hw.n].iter().filter(|w| w.1 != 0).count();
+    // Run to the third rise: the fourth step is computed and pending.
+    while rises(&hw) < 3 {
+        let t = hw.target.expect("running");
+        hw.t.set(hw.t.get().max(t));
+        d.on_interrupt(&mut stepper, &mut hw, &rt, &mut pop);
+    }
+    assert_eq!(stepper.position()[0], 4, "the pending step is counted");
+    rt.hard_limit(1);
+    for _ in 0..10 {
+        let Some(t) = hw.target else { break };
+        hw.t.set(hw.t.get().max(t));
+        d.on_interrupt(&mut stepper, &mut hw, &rt, &mut pop);
+    }
+    assert_eq!(rises(&hw), 3, "a pulse after the trip: {:?}", &hw.log[..hw.n]);
+    assert_eq!(stepper.position()[0], 3, "position = pulses sent");
+    assert_eq!(rt.position()[0], 3);
+    assert!(!d.is_running());
+}
