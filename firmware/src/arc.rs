@@ -179,7 +179,7 @@ impl Iterator for ArcChords {
         for (k, v) in p.iter_mut().enumerate() {
             *v = self.start[k] + (self.end[k] - self.start[k]) * t;
         }
-        let o = geom::offset(self.s, self.r0, self.sweep * t, self.grow * t);
+        let o = geom::offset(self.s, self.sweep * t, self.grow / self.r0 * t);
         p[a] = self.start[a] + o[0];
         p[b] = self.start[b] + o[1];
         Some(p)

@@ -156,6 +156,25 @@ proptest! {
             );
         }
 
+        // The soft-limit box holds every point, and is no wider than the
+        // points' own box plus a chord's sagitta (the tolerance) and a step.
+        let (lo, hi) = ch.bounds();
+        for k in 0..2 {
+            let pmin = pts.iter().chain([&start]).map(|p| p[k] as f64).fold(f64::MAX, f64::min);
+            let pmax = pts.iter().chain([&start]).map(|p| p[k] as f64).fold(f64::MIN, f64::max);
+            // f32 rounding of coordinates as far out as the arc goes.
+            let quantum = 2.0 * f32::EPSILON as f64 * pmin.abs().max(pmax.abs()).max(1.0);
+            let slack = TOL as f64 + step + 4.0 * quantum;
+            prop_assert!(
+                lo[k] as f64 <= pmin + quantum && hi[k] as f64 >= pmax - quantum,
+                "{}: box {:?}..{:?} misses points {}..{} on axis {}", text, lo, hi, pmin, pmax, k
+            );
+            prop_assert!(
+                lo[k] as f64 >= pmin - slack && hi[k] as f64 <= pmax + slack,
+                "{}: box {:?}..{:?} beyond points {}..{} on axis {}", text, lo, hi, pmin, pmax, k
+            );
+        }
+
         // Path length: no longer than the arc, no shorter than its
         // inscribed polygon of this many chords.
         let mut len = 0.0;

@@ -75,14 +75,15 @@ pub fn sweep(s: [f32; 2], r0: f32, d: [f32; 2], dir: ArcDir, turns: u16, same: f
 }
 
 /// The point at angle `th` along the arc, relative to the start: `s`
-/// turned by `th`, minus `s`, with the radius grown by `grow` (a spiral).
+/// turned by `th`, minus `s`, with the radius grown by the fraction `k` of
+/// itself (a spiral: `k` is the growth so far over `r0`).
 ///
 /// Turning and subtracting are done in one step,
 /// `(cos θ − 1)·s + sin θ·s⊥`, with `1 − cos θ` as `sin²θ / (1 + cos θ)`
 /// near 0: a tiny turn of a huge radius keeps its precision (the
 /// displacement is a few steps, not the difference of two numbers near
 /// 1e9), and every point still lies on the circle for any `th`.
-pub fn offset(s: [f32; 2], r0: f32, th: f32, grow: f32) -> [f32; 2] {
+pub fn offset(s: [f32; 2], th: f32, k: f32) -> [f32; 2] {
     let (sin, cos) = crate::num::trig::sin_cos(th);
     let vers = if cos > 0.0 {
         sin * sin / (1.0 + cos)
@@ -91,7 +92,6 @@ pub fn offset(s: [f32; 2], r0: f32, th: f32, grow: f32) -> [f32; 2] {
     };
     let oa = -vers * s[0] - sin * s[1];
     let ob = -vers * s[1] + sin * s[0];
-    let k = grow / r0;
     [oa + k * (s[0] + oa), ob + k * (s[1] + ob)]
 }
 
