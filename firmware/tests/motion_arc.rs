@@ -310,4 +310,7 @@ fn full_circle_only_when_start_is_end() {
     assert_eq!(burin::arc::same_point(1.0 / 80.0), SAME_POINT);
     assert_eq!(burin::arc::same_point(1e-5), 0.5e-5);
     assert_eq!(burin::arc::same_point(f32::NAN), SAME_POINT);
+    // No positive step count: 1/0 is infinite, and the fallback holds.
+    assert_eq!(burin::arc::same_point(f32::INFINITY), SAME_POINT);
+    assert_eq!(burin::arc::same_point(-1.0), SAME_POINT);
 }

@@ -20,8 +20,9 @@ use crate::AXES;
 /// R-format arc.
 pub const SAME_POINT: f32 = 1e-4;
 
-/// The finest step (mm) of the two axes of `plane`; NaN if neither has a
-/// positive step count (then [`same_point`] falls back to [`SAME_POINT`]).
+/// The finest step (mm) of the two axes of `plane`. Without a positive
+/// step count on either it is infinite, negative or NaN, and
+/// [`same_point`] falls back to [`SAME_POINT`].
 pub fn plane_step(axes: &[AxisSettings; AXES], plane: Plane) -> f32 {
     let (a, b, _) = plane.axes();
     let spm = |i: usize| axes.get(i).map_or(0.0, |x| x.steps_per_mm);
