@@ -7,8 +7,12 @@
 
 use core::f32::consts::PI;
 
-use crate::command::{Arc, ArcDir, Pos, Spline};
+use crate::command::{Arc, Pos, Spline};
 use crate::AXES;
+
+mod geom;
+use geom::hypot;
+pub use geom::{growth, plane_step, same_point, sweep, SAME_POINT};
 
 /// More chords than this in one arc or spline is refused rather than run for hours.
 pub const MAX_CHORDS: u32 = 1 << 24;
@@ -18,7 +22,7 @@ pub const MAX_CHORDS: u32 = 1 << 24;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ArcError {
     /// A point, the centre or the tolerance is not finite (or the tolerance
-    /// is not positive).
+    /// is not positive), or the radius is beyond f32 (over 1e19 mm).
     InvalidNumber,
     /// The start or end point sits on the centre: zero radius.
     InvalidArc,
@@ -39,29 +43,33 @@ pub fn max_chord_angle(r: f32, tol: f32) -> f32 {
     (4.0 * crate::num::trig::asin(x)).min(PI / 2.0)
 }
 
-/// `x` wrapped into `[0, 2π)`.
-fn wrap(x: f32) -> f32 {
-    x - libm::floorf(x / (2.0 * PI)) * 2.0 * PI
-}
-
 /// Chords of a circular, helical or spiral (start and end radius differ
 /// slightly; the radius is blended linearly) arc.
+///
+/// Points are the start plus the turned start radius minus itself
+/// ([`geom::offset`]), not the centre plus the radius: on a huge radius the
+/// centre is far away and coarse in f32, the displacement from the start
+/// is not.
 #[derive(Clone, Debug)]
 pub struct ArcChords {
     start: Pos,
     end: Pos,
-    center: [f32; 2],
     plane: (usize, usize, usize),
+    /// Start minus centre, in the plane.
+    s: [f32; 2],
     r0: f32,
-    r1: f32,
-    theta0: f32,
+    /// End radius minus start radius.
+    grow: f32,
     sweep: f32,
     n: u32,
     i: u32,
 }
 
 impl ArcChords {
-    pub fn new(start: &Pos, arc: &Arc, tol: f32) -> Result<Self, ArcError> {
+    /// `step` is the machine's finest step in the arc's plane, mm
+    /// ([`plane_step`]): start and end closer than [`same_point`] of it
+    /// make a full circle.
+    pub fn new(start: &Pos, arc: &Arc, tol: f32, step: f32) -> Result<Self, ArcError> {
         let plane = arc.plane.axes();
         let (a, b, _) = plane;
         let [ca, cb] = arc.center;
@@ -73,32 +81,19 @@ impl ArcChords {
         if !finite {
             return Err(ArcError::InvalidNumber);
         }
-        let (sa, sb) = (start[a] - ca, start[b] - cb);
-        let (ea, eb) = (arc.end[a] - ca, arc.end[b] - cb);
-        let r0 = hypot(sa, sb);
-        let r1 = hypot(ea, eb);
+        let s = [start[a] - ca, start[b] - cb];
+        let e = [arc.end[a] - ca, arc.end[b] - cb];
+        let d = [arc.end[a] - start[a], arc.end[b] - start[b]];
+        let r0 = hypot(s[0], s[1]);
+        let r1 = hypot(e[0], e[1]);
+        if !(r0.is_finite() && r1.is_finite()) {
+            return Err(ArcError::InvalidNumber);
+        }
         if r0 < 1e-6 || r1 < 1e-6 {
             return Err(ArcError::InvalidArc);
         }
-        let theta0 = libm::atan2f(sb, sa);
-        let theta1 = libm::atan2f(eb, ea);
-        let mut sweep = theta1 - theta0;
-        // Same start and end angle means a full circle (RS274NGC).
-        const EPS: f32 = 1e-6;
-        match arc.dir {
-            ArcDir::Ccw => {
-                if sweep <= EPS {
-                    sweep += 2.0 * PI;
-                }
-                sweep += 2.0 * PI * arc.turns as f32;
-            }
-            ArcDir::Cw => {
-                if sweep >= -EPS {
-                    sweep -= 2.0 * PI;
-                }
-                sweep -= 2.0 * PI * arc.turns as f32;
-            }
-        }
+        let sweep = geom::sweep(s, r0, d, arc.dir, arc.turns, same_point(step));
+        let grow = geom::growth(s, e, r0, r1, d);
         let phi = max_chord_angle(r0.max(r1), tol);
         let n = libm::ceilf(libm::fabsf(sweep) / phi).max(1.0);
         if n > MAX_CHORDS as f32 {
@@ -107,11 +102,10 @@ impl ArcChords {
         Ok(ArcChords {
             start: *start,
             end: arc.end,
-            center: arc.center,
             plane,
+            s,
             r0,
-            r1,
-            theta0,
+            grow,
             sweep,
             n: n as u32,
             i: 0,
@@ -128,12 +122,18 @@ impl ArcChords {
     pub fn curve(&self) -> crate::planner::Curve {
         let (a, b, _) = self.plane;
         crate::planner::Curve {
-            radius: self.r0.min(self.r1),
+            radius: self.r0 + self.grow.min(0.0),
             plane: (1 << a | 1 << b) as u8,
         }
     }
 
-    /// Axis-aligned bounds of the whole arc (for soft limits before any step).
+    /// The signed sweep, radians (positive counter-clockwise).
+    pub fn sweep(&self) -> f32 {
+        self.sweep
+    }
+
+    /// Axis-aligned bounds of the whole arc (for soft limits before any
+    /// step), on the larger of the two radii.
     pub fn bounds(&self) -> (Pos, Pos) {
         let mut lo = self.start;
         let mut hi = self.start;
@@ -142,24 +142,22 @@ impl ArcChords {
             hi[i] = hi[i].max(self.end[i]);
         }
         let (a, b, _) = self.plane;
-        let r = self.r0.max(self.r1);
-        // Cardinal directions the sweep passes through extend the box.
+        let [sa, sb] = self.s;
+        // Axis directions the sweep passes through extend the box, by how
+        // far the circle reaches beyond the start along them.
         for k in 0..4 {
-            let ang = k as f32 * PI / 2.0;
-            let rel = if self.sweep >= 0.0 {
-                wrap(ang - self.theta0)
-            } else {
-                wrap(self.theta0 - ang)
-            };
-            if rel <= libm::fabsf(self.sweep) {
-                let (sin, cos) = [(0.0, 1.0), (1.0, 0.0), (0.0, -1.0), (-1.0, 0.0)][k];
-                let pa = self.center[0] + r * cos;
-                let pb = self.center[1] + r * sin;
-                lo[a] = lo[a].min(pa);
-                hi[a] = hi[a].max(pa);
-                lo[b] = lo[b].min(pb);
-                hi[b] = hi[b].max(pb);
+            if geom::turn_to_axis(self.s, k, self.sweep >= 0.0) > libm::fabsf(self.sweep) {
+                continue;
             }
+            let (axis, c, o, sign) = match k {
+                0 => (a, sa, sb, 1.0),
+                1 => (b, sb, sa, 1.0),
+                2 => (a, -sa, sb, -1.0),
+                _ => (b, -sb, sa, -1.0),
+            };
+            let p = self.start[axis] + sign * geom::reach(self.r0, self.grow, c, o);
+            lo[axis] = lo[axis].min(p);
+            hi[axis] = hi[axis].max(p);
         }
         (lo, hi)
     }
@@ -176,16 +174,14 @@ impl Iterator for ArcChords {
             return Some(self.end);
         }
         let t = self.i as f32 / self.n as f32;
-        let th = self.theta0 + self.sweep * t;
-        let r = self.r0 + (self.r1 - self.r0) * t;
         let (a, b, _) = self.plane;
         let mut p = [0.0; AXES];
         for (k, v) in p.iter_mut().enumerate() {
             *v = self.start[k] + (self.end[k] - self.start[k]) * t;
         }
-        let (sin, cos) = crate::num::trig::sin_cos(th);
-        p[a] = self.center[0] + r * cos;
-        p[b] = self.center[1] + r * sin;
+        let o = geom::offset(self.s, self.sweep * t, self.grow / self.r0 * t);
+        p[a] = self.start[a] + o[0];
+        p[b] = self.start[b] + o[1];
         Some(p)
     }
 }
@@ -284,11 +280,4 @@ impl Iterator for SplineChords {
         }
         Some(self.point(self.i as f32 / self.n as f32))
     }
-}
-
-/// √(a² + b²) in `f32`: libm's `hypotf` sums the squares in `f64`, soft
-/// float on the board, to be safe from overflow at 1e19, far beyond any
-/// length in mm.
-fn hypot(a: f32, b: f32) -> f32 {
-    libm::sqrtf(a * a + b * b)
 }

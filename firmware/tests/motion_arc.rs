@@ -1,9 +1,13 @@
 //! Segmenter: chord error within tolerance in every plane, helix, full
 //! circles, multi-turn, exact end points; splines flattened to tolerance.
-use burin::arc::{ArcChords, ArcError, SplineChords};
-use burin::command::{Arc, ArcDir, Feed, Plane, Pos, Spline};
+use burin::arc::{ArcChords, ArcError, SplineChords, SAME_POINT};
+use burin::command::{Arc, ArcDir, Command, Feed, Plane, Pos, Spline};
+use burin::interp::Interpreter;
 
 const TOL: f32 = 0.002;
+/// A fine machine step (800 steps/mm), mm: full circles only when start and
+/// end are closer than `arc::same_point(STEP)`.
+const STEP: f32 = 1.0 / 800.0;
 
 /// Largest distance from the true circle over chord midpoints (the sagitta
 /// is largest there), in f64.
@@ -50,7 +54,7 @@ fn chords_within_tolerance_all_planes() {
                 e[h] = 3.0; // helical
                 e[3] = 7.0;
                 let arc = arc(e, [0.0, 0.0], plane, dir, 0);
-                let ch: Vec<Pos> = ArcChords::new(&s, &arc, TOL).unwrap().collect();
+                let ch: Vec<Pos> = ArcChords::new(&s, &arc, TOL, STEP).unwrap().collect();
                 assert_eq!(*ch.last().unwrap(), e, "end point exact");
                 let err = worst_chord_error(s, &arc, &ch);
                 assert!(
@@ -76,8 +80,8 @@ fn full_circle_and_multi_turn() {
         ArcDir::Ccw,
         2,
     );
-    let c1 = ArcChords::new(&s, &one, TOL).unwrap();
-    let c3 = ArcChords::new(&s, &three, TOL).unwrap();
+    let c1 = ArcChords::new(&s, &one, TOL, STEP).unwrap();
+    let c3 = ArcChords::new(&s, &three, TOL, STEP).unwrap();
     let n1 = c1.chords();
     assert!(
         n1 > 50,
@@ -103,10 +107,15 @@ fn full_circle_and_multi_turn() {
 fn cw_vs_ccw_go_opposite_ways() {
     let s = [10.0, 0.0, 0.0, 0.0];
     let e = [0.0, 10.0, 0.0, 0.0];
-    let ccw: Vec<Pos> = ArcChords::new(&s, &arc(e, [0.0, 0.0], Plane::XY, ArcDir::Ccw, 0), TOL)
-        .unwrap()
-        .collect();
-    let cw: Vec<Pos> = ArcChords::new(&s, &arc(e, [0.0, 0.0], Plane::XY, ArcDir::Cw, 0), TOL)
+    let ccw: Vec<Pos> = ArcChords::new(
+        &s,
+        &arc(e, [0.0, 0.0], Plane::XY, ArcDir::Ccw, 0),
+        TOL,
+        STEP,
+    )
+    .unwrap()
+    .collect();
+    let cw: Vec<Pos> = ArcChords::new(&s, &arc(e, [0.0, 0.0], Plane::XY, ArcDir::Cw, 0), TOL, STEP)
         .unwrap()
         .collect();
     assert!(
@@ -127,7 +136,8 @@ fn bad_arcs_are_errors_not_panics() {
         ArcChords::new(
             &s,
             &arc([1.0, 0.0, 0.0, 0.0], [0.0, 0.0], Plane::XY, ArcDir::Cw, 0),
-            TOL
+            TOL,
+            STEP
         )
         .err(),
         Some(ArcError::InvalidArc),
@@ -137,7 +147,8 @@ fn bad_arcs_are_errors_not_panics() {
         ArcChords::new(
             &[f32::NAN; 4],
             &arc(s, [1.0, 0.0], Plane::XY, ArcDir::Cw, 0),
-            TOL
+            TOL,
+            STEP
         )
         .err(),
         Some(ArcError::InvalidNumber)
@@ -150,7 +161,7 @@ fn bad_arcs_are_errors_not_panics() {
         u16::MAX,
     );
     assert_eq!(
-        ArcChords::new(&[1.0, 0.0, 0.0, 0.0], &huge, 1e-6).err(),
+        ArcChords::new(&[1.0, 0.0, 0.0, 0.0], &huge, 1e-6, STEP).err(),
         Some(ArcError::TooManySegments),
         "too many chords is refused"
     );
@@ -184,4 +195,122 @@ fn spline_flattened_within_tolerance() {
         }
         prev = *p;
     }
+}
+
+/// The arc the interpreter makes of `line` with the machine at `start`
+/// (no offsets: work and machine coordinates agree).
+fn parse_arc(start: Pos, line: &str) -> Arc {
+    let mut it = Interpreter::new();
+    it.set_machine_position(start);
+    let mut arc = None;
+    it.execute_line(format!("{line} F600").as_bytes(), &mut |c| {
+        if let Command::Arc(a) = c {
+            arc = Some(a);
+        }
+    })
+    .unwrap();
+    arc.expect("an arc")
+}
+
+/// Sum of the chord lengths, in f64.
+fn path_len(start: Pos, pts: &[Pos]) -> f64 {
+    let mut prev = start;
+    let mut len = 0.0;
+    for p in pts {
+        let sq: f64 = (0..4).map(|k| (p[k] as f64 - prev[k] as f64).powi(2)).sum();
+        len += sq.sqrt();
+        prev = *p;
+    }
+    len
+}
+
+/// Issue 35 item 1: a 0.01 mm arc on a radius of 30 m (and, with chords of
+/// a few steps, 1e9 mm) ran as a full circle, 188 km, because its sweep,
+/// the difference of two f32 angles, came out within 1e-6 rad of zero. In
+/// R and I/J form, G2 and G3, it is one chord of 0.01 mm now.
+#[test]
+fn short_arc_on_huge_radius_is_short() {
+    let s = [-150.0, -150.0, 0.0, 0.0];
+    for line in [
+        "G17 G91 G2 X0.01 Y0 R30000",
+        "G17 G91 G2 X0.01 Y0 I0.005 J-30000",
+        "G17 G91 G3 X0.01 Y0 R30000",
+        "G17 G91 G3 X0.01 Y0 I0.005 J30000",
+        "G17 G91 G2 X0.005 Y0 R1000000000",
+        "G17 G91 G3 X0 Y0.005 I-1000000000 J0.0025",
+        "G18 G91 G2 Z0.01 X0 R3000000",
+        "G19 G91 G3 Y-0.01 Z0 R-0.02",
+    ] {
+        let a = parse_arc(s, line);
+        let ch = ArcChords::new(&s, &a, TOL, STEP).unwrap();
+        let long = line.ends_with("R-0.02");
+        let pts: Vec<Pos> = ch.clone().collect();
+        assert_eq!(*pts.last().unwrap(), a.end, "{line}");
+        let len = path_len(s, &pts);
+        if long {
+            // on a 0.01 mm chord: the long way, most of a circle.
+            assert!(len > 0.1 && len < 2.0 * 3.15 * 0.02, "{line}: {len}");
+            continue;
+        }
+        let chord = path_len(s, &[a.end]);
+        assert!(ch.chords() <= 2, "{line}: {} chords", ch.chords());
+        assert!((len - chord).abs() < 1e-6, "{line}: {len} vs {chord}");
+        let cw = line.contains("G2 ");
+        assert!(
+            ch.sweep() != 0.0 && (ch.sweep() < 0.0) == cw && ch.sweep().abs() < 1e-5,
+            "{line}: {}",
+            ch.sweep()
+        );
+        // The box is the chord's: the bulge of such an arc is far below a
+        // step (the old box put the top of a 30 m circle 0.002 mm off).
+        let (lo, hi) = ch.bounds();
+        for k in 0..4 {
+            let (l, h) = (s[k].min(a.end[k]), s[k].max(a.end[k]));
+            assert!(
+                lo[k] >= l - 1e-6 && hi[k] <= h + 1e-6,
+                "{line}: {lo:?} {hi:?}"
+            );
+        }
+    }
+}
+
+/// A full circle still is one when the end is the start, on any radius,
+/// and only when start and end are closer than the same-point distance:
+/// just beyond it the arc is the short one it says.
+#[test]
+fn full_circle_only_when_start_is_end() {
+    let s = [-150.0, -150.0, 0.0, 0.0];
+    let a = parse_arc(s, "G17 G91 G2 X0 Y0 I0 J-30000");
+    let ch = ArcChords::new(&s, &a, TOL, STEP).unwrap();
+    assert_eq!(ch.sweep(), -2.0 * core::f32::consts::PI);
+    let len = path_len(s, &ch.collect::<Vec<_>>());
+    let full = 2.0 * std::f64::consts::PI * 30000.0;
+    assert!((len - full).abs() < 1e-3 * full, "{len}");
+    for (gap, circle) in [
+        (0.0, true),
+        (0.4 * SAME_POINT, true),
+        (3.0 * SAME_POINT, false),
+    ] {
+        for r in [10.0f32, 1e6] {
+            let s = [r, 0.0, 0.0, 0.0];
+            let e = [r, gap, 0.0, 0.0];
+            let ch = ArcChords::new(
+                &s,
+                &arc(e, [0.0, 0.0], Plane::XY, ArcDir::Ccw, 0),
+                TOL,
+                STEP,
+            )
+            .unwrap();
+            let turned = ch.sweep() > 6.0;
+            assert_eq!(turned, circle, "gap {gap} r {r}: {}", ch.sweep());
+        }
+    }
+    // A coarse machine does not widen it beyond SAME_POINT; a very fine
+    // one narrows it to half a step.
+    assert_eq!(burin::arc::same_point(1.0 / 80.0), SAME_POINT);
+    assert_eq!(burin::arc::same_point(1e-5), 0.5e-5);
+    assert_eq!(burin::arc::same_point(f32::NAN), SAME_POINT);
+    // No positive step count: 1/0 is infinite, and the fallback holds.
+    assert_eq!(burin::arc::same_point(f32::INFINITY), SAME_POINT);
+    assert_eq!(burin::arc::same_point(-1.0), SAME_POINT);
 }

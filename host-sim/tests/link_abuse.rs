@@ -257,6 +257,31 @@ fn reprap_numbering_and_resend() {
     assert_eq!(st.mpos, Some(vec![-7.0, 0.0, 0.0, 0.0]));
 }
 
+/// Issue 35 item 4: a line number of ten digits was refused as a checksum
+/// mismatch and asked for again, for ever. Up to 2^31 - 1 runs (as in
+/// Marlin); 2^31 gets an error and `ok` but no `Resend:`, so the host does
+/// not send it again, and the next numbering works.
+#[test]
+fn reprap_numbers_up_to_2_pow_31_minus_1() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    assert_eq!(r.cmd("M110 N2147483646"), ["ok"]);
+    assert_eq!(r.cmd("N2147483647 G4 P0*87"), ["ok"]);
+    let over = r.cmd(&reprap("N2147483648 G91 G1 X-1 F2000"));
+    assert_eq!(over.len(), 2, "{over:?}");
+    assert!(over[0].starts_with("Error:") && over[1] == "ok", "{over:?}");
+    assert_eq!(r.cmd(&reprap("N-1 M110 N-1")), ["ok"]);
+    assert_eq!(r.cmd(&reprap("N0 G91 G1 X-2 F2000")), ["ok"]);
+    let st = r.until_idle();
+    assert_eq!(
+        st.mpos,
+        Some(vec![-2.0, 0.0, 0.0, 0.0]),
+        "the refused line did not run"
+    );
+}
+
 /// Issue 15 item 3: a reset in motion prints `ALARM:3` once.
 #[test]
 fn reset_in_motion_alarms_once() {

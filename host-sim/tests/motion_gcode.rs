@@ -82,3 +82,56 @@ fn gcode_homing_and_probing_sync_the_interpreter() {
     // ...and #5063 holds the contact point itself.
     assert_eq!(run(&format!("{probe}G1 Z[#5063] F500\n")), -8000);
 }
+
+/// Issue 35 item 1, on the whole device: after `G53 G0 X-150 Y-150`, a
+/// 0.01 mm arc on a radius of 30 m (R and I/J form, G2 and G3) ran as the
+/// full 30 m circle, 188 km at F600 and still going after 1.5 s. It moves
+/// its 0.01 mm and nothing else: X ends on the step of -149.99, Y never
+/// leaves -150, and the job is done long before the circle would be.
+#[test]
+fn short_arc_on_huge_radius_moves_only_its_chord() {
+    let cfg = config();
+    let spm = [0, 1].map(|k| f64::from(cfg.settings.axes[k].steps_per_mm));
+    let at = |mm: f64, k: usize| (mm * spm[k]).round() as i32;
+    // The rapid takes under 3 s; the circle would take five hours.
+    let budget = 10 * u64::from(TICK_HZ);
+    for arc in [
+        "G2 X0.01 Y0 R30000",
+        "G2 X0.01 Y0 I0.005 J-30000",
+        "G3 X0.01 Y0 R30000",
+        "G3 X0.01 Y0 I0.005 J30000",
+    ] {
+        let src = format!("G21 G90 G53 G0 X-150 Y-150\nG17 G91 {arc} F600\n");
+        let mut rec = Collect::default();
+        let s = host_sim::offline::run_file_watched(&cfg, &src, &mut rec, &mut |p| {
+            assert!(p.tick < budget, "{arc}: still moving at {:?}", p.steps);
+            // While the arc runs, X stays on its chord and Y does not move.
+            if p.line == 2 {
+                assert!(
+                    p.steps[0] >= at(-150.0, 0) && p.steps[0] <= at(-149.99, 0),
+                    "{arc}: X at step {}",
+                    p.steps[0]
+                );
+                assert_eq!(p.steps[1], at(-150.0, 1), "{arc}: Y moved");
+            }
+        });
+        assert!(s.errors.is_empty(), "{arc}: {:?}", s.errors);
+        assert_eq!(
+            &s.final_position_steps[..2],
+            &[i64::from(at(-149.99, 0)), i64::from(at(-150.0, 1))],
+            "{arc}"
+        );
+        assert!(
+            (s.final_work_position_mm[0] + 149.99).abs() < 0.5 / spm[0],
+            "{arc}: {:?}",
+            s.final_work_position_mm
+        );
+        let rapid = 150.0 * std::f64::consts::SQRT_2;
+        assert!(
+            (s.distance_mm - rapid - 0.01).abs() < 1e-3,
+            "{arc}: {} mm",
+            s.distance_mm
+        );
+        assert!(s.job_time_s < 5.0, "{arc}: {} s", s.job_time_s);
+    }
+}

@@ -69,7 +69,8 @@ impl<const N: usize> Machine<N> {
                 self.push_line(end, sp, Watch::default(), line, PathKind::Feed, obs)
             }
             Command::Arc(a) => {
-                let ch = ArcChords::new(&self.commanded, a, tol)?;
+                let step = crate::arc::plane_step(&self.planner.settings.axes, a.plane);
+                let ch = ArcChords::new(&self.commanded, a, tol, step)?;
                 let (lo, hi) = ch.bounds();
                 self.check_soft(&lo, &hi)?;
                 let speed = self.chord_speed(a.feed, Chords::Arc(ch.clone()))?;

@@ -12,8 +12,9 @@ fn len(a: P2) -> f32 {
     sqrtf(a[0] * a[0] + a[1] * a[1])
 }
 
-/// Start and end closer than this (mm) are the same point: a full circle.
-pub(crate) const SAME_POINT: f32 = 1e-4;
+/// Start and end closer than this (mm) are the same point: a full circle
+/// (the segmenter's threshold never exceeds it, see `arc::same_point`).
+pub(crate) use crate::arc::SAME_POINT;
 
 /// LinuxCNC 2.9's tolerance for centre-format arcs, as measured with its
 /// `rs274` (issue 14): the start and end radii may differ by at most
@@ -34,13 +35,18 @@ pub(crate) const R_SHORTFALL: f32 = 0.001;
 /// Centre format (IJK): checks the radii, then moves the centre onto the
 /// chord's perpendicular bisector so both radii agree exactly and the
 /// segmenter never sees an inconsistent arc.
+///
+/// The end radius is the start radius plus what the chord adds
+/// ([`crate::arc::growth`]): two f32 radii near 1e8 mm are 8 mm apart per
+/// ulp, which the check would take for a radius mismatch (issue 35).
 pub(crate) fn centre_ijk(s: P2, e: P2, c: P2, inch: bool) -> Result<P2, ErrorKind> {
-    let rs = len(sub(s, c));
-    let re = len(sub(e, c));
+    let (sv, ev) = (sub(s, c), sub(e, c));
+    let chord = sub(e, s);
+    let rs = len(sv);
+    let re = rs + crate::arc::growth(sv, ev, rs, len(ev), chord);
     if rs < SAME_POINT || radius_mismatch(rs, re, inch) {
         return Err(ErrorKind::ArcRadius);
     }
-    let chord = sub(e, s);
     let d = len(chord);
     if d < SAME_POINT {
         return Ok(c);

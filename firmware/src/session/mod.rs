@@ -341,6 +341,10 @@ impl<S: Storage> Device<S> {
                         self.stats.lines_err += 1;
                         return self.numbers.resend(checksum, o);
                     }
+                    reprap::Numbered::OutOfRange => {
+                        self.stats.lines_err += 1;
+                        return reprap::out_of_range(o);
+                    }
                 };
                 self.text_lines = self.text_lines.wrapping_add(1);
                 let n = self.text_lines;
