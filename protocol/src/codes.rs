@@ -143,6 +143,11 @@ pub mod alarm {
     pub const ESTOP: u16 = 10;
     /// Host link lost while running (burin): the machine was held.
     pub const LINK_LOST: u16 = 20;
+    /// A line was refused after its `ok` (burin): the machine ramped down
+    /// and stopped, nothing queued behind the line runs. The `[MSG:…]` (the
+    /// `Error` frame) before the alarm names the line and the error; a soft
+    /// limit is [`SOFT_LIMIT`] instead, as in GRBL.
+    pub const LATE_ERROR: u16 = 21;
 }
 
 #[cfg(test)]

@@ -110,6 +110,12 @@ enum Pending {
         line: u32,
     },
     Homing(Homing),
+    /// An error found after its line was acknowledged ([`Machine::fault`]):
+    /// the motion ramps down, then `error` becomes the alarm.
+    Fault {
+        error: MachineError,
+        line: u32,
+    },
 }
 
 /// Machine state as reported to the operator.
@@ -143,6 +149,8 @@ pub struct Machine<const N: usize> {
     tool_event: Option<ToolEvent>,
     /// Trip Z of the first tool the setter measured (`$211=2`).
     tool_reference: Option<f32>,
+    /// The last fault, until the session takes it to report it.
+    fault: Option<(MachineError, u32)>,
 }
 
 impl<const N: usize> Machine<N> {
@@ -165,6 +173,7 @@ impl<const N: usize> Machine<N> {
             script: None,
             tool_event: None,
             tool_reference: None,
+            fault: None,
         }
     }
 
@@ -189,6 +198,7 @@ impl<const N: usize> Machine<N> {
             script,
             tool_event,
             tool_reference,
+            fault,
         } = Machine::<0>::new(settings, tick_hz);
         self.prep = prep;
         self.cfg = cfg;
@@ -203,6 +213,7 @@ impl<const N: usize> Machine<N> {
         self.script = script;
         self.tool_event = tool_event;
         self.tool_reference = tool_reference;
+        self.fault = fault;
     }
 
     pub fn settings(&self) -> &Settings {
@@ -429,9 +440,20 @@ impl<const N: usize> Machine<N> {
                 }
             }
         }
-        if let Pending::Chords { .. } = self.pending {
+        if let Pending::Chords { line, .. } = self.pending {
             if let Err(e) = self.feed_chords(obs) {
-                obs(Note::Error { line: 0, error: e });
+                self.fault(e, line);
+            }
+        }
+        if let Pending::Fault { error, line } = self.pending {
+            let stopped = self.prep.hold() == crate::stepper::prep::Hold::Held
+                && sink.is_empty()
+                && rt.stepper_idle();
+            if stopped {
+                // Position exact (it ramped down): an operator hold asked
+                // for meanwhile goes with the job.
+                rt.clear_hold();
+                self.raise_alarm(rt, error, line, obs);
             }
         }
         if !matches!(self.pending, Pending::None | Pending::Chords { .. })
