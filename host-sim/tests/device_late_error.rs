@@ -150,3 +150,51 @@ fn framed_late_soft_limit_alarms_and_drops_the_lines_behind() {
     assert_eq!(r.dev.log.as_deref(), Some(&[s][..]));
     assert_eq!(r.dev.position_steps()[1], 0);
 }
+
+/// A fault the executor finds on its own, after the command was accepted:
+/// the probe move is planned only once the motion before it has stopped,
+/// and its feed is refused then. It used to be dropped without a word and
+/// the job went on.
+#[test]
+fn probe_move_refused_when_planned_stops_the_job() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    r.send(b"G38.2 Z-10 F0.0001\nG0 X-5\n");
+    let out = until_alarm(&mut r, 100);
+    let msg = out.iter().position(|l| l.starts_with("[MSG:line 1: error 412"));
+    let code = format!("ALARM:{}", alarm::LATE_ERROR);
+    let alarm = out.iter().position(|l| *l == code);
+    assert!(msg.is_some() && alarm.is_some() && msg < alarm, "{out:?}");
+    r.run(20);
+    let mut out = out;
+    out.extend(r.lines());
+    // The probe line's `ok`; the move behind it is refused.
+    assert_eq!(out.iter().filter(|l| *l == "ok").count(), 1, "{out:?}");
+    assert_eq!(out.iter().filter(|l| *l == "error:9").count(), 1, "{out:?}");
+    assert_eq!(r.status().mpos, Some(vec![0.0, 0.0, 0.0, 0.0]));
+}
+
+/// A canned cycle's step refused by the soft limits (its R plane is above
+/// the envelope): the cycle stops as `ALARM:2` instead of being cut short
+/// without a word while the job goes on.
+#[test]
+fn canned_cycle_step_outside_the_soft_limits_stops_the_job() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    assert_eq!(r.cmd("$20=1"), ["ok"]);
+    r.send(b"G90 G0 Z-20\nG98 G81 X-10 Y-10 Z-30 R10 F300\nG80 G0 X-20\n");
+    let out = until_alarm(&mut r, 500);
+    let msg = out.iter().position(|l| l.starts_with("[MSG:line 2: error 400"));
+    let alarm = out.iter().position(|l| l == "ALARM:2");
+    assert!(msg.is_some() && alarm.is_some() && msg < alarm, "{out:?}");
+    // The cycle runs after the move before it, so the line behind it was
+    // acknowledged already: dropped, it never runs.
+    r.run(200);
+    let p = r.status().mpos.unwrap_or_default();
+    assert!(p[0] >= -10.0, "{p:?}");
+    assert_eq!(r.status().state, "Alarm");
+}
