@@ -329,6 +329,9 @@ impl<Q: SegmentSink, const N: usize> MotionPort for Core<'_, Q, N> {
     fn take_fault(&mut self) -> Option<(MachineError, u32)> {
         self.machine.take_fault()
     }
+    fn check_soft(&self, end: &Pos) -> Result<(), MachineError> {
+        self.machine.check_soft(end, end)
+    }
     fn state(&self) -> executor::State {
         self.machine.state(self.rt)
     }

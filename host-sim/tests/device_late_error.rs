@@ -97,10 +97,10 @@ fn late_feed_too_slow_raises_an_alarm_and_stops_the_stream() {
     stopped_on_x(&mut r, x0);
 }
 
-/// A jog beyond the soft limits is not a job: it is refused without an
-/// alarm, as before.
+/// A jog beyond the soft limits is not a job: it is refused before its
+/// `ok` with GRBL's `error:15`, without an alarm.
 #[test]
-fn late_jog_error_does_not_alarm() {
+fn jog_beyond_the_soft_limits_is_error_15_without_alarm() {
     let cfg = origin();
     let mut rec = Discard;
     let mut r = Rig::new(&cfg, &mut rec);
@@ -109,7 +109,7 @@ fn late_jog_error_does_not_alarm() {
     r.send(b"$J=G91 X-400 F1000\n");
     r.run(20);
     let out = r.lines();
-    assert!(!out.iter().any(|l| l.starts_with("ALARM")), "{out:?}");
+    assert_eq!(out, ["error:15"]);
     assert_eq!(r.status().state, "Idle");
     assert_eq!(r.cmd("G1 X-5 F1000"), ["ok"]);
     assert_eq!(r.until_idle().mpos, Some(vec![-5.0, 0.0, 0.0, 0.0]));
@@ -163,7 +163,9 @@ fn probe_move_refused_when_planned_stops_the_job() {
     r.lines();
     r.send(b"G38.2 Z-10 F0.0001\nG0 X-5\n");
     let out = until_alarm(&mut r, 100);
-    let msg = out.iter().position(|l| l.starts_with("[MSG:line 1: error 412"));
+    let msg = out
+        .iter()
+        .position(|l| l.starts_with("[MSG:line 1: error 412"));
     let code = format!("ALARM:{}", alarm::LATE_ERROR);
     let alarm = out.iter().position(|l| *l == code);
     assert!(msg.is_some() && alarm.is_some() && msg < alarm, "{out:?}");
@@ -188,7 +190,9 @@ fn canned_cycle_step_outside_the_soft_limits_stops_the_job() {
     assert_eq!(r.cmd("$20=1"), ["ok"]);
     r.send(b"G90 G0 Z-20\nG98 G81 X-10 Y-10 Z-30 R10 F300\nG80 G0 X-20\n");
     let out = until_alarm(&mut r, 500);
-    let msg = out.iter().position(|l| l.starts_with("[MSG:line 2: error 400"));
+    let msg = out
+        .iter()
+        .position(|l| l.starts_with("[MSG:line 2: error 400"));
     let alarm = out.iter().position(|l| l == "ALARM:2");
     assert!(msg.is_some() && alarm.is_some() && msg < alarm, "{out:?}");
     // The cycle runs after the move before it, so the line behind it was

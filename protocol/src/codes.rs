@@ -23,6 +23,8 @@ pub enum Code {
     Locked = 9,
     /// The line is longer than [`crate::MAX_LINE`] bytes; it was discarded.
     LineOverflow = 11,
+    /// A `$J=` target outside the soft limits (`$20=1`): nothing moves.
+    JogTravel = 15,
     /// A `$J=` line is not a valid jog.
     InvalidJog = 16,
     /// The command exists in GRBL but burin does not support it.
@@ -56,7 +58,7 @@ pub enum Code {
 
 impl Code {
     /// Every code, for tables and tests.
-    pub const ALL: [Code; 21] = [
+    pub const ALL: [Code; 22] = [
         Code::BadNumber,
         Code::InvalidStatement,
         Code::NegativeValue,
@@ -64,6 +66,7 @@ impl Code {
         Code::NotIdle,
         Code::Locked,
         Code::LineOverflow,
+        Code::JogTravel,
         Code::InvalidJog,
         Code::Unsupported,
         Code::FrameCorrupt,
@@ -100,6 +103,7 @@ impl Code {
             Code::NotIdle => "command needs the machine idle",
             Code::Locked => "locked by alarm or jog state",
             Code::LineOverflow => "line too long, discarded",
+            Code::JogTravel => "jog target exceeds machine travel",
             Code::InvalidJog => "invalid jog command",
             Code::Unsupported => "unsupported command",
             Code::FrameCorrupt => "corrupt frame",

@@ -283,7 +283,9 @@ impl<const N: usize> Machine<N> {
 
     /// Soft limits: the envelope is `[-travel, 0]` when homing towards
     /// positive, `[0, travel]` towards negative; travel 0 means unlimited.
-    fn check_soft(&self, lo: &Pos, hi: &Pos) -> Result<(), MachineError> {
+    /// The box `lo`..`hi` must lie inside it (a jog's target is checked
+    /// before its `ok`, as GRBL's error 15).
+    pub fn check_soft(&self, lo: &Pos, hi: &Pos) -> Result<(), MachineError> {
         let s = &self.planner.settings;
         if !s.soft_limits {
             return Ok(());

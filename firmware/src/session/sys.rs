@@ -387,6 +387,8 @@ impl<S: crate::seams::Storage> Device<S> {
         let (Some((e, f)), 1) = (end, count) else {
             return Err(bad);
         };
+        // Refused before its `ok` (GRBL's error 15), not as a late error.
+        m.check_soft(&e).map_err(|_| Code::JogTravel.code())?;
         let cmd = Command::Line {
             end: e,
             feed: Feed::PerMin(f),
