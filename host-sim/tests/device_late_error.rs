@@ -202,3 +202,27 @@ fn canned_cycle_step_outside_the_soft_limits_stops_the_job() {
     assert!(p[0] >= -10.0, "{p:?}");
     assert_eq!(r.status().state, "Alarm");
 }
+
+/// The ramp down before the alarm is not a feed hold: cycle start during
+/// it resumes nothing, and the alarm comes.
+#[test]
+fn cycle_start_does_not_resume_the_stop() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    assert_eq!(r.cmd("$20=1"), ["ok"]);
+    assert_eq!(r.cmd("G1 X-50 F3000"), ["ok"]);
+    r.run(100);
+    r.send(b"G1 X-400\n");
+    r.run(1);
+    let st = r.status();
+    assert_eq!(st.state, "Run", "still ramping down: {st:?}");
+    r.send(b"~");
+    let out = until_alarm(&mut r, 100);
+    assert!(out.iter().any(|l| l == "ALARM:2"), "{out:?}");
+    let x = r.status().mpos.map_or(f32::NAN, |p| p[0]);
+    assert!(x > -25.0, "ran on after ~: {x}");
+    r.run(100);
+    assert_eq!(r.status().mpos.map_or(f32::NAN, |p| p[0]), x);
+}

@@ -429,6 +429,9 @@ impl<const N: usize> Machine<N> {
                         self.pending = Pending::None;
                     }
                 }
+                // Stopping for a fault already: its alarm's flush clears
+                // the trip.
+                Pending::Fault { .. } => {}
                 _ => {
                     self.flush(rt);
                     self.pending = Pending::None;
