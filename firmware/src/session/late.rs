@@ -58,6 +58,8 @@ impl<S: crate::seams::Storage> Device<S> {
             self.slots.clear();
             self.pending.cancel_queued();
             self.sync = true;
+            // A probe behind the line never runs: no result to take.
+            self.probe_sync = false;
         }
     }
 }
