@@ -8,6 +8,7 @@ use host_sim::record::Discard;
 use protocol::codes::alarm;
 use protocol::{DeviceMsg, HostMsg};
 
+mod common;
 mod rig;
 
 use rig::{line_frame, origin, Rig};
@@ -225,4 +226,31 @@ fn cycle_start_does_not_resume_the_stop() {
     assert!(x > -25.0, "ran on after ~: {x}");
     r.run(100);
     assert_eq!(r.status().mpos.map_or(f32::NAN, |p| p[0]), x);
+}
+
+/// The stop is a ramp at the axis's acceleration, not a halt: the steps
+/// before it decelerate within `$120`, and the alarm's position is where
+/// the steps ended.
+#[test]
+fn the_stop_decelerates_and_keeps_the_position() {
+    let cfg = origin();
+    let mut rec = common::Collect::default();
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    assert_eq!(r.cmd("$20=1"), ["ok"]);
+    assert_eq!(r.cmd("G1 X-50 F3000"), ["ok"]);
+    r.run(200);
+    r.send(b"G1 X-400\n");
+    let out = until_alarm(&mut r, 100);
+    assert!(out.iter().any(|l| l == "ALARM:2"), "{out:?}");
+    r.run(50);
+    let steps = r.dev.position_steps();
+    let st = r.status();
+    drop(r);
+    let info = rec.info.clone().expect("run info");
+    let worst = common::check_stop_decel(&info, &rec.events, 0, 200);
+    println!("stop: worst distance/bound {worst:.3}");
+    let x = st.mpos.map_or(f32::NAN, |p| p[0]);
+    assert_eq!(x, steps[0] as f32 / 80.0);
+    assert!(x < -5.0 && x > -50.0, "{x}");
 }

@@ -5,7 +5,7 @@
 
 use host_sim::config::MachineConfig;
 use host_sim::device_sim::VirtualDevice;
-use host_sim::record::Discard;
+use host_sim::record::Recorder;
 use protocol::client::grbl::parse_status;
 
 /// The default machine, powered up at machine zero.
@@ -23,7 +23,7 @@ pub struct Rig<'r> {
 }
 
 impl<'r> Rig<'r> {
-    pub fn new(cfg: &MachineConfig, rec: &'r mut Discard) -> Self {
+    pub fn new(cfg: &MachineConfig, rec: &'r mut dyn Recorder) -> Self {
         let dev = VirtualDevice::new(cfg, rec);
         let mut r = Rig {
             dev,
