@@ -450,17 +450,7 @@ impl<const N: usize> Machine<N> {
                 self.fault(e, line);
             }
         }
-        if let Pending::Fault { error, line } = self.pending {
-            let stopped = self.prep.hold() == crate::stepper::prep::Hold::Held
-                && sink.is_empty()
-                && rt.stepper_idle();
-            if stopped {
-                // Position exact (it ramped down): an operator hold asked
-                // for meanwhile goes with the job.
-                rt.clear_hold();
-                self.raise_alarm(rt, error, line, obs);
-            }
-        }
+        self.end_fault(rt, sink, obs);
         if !matches!(self.pending, Pending::None | Pending::Chords { .. })
             && self.motion_idle(rt, sink)
         {

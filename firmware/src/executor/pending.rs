@@ -24,6 +24,27 @@ impl<const N: usize> Machine<N> {
         self.prep.cancel_motion();
     }
 
+    /// A fault's ramp has stopped: its error becomes the alarm.
+    pub(super) fn end_fault(
+        &mut self,
+        rt: &Realtime,
+        sink: &impl SegmentSink,
+        obs: &mut dyn FnMut(Note),
+    ) {
+        let Pending::Fault { error, line } = self.pending else {
+            return;
+        };
+        let stopped = self.prep.hold() == crate::stepper::prep::Hold::Held
+            && sink.is_empty()
+            && rt.stepper_idle();
+        if stopped {
+            // Position exact (it ramped down): an operator hold asked for
+            // meanwhile goes with the job.
+            rt.clear_hold();
+            self.raise_alarm(rt, error, line, obs);
+        }
+    }
+
     /// The last fault and its line, once.
     pub fn take_fault(&mut self) -> Option<(MachineError, u32)> {
         self.fault.take()
