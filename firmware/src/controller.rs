@@ -323,6 +323,15 @@ impl<Q: SegmentSink, const N: usize> MotionPort for Core<'_, Q, N> {
         });
         Ok(())
     }
+    fn fault(&mut self, e: MachineError, line: u32) {
+        self.machine.fault(e, line);
+    }
+    fn take_fault(&mut self) -> Option<(MachineError, u32)> {
+        self.machine.take_fault()
+    }
+    fn check_soft(&self, end: &Pos) -> Result<(), MachineError> {
+        self.machine.check_soft(end, end)
+    }
     fn state(&self) -> executor::State {
         self.machine.state(self.rt)
     }

@@ -53,7 +53,7 @@ fn a_broken_pulse_path_is_an_alarm_at_boot_that_nothing_unlocks() {
     assert_eq!(r.dev.sim.rt.hw_fault(), Some(HwFault::PulseEndPath));
     r.run(2);
     let boot = r.lines();
-    assert!(boot.iter().any(|l| l == "ALARM:21"), "{boot:?}");
+    assert!(boot.iter().any(|l| l == "ALARM:22"), "{boot:?}");
     assert!(
         boot.iter()
             .any(|l| l.starts_with("[MSG:hardware fault: step pulse DMA")),
@@ -86,6 +86,6 @@ fn a_path_the_table_allows_but_the_stream_breaks_is_caught_at_the_next_start() {
     let reply = r.cmd("G1 X2 F600");
     r.run(50);
     assert_eq!(r.dev.sim.rt.hw_fault(), Some(HwFault::PulseEndError));
-    assert_eq!(reply[..2], ["ok", "ALARM:21"], "{reply:?}");
+    assert_eq!(reply[..2], ["ok", "ALARM:22"], "{reply:?}");
     assert_eq!(r.dev.sim.world.steps[0], x, "no pulse after the fault");
 }

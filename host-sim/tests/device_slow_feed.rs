@@ -92,21 +92,25 @@ fn origin() -> MachineConfig {
 
 /// The issue's line: one step would be 7 500 s away, beyond the step
 /// driver's 11.2 s (`seams::MAX_PERIOD`), so the move is refused (error 412) and nothing moves;
-/// `?`, `!` and a soft reset are all answered.
+/// found after the line's `ok`, it stops the job as alarm 21 (issue 35);
+/// `?`, `!` and a soft reset are all answered, and `$X` unlocks.
 #[test]
 fn feed_0_0001_is_refused_and_the_device_keeps_answering() {
     within(|| {
         let mut rec = Discard;
         let mut r = Rig::new(&origin(), &mut rec);
-        let out = r.send_until(b"G1 X-1 F0.0001\n", |l| l.contains("error 412"));
+        let out = r.send_until(b"G1 X-1 F0.0001\n", |l| l == "ALARM:21");
         assert!(out.iter().any(|l| l == "ok"), "{out:?}");
-        assert_eq!(r.state(), "Idle");
+        assert!(out.iter().any(|l| l.contains("error 412")), "{out:?}");
+        assert_eq!(r.state(), "Alarm");
         r.send_until(b"!", |_| true);
-        let st = r.state();
-        assert!(st == "Idle" || st.starts_with("Hold"), "{st}");
+        assert_eq!(r.state(), "Alarm");
         let out = r.send_until(&[0x18], |l| l.starts_with("Grbl 1.1h"));
         assert!(!out.iter().any(|l| l.starts_with("ALARM")), "{out:?}");
+        assert_eq!(r.state(), "Alarm");
+        r.send_until(b"$X\n", |l| l == "ok");
         assert_eq!(r.state(), "Idle");
+        assert_eq!(r.dev.position_steps(), [0; 4]);
     });
 }
 

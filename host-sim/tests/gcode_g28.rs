@@ -29,12 +29,15 @@ fn beagleg_meaning_homes_and_so_needs_homing() {
     let mut cfg = config();
     cfg.settings.g28_homes = true;
     let s = run_job(&cfg, "G28 G91 Z0\nG90 G0 X1\n", &mut Collect::default());
+    // Refused after the line was acknowledged: the job stops there as an
+    // alarm (issue 35), and `G0 X1` never runs.
     assert_eq!(
         s.errors.iter().map(|e| e.code).collect::<Vec<_>>(),
-        [409],
+        [protocol::codes::alarm::LATE_ERROR, 409],
         "{:?}",
         s.errors
     );
+    assert_eq!(s.final_position_steps, [0; 4]);
 }
 
 #[test]

@@ -23,6 +23,8 @@ pub enum Code {
     Locked = 9,
     /// The line is longer than [`crate::MAX_LINE`] bytes; it was discarded.
     LineOverflow = 11,
+    /// A `$J=` target outside the soft limits (`$20=1`): nothing moves.
+    JogTravel = 15,
     /// A `$J=` line is not a valid jog.
     InvalidJog = 16,
     /// The command exists in GRBL but burin does not support it.
@@ -56,7 +58,7 @@ pub enum Code {
 
 impl Code {
     /// Every code, for tables and tests.
-    pub const ALL: [Code; 21] = [
+    pub const ALL: [Code; 22] = [
         Code::BadNumber,
         Code::InvalidStatement,
         Code::NegativeValue,
@@ -64,6 +66,7 @@ impl Code {
         Code::NotIdle,
         Code::Locked,
         Code::LineOverflow,
+        Code::JogTravel,
         Code::InvalidJog,
         Code::Unsupported,
         Code::FrameCorrupt,
@@ -100,6 +103,7 @@ impl Code {
             Code::NotIdle => "command needs the machine idle",
             Code::Locked => "locked by alarm or jog state",
             Code::LineOverflow => "line too long, discarded",
+            Code::JogTravel => "jog target exceeds machine travel",
             Code::InvalidJog => "invalid jog command",
             Code::Unsupported => "unsupported command",
             Code::FrameCorrupt => "corrupt frame",
@@ -143,10 +147,15 @@ pub mod alarm {
     pub const ESTOP: u16 = 10;
     /// Host link lost while running (burin): the machine was held.
     pub const LINK_LOST: u16 = 20;
+    /// A line was refused after its `ok` (burin): the machine ramped down
+    /// and stopped, nothing queued behind the line runs. The `[MSG:…]` (the
+    /// `Error` frame) before the alarm names the line and the error; a soft
+    /// limit is [`SOFT_LIMIT`] instead, as in GRBL.
+    pub const LATE_ERROR: u16 = 21;
     /// A hardware path failed its boot check or raised an error while
     /// running (burin): pulses may not reach the drivers. Only a reset of
     /// the board clears it.
-    pub const HARDWARE_FAULT: u16 = 21;
+    pub const HARDWARE_FAULT: u16 = 22;
 }
 
 #[cfg(test)]

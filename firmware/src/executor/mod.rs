@@ -110,6 +110,12 @@ enum Pending {
         line: u32,
     },
     Homing(Homing),
+    /// An error found after its line was acknowledged ([`Machine::fault`]):
+    /// the motion ramps down, then `error` becomes the alarm.
+    Fault {
+        error: MachineError,
+        line: u32,
+    },
 }
 
 /// Machine state as reported to the operator.
@@ -143,6 +149,8 @@ pub struct Machine<const N: usize> {
     tool_event: Option<ToolEvent>,
     /// Trip Z of the first tool the setter measured (`$211=2`).
     tool_reference: Option<f32>,
+    /// The last fault, until the session takes it to report it.
+    fault: Option<(MachineError, u32)>,
 }
 
 impl<const N: usize> Machine<N> {
@@ -165,6 +173,7 @@ impl<const N: usize> Machine<N> {
             script: None,
             tool_event: None,
             tool_reference: None,
+            fault: None,
         }
     }
 
@@ -189,6 +198,7 @@ impl<const N: usize> Machine<N> {
             script,
             tool_event,
             tool_reference,
+            fault,
         } = Machine::<0>::new(settings, tick_hz);
         self.prep = prep;
         self.cfg = cfg;
@@ -203,6 +213,7 @@ impl<const N: usize> Machine<N> {
         self.script = script;
         self.tool_event = tool_event;
         self.tool_reference = tool_reference;
+        self.fault = fault;
     }
 
     pub fn settings(&self) -> &Settings {
@@ -272,7 +283,9 @@ impl<const N: usize> Machine<N> {
 
     /// Soft limits: the envelope is `[-travel, 0]` when homing towards
     /// positive, `[0, travel]` towards negative; travel 0 means unlimited.
-    fn check_soft(&self, lo: &Pos, hi: &Pos) -> Result<(), MachineError> {
+    /// The box `lo`..`hi` must lie inside it (a jog's target is checked
+    /// before its `ok`, as GRBL's error 15).
+    pub fn check_soft(&self, lo: &Pos, hi: &Pos) -> Result<(), MachineError> {
         let s = &self.planner.settings;
         if !s.soft_limits {
             return Ok(());
@@ -427,6 +440,9 @@ impl<const N: usize> Machine<N> {
                         self.pending = Pending::None;
                     }
                 }
+                // Stopping for a fault already: its alarm's flush clears
+                // the trip.
+                Pending::Fault { .. } => {}
                 _ => {
                     self.flush(rt);
                     self.pending = Pending::None;
@@ -440,11 +456,12 @@ impl<const N: usize> Machine<N> {
                 }
             }
         }
-        if let Pending::Chords { .. } = self.pending {
+        if let Pending::Chords { line, .. } = self.pending {
             if let Err(e) = self.feed_chords(obs) {
-                obs(Note::Error { line: 0, error: e });
+                self.fault(e, line);
             }
         }
+        self.end_fault(rt, sink, obs);
         if !matches!(self.pending, Pending::None | Pending::Chords { .. })
             && self.motion_idle(rt, sink)
         {

@@ -1,13 +1,60 @@
-//! Work that waits for motion to finish: synced commands, probing, homing.
+//! Work that waits for motion to finish: synced commands, probing, homing,
+//! and the stop after a fault.
 
 use super::*;
 
 impl<const N: usize> Machine<N> {
+    /// An error found after its line was acknowledged (issue 35): a
+    /// command refused when it reached the executor, or a chord, probe move
+    /// or script step refused later. The sender has counted the `ok` and
+    /// streams on, so the job must stop here, not skip the command: the
+    /// motion ramps down along its path (a motion cancel, which cycle
+    /// start does not resume; the position stays exact), then everything
+    /// queued is dropped and `e` becomes the alarm (`poll`). Nothing is
+    /// accepted meanwhile ([`Machine::ready`] is false). The session takes
+    /// the fault with [`Machine::take_fault`] to report it; in alarm, or
+    /// with a stop already under way, it is only reported.
+    pub fn fault(&mut self, e: MachineError, line: u32) {
+        self.fault = Some((e, line));
+        if self.alarm.is_some() || matches!(self.pending, Pending::Fault { .. }) {
+            return;
+        }
+        self.script = None;
+        self.pending = Pending::Fault { error: e, line };
+        self.prep.cancel_motion();
+    }
+
+    /// A fault's ramp has stopped: its error becomes the alarm.
+    pub(super) fn end_fault(
+        &mut self,
+        rt: &Realtime,
+        sink: &impl SegmentSink,
+        obs: &mut dyn FnMut(Note),
+    ) {
+        let Pending::Fault { error, line } = self.pending else {
+            return;
+        };
+        let stopped = self.prep.hold() == crate::stepper::prep::Hold::Held
+            && sink.is_empty()
+            && rt.stepper_idle();
+        if stopped {
+            // Position exact (it ramped down): an operator hold asked for
+            // meanwhile goes with the job.
+            rt.clear_hold();
+            self.raise_alarm(rt, error, line, obs);
+        }
+    }
+
+    /// The last fault and its line, once.
+    pub fn take_fault(&mut self) -> Option<(MachineError, u32)> {
+        self.fault.take()
+    }
+
     pub(super) fn run_pending(&mut self, rt: &Realtime, obs: &mut dyn FnMut(Note)) {
         match core::mem::replace(&mut self.pending, Pending::None) {
             Pending::None | Pending::Chords { .. } => {}
             // Finished by `poll` once the ramp-down has stopped.
-            p @ Pending::ProbeStop { .. } => self.pending = p,
+            p @ (Pending::ProbeStop { .. } | Pending::Fault { .. }) => self.pending = p,
             Pending::Sync { command, line } => {
                 match command {
                     Command::Pause { .. } => rt.feed_hold(),
@@ -44,7 +91,7 @@ impl<const N: usize> Machine<N> {
                 };
                 match self.push_line(&end, speed, watch, line, PathKind::Probe, obs) {
                     Ok(()) => self.pending = Pending::ProbeRun { kind, line },
-                    Err(e) => obs(Note::Error { line, error: e }),
+                    Err(e) => self.fault(e, line),
                 }
             }
             Pending::ProbeRun { kind, line } => {

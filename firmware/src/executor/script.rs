@@ -149,7 +149,7 @@ impl<const N: usize> Machine<N> {
             };
             if let Err(e) = self.accept(rt, &cmd, line, obs) {
                 self.script = None;
-                obs(Note::Error { line, error: e });
+                self.fault(e, line);
                 return;
             }
         }

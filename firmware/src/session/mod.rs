@@ -27,7 +27,8 @@
 //! * Errors found when a queued command reaches the executor (soft limits,
 //!   bad arcs) come after the line's `ok`: text mode reports them as
 //!   `[MSG:…]` (an extra `error:N` would break send-response counting),
-//!   framed mode as `DeviceMsg::Error` with the line's sequence number.
+//!   framed mode as `DeviceMsg::Error` with the line's sequence number,
+//!   and they stop the job as an alarm (`late.rs`).
 //! * The machine line number (`Ln:`, traces) is the sequence number in
 //!   framed mode and the count of text lines received in text mode.
 //! * Soft reset during motion raises alarm 3 (as GRBL); `ALARM:3` comes
@@ -37,6 +38,7 @@
 //!   clears the resulting alarm itself (the position is kept exactly: the
 //!   hold decelerated).
 
+mod late;
 mod out;
 mod persist;
 mod ports;
@@ -248,6 +250,7 @@ impl<S: Storage> Device<S> {
 
     /// Alarms and the end of jogs and syncs.
     fn watch(&mut self, m: &mut impl MotionPort, o: &mut Out<'_, impl Tx>) {
+        self.faults(m, o);
         let alarm = m.alarm();
         // Until the executor has done a requested reset its alarm state is
         // stale (the reset's own alarm is already reported, once).
@@ -310,7 +313,7 @@ impl<S: Storage> Device<S> {
                 };
                 self.stats.commands += 1;
                 if let Err(e) = m.submit(&cmd, line) {
-                    sys::report_late(e, line, &mut Out::new(&mut *tx, framed));
+                    self.refused(&cmd, line, e, m, &mut Out::new(&mut *tx, framed));
                 }
             }
             if self.sync || self.cmds.capacity() - self.cmds.len() < LINE_COMMANDS {

@@ -34,6 +34,13 @@ pub trait MotionPort {
     /// The executor takes a command now.
     fn ready(&self) -> bool;
     fn submit(&mut self, cmd: &Command, line: u32) -> Result<(), MachineError>;
+    /// `e` was found after line `line` was acknowledged: stop the job
+    /// (`executor::Machine::fault`).
+    fn fault(&mut self, e: MachineError, line: u32);
+    /// A fault to report (the session's or the executor's own), once.
+    fn take_fault(&mut self) -> Option<(MachineError, u32)>;
+    /// `end` is inside the soft limits (or they are off).
+    fn check_soft(&self, end: &Pos) -> Result<(), MachineError>;
     fn state(&self) -> executor::State;
     fn alarm(&self) -> Option<MachineError>;
     /// Nothing queued, planned or moving.

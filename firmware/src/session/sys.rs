@@ -44,8 +44,11 @@ pub fn alarm_code(e: MachineError) -> u16 {
         MachineError::ProbeInitialState => alarm::PROBE_FAIL_INITIAL,
         MachineError::ProbeNoContact => alarm::PROBE_FAIL_CONTACT,
         MachineError::HomingPullOff { .. } => alarm::HOMING_FAIL_PULLOFF,
-        MachineError::HomingNoSwitch { .. } => alarm::HOMING_FAIL_APPROACH,
-        _ => alarm::HOMING_FAIL_APPROACH,
+        MachineError::HomingNoSwitch { .. } | MachineError::VerifyHome { .. } => {
+            alarm::HOMING_FAIL_APPROACH
+        }
+        // A line refused after its `ok` (`session::late`).
+        _ => alarm::LATE_ERROR,
     }
 }
 
@@ -57,16 +60,6 @@ pub(super) fn report_alarm(e: MachineError, o: &mut Out<'_, impl Tx>) {
         let _ = reply::alarm(o, code);
     }
     let _ = write!(o, "[MSG:{e}]\r\n");
-}
-
-/// A queued command the executor refused after its line was acknowledged.
-pub(super) fn report_late(e: MachineError, line: u32, o: &mut Out<'_, impl Tx>) {
-    let _ = write!(o, "[MSG:line {line}: error {}: {e}]\r\n", e.code());
-    o.frame(&DeviceMsg::Error {
-        seq: Some(line),
-        line: Some(line),
-        code: e.code(),
-    });
 }
 
 /// G43 H or M6 named a tool the table does not have: it gets no offset.
@@ -322,7 +315,13 @@ impl<S: crate::seams::Storage> Device<S> {
                     return Err(Code::Locked.code());
                 }
                 if m.alarm().is_some() {
-                    let _ = self.cmds.push_back((0, Command::ClearAlarm));
+                    // Cleared now, not queued: the `ok` means unlocked, so
+                    // a line right behind `$X` in the same read is judged
+                    // unlocked (issue 35). In alarm the executor has
+                    // flushed everything and takes a command at once.
+                    m.submit(&Command::ClearAlarm, 0)
+                        .map_err(|_| Code::NotIdle.code())?;
+                    self.seen_alarm = None;
                     let _ = reply::msg(o, "Caution: Unlocked");
                 }
             }
@@ -390,6 +389,8 @@ impl<S: crate::seams::Storage> Device<S> {
         let (Some((e, f)), 1) = (end, count) else {
             return Err(bad);
         };
+        // Refused before its `ok` (GRBL's error 15), not as a late error.
+        m.check_soft(&e).map_err(|_| Code::JogTravel.code())?;
         let cmd = Command::Line {
             end: e,
             feed: Feed::PerMin(f),

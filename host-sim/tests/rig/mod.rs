@@ -5,7 +5,7 @@
 
 use host_sim::config::MachineConfig;
 use host_sim::device_sim::VirtualDevice;
-use host_sim::record::Discard;
+use host_sim::record::Recorder;
 use protocol::client::grbl::parse_status;
 
 /// The default machine, powered up at machine zero.
@@ -23,7 +23,7 @@ pub struct Rig<'r> {
 }
 
 impl<'r> Rig<'r> {
-    pub fn new(cfg: &MachineConfig, rec: &'r mut Discard) -> Self {
+    pub fn new(cfg: &MachineConfig, rec: &'r mut dyn Recorder) -> Self {
         let dev = VirtualDevice::new(cfg, rec);
         let mut r = Rig {
             dev,
@@ -93,5 +93,58 @@ impl<'r> Rig<'r> {
         assert_eq!(self.cmd(&format!("G1 X{x} F1000")), ["ok"]);
         let st = self.until_idle();
         assert_eq!(st.mpos, Some(vec![x, 0.0, 0.0, 0.0]));
+    }
+}
+
+/// One host message as it goes on the wire.
+pub fn frame(msg: &protocol::HostMsg) -> Vec<u8> {
+    let mut out = [0u8; protocol::frame::MAX_WIRE];
+    let n = protocol::frame::encode(msg, &mut out).expect("encode");
+    out[..n].to_vec()
+}
+
+/// A framed job line.
+pub fn line_frame(seq: u32, text: &str) -> Vec<u8> {
+    let text = protocol::LineText::from_slice(text.as_bytes()).expect("line fits");
+    frame(&protocol::HostMsg::Line { seq, text })
+}
+
+/// The device's frames in `bytes` (text before the first frame is skipped).
+pub fn device_msgs(bytes: &[u8]) -> Vec<protocol::DeviceMsg> {
+    bytes
+        .split(|b| *b == 0)
+        .filter(|f| !f.is_empty())
+        .filter_map(|f| protocol::frame::decode(&mut f.to_vec()).ok())
+        .collect()
+}
+
+impl Rig<'_> {
+    /// Switch the port to frames and shake hands; returns the sequence
+    /// number the device expects next.
+    pub fn go_framed(&mut self) -> u32 {
+        let _ = self.dev.take_output();
+        self.lines();
+        let mut hello = vec![0u8];
+        hello.extend(frame(&protocol::HostMsg::Hello {
+            version: protocol::PROTOCOL_VERSION,
+        }));
+        self.send(&hello);
+        let msgs = self.run_framed(2);
+        msgs.iter()
+            .find_map(|m| match m {
+                protocol::DeviceMsg::Welcome(i) => Some(i.next_seq),
+                _ => None,
+            })
+            .unwrap_or_else(|| panic!("no Welcome in {msgs:?}"))
+    }
+    /// Framed mode: `rounds` rounds, and the frames the device sent.
+    pub fn run_framed(&mut self, rounds: usize) -> Vec<protocol::DeviceMsg> {
+        let mut out = Vec::new();
+        for _ in 0..rounds {
+            let t = self.dev.sim.now() + self.step;
+            self.dev.advance_to(t);
+            out.extend(self.dev.take_output());
+        }
+        device_msgs(&out)
     }
 }

@@ -85,6 +85,9 @@ pub fn alarm_text(code: u16) -> String {
         alarm::HOMING_FAIL_APPROACH => "homing: switch not found",
         alarm::ESTOP => "e-stop pressed; release it",
         alarm::LINK_LOST => "host link lost while running",
+        alarm::LATE_ERROR => {
+            "a line was refused after its ok (the error above); nothing after it ran"
+        }
         _ => "alarm",
     };
     format!("{what}; the job stopped: unlock with $X or home with $H before moving again")
