@@ -102,6 +102,10 @@ struct Stats {
     blocks: u64,
     /// Stops where the planner ran empty waiting for a line (link or task time).
     starved: u32,
+    /// Steps per mm the recorder was last told of.
+    steps_per_mm: [f32; AXES],
+    /// Simulated work: step interrupts entered and task passes run.
+    work: u64,
 }
 
 fn kind(k: PathKind) -> MoveKind {
@@ -158,6 +162,7 @@ impl<'r> Sim<'r> {
                 s.axes.map(|a| a.steps_per_mm),
                 s.axes.map(|a| a.max_rate),
             ),
+            steps_per_mm: s.axes.map(|a| a.steps_per_mm),
             ..Stats::default()
         };
         Sim {
@@ -189,6 +194,12 @@ impl<'r> Sim<'r> {
     }
     pub fn tick_hz(&self) -> u32 {
         self.cfg.tick_hz
+    }
+    /// Simulated work so far: step interrupts entered and parse/plan task
+    /// passes run. A measure of host effort that does not depend on how
+    /// loaded the host is (the fuzz targets bound it per input).
+    pub fn work(&self) -> u64 {
+        self.stats.work
     }
     /// Errors so far.
     pub fn errors(&self) -> &[RunError] {
@@ -400,6 +411,11 @@ fn note(stats: &mut Stats, rec: &mut dyn Recorder, n: Note) {
         Note::Probed { position, .. } => {
             stats.last_path = Some(position);
         }
+        Note::Move {
+            line,
+            start,
+            geometry,
+        } => rec.motion(line, start, &geometry),
         Note::Homed { .. } => {}
         Note::Executed { .. } => {}
     }
