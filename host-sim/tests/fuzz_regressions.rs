@@ -79,20 +79,37 @@ fn envelope_passes_in_bounds_programs() {
                 G81 X-70 Y-70 Z-8 R-6 F300\nG80\nG0 X-1 Y-1 Z-1\n";
     let n = envelope(arcs, 60.0);
     assert!(n > 5_000, "only {n} step events checked");
-    let dir = root().join("host-sim/jobs");
-    let mut files: Vec<_> = std::fs::read_dir(dir).expect("jobs").flatten().collect();
+    let mut files = Vec::new();
+    files_under(&root().join("host-sim/jobs"), &mut files);
     let shared = root().join("../shared/corpus");
-    match std::fs::read_dir(&shared) {
-        Ok(rd) => files.extend(rd.flatten()),
-        Err(_) => eprintln!("{}: not found, skipped", shared.display()),
+    if shared.is_dir() {
+        files_under(&shared, &mut files);
+    } else {
+        eprintln!("{}: not found, skipped", shared.display());
     }
-    for e in files {
-        let Ok(text) = std::fs::read_to_string(e.path()) else {
+    for p in files {
+        let Ok(text) = std::fs::read_to_string(&p) else {
             continue;
         };
         let head: String = text.lines().take(150).flat_map(|l| [l, "\n"]).collect();
-        eprintln!("envelope: {}", e.path().display());
-        envelope(&head, 20.0);
+        let n = envelope(&head, 20.0);
+        eprintln!("envelope: {}: {n} step events", p.display());
+    }
+}
+
+fn files_under(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
+    let mut entries: Vec<_> = std::fs::read_dir(dir)
+        .expect("a directory")
+        .flatten()
+        .map(|e| e.path())
+        .collect();
+    entries.sort();
+    for p in entries {
+        if p.is_dir() {
+            files_under(&p, out);
+        } else {
+            out.push(p);
+        }
     }
 }
 
@@ -117,19 +134,21 @@ fn issue_35_short_arc_on_a_huge_radius_stays_in_its_box() {
 /// The runaway seeds of the fuzz targets (`xtask/src/fuzz_seeds.rs`
 /// `RUNAWAY`, kept as inputs in `firmware/fuzz/known/<target>/`) pass the
 /// targets' checks. Once the arc fix lands, un-ignore this and move the
-/// inputs to `firmware/fuzz/regressions/<target>/`.
+/// inputs to `firmware/fuzz/regressions/<target>/` (it reads both).
 #[test]
 #[ignore = "un-ignore once arc fix lands (issue 35 item 1): fails on the arc code of this branch"]
 fn fuzz_arc_runaway_seeds_stay_in_their_box() {
     let mut n = 0;
     for name in ["device", "executor"] {
         let f = host_sim::fuzz::target(name).expect("target");
-        let dir = root().join("firmware/fuzz/known").join(name);
-        for e in std::fs::read_dir(&dir).expect("known inputs").flatten() {
-            if e.file_name().to_string_lossy().starts_with("arc-runaway") {
-                eprintln!("{name}: {}", e.path().display());
-                f(&std::fs::read(e.path()).expect("input"));
-                n += 1;
+        for kind in ["known", "regressions"] {
+            let dir = root().join("firmware/fuzz").join(kind).join(name);
+            for e in std::fs::read_dir(&dir).expect("fuzz inputs").flatten() {
+                if e.file_name().to_string_lossy().starts_with("arc-runaway") {
+                    eprintln!("{name}: {}", e.path().display());
+                    f(&std::fs::read(e.path()).expect("input"));
+                    n += 1;
+                }
             }
         }
     }
