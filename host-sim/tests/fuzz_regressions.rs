@@ -62,7 +62,7 @@ fn fuzz_gcode_line_preludes() {
 /// default machine (80 steps/mm); returns the step events checked.
 fn envelope(text: &str, max_s: f64) -> u64 {
     let cfg = host_sim::config::MachineConfig::default();
-    host_sim::fuzz::envelope::run_gcode(&cfg, text.as_bytes(), max_s)
+    host_sim::fuzz::envelope::run_gcode(&cfg, text.as_bytes(), max_s).0
 }
 
 /// The envelope check passes in-bounds programs: arcs of both directions,
@@ -111,6 +111,33 @@ fn files_under(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
             out.push(p);
         }
     }
+}
+
+/// Homing (G28 with `$210=1`, switches at 0: seek, pull-off, the position
+/// redefined), probing that trips and ramps down past the plate, and
+/// moves after both stay in the envelope.
+#[test]
+fn envelope_passes_homing_and_probing() {
+    use host_sim::config::{LimitSwitch, ProbeSurface};
+    let mut cfg = host_sim::config::MachineConfig::default();
+    let sw = Some(LimitSwitch {
+        trip_mm: 0.0,
+        hysteresis_mm: 0.05,
+    });
+    cfg.limits = [sw, sw, sw, None];
+    cfg.probe = Some(ProbeSurface {
+        axis: 2,
+        trip_mm: -20.0,
+        towards_negative: true,
+    });
+    cfg.settings.homing_enable = true;
+    cfg.settings.g28_homes = true;
+    cfg.start_position_mm = [-40.0, -30.0, -10.0, 0.0];
+    let prog = "G21 G90\nG28\nG0 X-20 Y-20 Z-5\nG38.2 Z-30 F300\nG0 Z-5\n\
+                G38.3 Z-25 F600\nG0 Z-2\nG1 X-30 Y-10 F2000\nG28 X\nG0 X-5 Y-5\n";
+    let (n, errors) = host_sim::fuzz::envelope::run_gcode(&cfg, prog.as_bytes(), 30.0);
+    assert!(errors.is_empty(), "{errors:?}");
+    assert!(n > 10_000, "only {n} step events checked");
 }
 
 /// Issue 35's runaway as reported (on 80 steps/mm the 0.01 mm chord does

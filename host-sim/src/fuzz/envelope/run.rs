@@ -9,12 +9,13 @@ use burin::interp::Interpreter;
 use super::{Envelope, EnvelopeRec};
 use crate::config::MachineConfig;
 use crate::engine::Sim;
+use crate::record::RunError;
 
 /// Runs `text` on `cfg` for at most `max_s` of virtual time per stretch
 /// (the program, or up to a line that needs the machine to stop), and
 /// panics as the fuzz targets do when a step leaves the commanded box.
-/// Returns the step events checked.
-pub fn run_gcode(cfg: &MachineConfig, text: &[u8], max_s: f64) -> u64 {
+/// Returns the step events checked and the errors the run met.
+pub fn run_gcode(cfg: &MachineConfig, text: &[u8], max_s: f64) -> (u64, Vec<RunError>) {
     let env = RefCell::new(Envelope::new(cfg.settings.axes.map(|a| a.steps_per_mm)));
     let mut rec = EnvelopeRec(&env);
     let mut sim = Sim::new(cfg, &mut rec);
@@ -41,7 +42,8 @@ pub fn run_gcode(cfg: &MachineConfig, text: &[u8], max_s: f64) -> u64 {
         }
     }
     run(&mut sim);
+    let errors = sim.errors().to_vec();
     drop(sim);
     let checked = env.borrow().checked;
-    checked
+    (checked, errors)
 }
