@@ -154,10 +154,9 @@ pub fn executor(data: &[u8]) {
     let mut sim = Sim::new(&cfg, &mut tee);
     env.borrow_mut().settle(sim.rt.position());
     it.set_machine_position(sim.machine.commanded_position());
-    let mut lines = 0u32;
-    for line in b.rest().split(|&c| c == b'\n').take(MAX_LINES) {
-        lines += 1;
-        let _ = it.execute_line(line, &mut |c| sim.push_command(lines, c));
+    for (i, line) in b.rest().split(|&c| c == b'\n').take(MAX_LINES).enumerate() {
+        let n = i as u32 + 1;
+        let _ = it.execute_line(line, &mut |c| sim.push_command(n, c));
         if it.needs_sync() {
             // The engine runs ahead of nothing here: finish, then sync.
             run(&mut sim, tick_hz, &count, &env);

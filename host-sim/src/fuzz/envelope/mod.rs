@@ -228,15 +228,7 @@ impl Envelope {
             }
         }
         if let Some(a) = &mut self.allowed {
-            let b = bounds;
-            for i in 0..AXES {
-                a[i].0 = a[i]
-                    .0
-                    .min(b.lo[i] * self.spm[i] - slack(b.lo[i] * self.spm[i]));
-                a[i].1 = a[i]
-                    .1
-                    .max(b.hi[i] * self.spm[i] + slack(b.hi[i] * self.spm[i]));
-            }
+            widen(a, &bounds, &self.spm);
         }
     }
 
@@ -253,17 +245,13 @@ impl Envelope {
         let mut a = [(f64::INFINITY, f64::NEG_INFINITY); AXES];
         let boxes = self.window.iter().map(|e| &e.bounds).chain(&self.folded);
         for b in boxes {
-            for i in 0..AXES {
-                let (lo, hi) = (b.lo[i] * self.spm[i], b.hi[i] * self.spm[i]);
-                a[i].0 = a[i].0.min(lo - slack(lo));
-                a[i].1 = a[i].1.max(hi + slack(hi));
-            }
+            widen(&mut a, b, &self.spm);
         }
         if let Some((p, steps)) = self.anchor {
-            for i in 0..AXES {
+            for (i, r) in a.iter_mut().enumerate() {
                 let v = f64::from(p[i]) * self.spm[i];
-                a[i].0 = a[i].0.min(v - steps - slack(v) + 1.0);
-                a[i].1 = a[i].1.max(v + steps + slack(v) - 1.0);
+                r.0 = r.0.min(v - steps - slack(v) + 1.0);
+                r.1 = r.1.max(v + steps + slack(v) - 1.0);
             }
         }
         a
@@ -306,6 +294,15 @@ impl Envelope {
              anchor {:?}; last moves committed (line, start, move): {:?}",
             pos[axis], mm[axis], allowed[axis].0, allowed[axis].1, self.anchor, self.recent
         );
+    }
+}
+
+/// Widen allowed step ranges to take in `b` (mm) with its slack.
+fn widen(a: &mut [(f64, f64); AXES], b: &Bounds, spm: &[f64; AXES]) {
+    for (i, (r, s)) in a.iter_mut().zip(spm).enumerate() {
+        let (lo, hi) = (b.lo[i] * s, b.hi[i] * s);
+        r.0 = r.0.min(lo - slack(lo));
+        r.1 = r.1.max(hi + slack(hi));
     }
 }
 
