@@ -140,6 +140,41 @@ fn envelope_passes_homing_and_probing() {
     assert!(n > 10_000, "only {n} step events checked");
 }
 
+/// On the virtual board: jogs, a jog cancel and a soft reset mid-move (the
+/// moves they cut short stay in the window), `$X` and a move after, with
+/// the device target's envelope recorder; every step is checked.
+#[test]
+fn envelope_passes_jogs_and_resets_on_the_board() {
+    use host_sim::fuzz::envelope::{Envelope, EnvelopeRec};
+    use std::cell::RefCell;
+    let cfg = host_sim::config::MachineConfig::default();
+    let env = RefCell::new(Envelope::new(cfg.settings.axes.map(|a| a.steps_per_mm)));
+    let mut rec = EnvelopeRec(&env);
+    let mut dev = host_sim::device_sim::VirtualDevice::new(&cfg, &mut rec);
+    env.borrow_mut().settle(dev.position_steps());
+    let ms = u64::from(cfg.tick_hz) / 1000;
+    let mut wait = |dev: &mut host_sim::device_sim::VirtualDevice, t: u64| {
+        let end = dev.sim.now() + t * ms;
+        dev.advance_to(end);
+    };
+    for (bytes, t) in [
+        (&b"$J=G91 X-20 F1200\n"[..], 300),
+        (&[0x85][..], 500),
+        (&b"$J=G91 Y-10 Z-5 F900\n"[..], 200),
+        (&[0x18][..], 300),
+        (&b"$X\n"[..], 50),
+        (&b"G90 G0 X-30 Y-30\nG2 X-20 Y-30 R5 F1500\n"[..], 4000),
+    ] {
+        dev.receive(bytes);
+        wait(&mut dev, t);
+    }
+    let out = String::from_utf8_lossy(&dev.take_output()).to_string();
+    assert!(out.contains("ALARM:3"), "the reset met no motion: {out}");
+    assert_eq!(dev.position_steps()[..2], [-1600, -2400], "{out}");
+    let n = env.borrow().checked;
+    assert!(n > 3_000, "only {n} step events checked");
+}
+
 /// Issue 35's runaway as reported (on 80 steps/mm the 0.01 mm chord does
 /// not round to the start's steps): the arc leaves its box (the chord and
 /// its sagitta) at once when run as a 30 m circle.
