@@ -1,6 +1,7 @@
 //! The motion envelope check of the `device` and `executor` targets: the
 //! machine never steps outside the axis-aligned box of the moves it was
-//! commanded, plus one step per axis, whether or not the input ends idle.
+//! commanded, plus one step per axis (two around the end of a move it has
+//! finished), whether or not the input ends idle.
 //!
 //! The moves are the executor's own account of what it committed to
 //! ([`burin::executor::Note::Move`]: machine mm, an arc or spline as
@@ -8,8 +9,10 @@
 //! virtual hardware's step events, so nothing here trusts the segmenter,
 //! the planner or the preparer it checks. An arc's box is computed here
 //! from its centre, radius and sweep (so a short arc run as a full circle,
-//! issue 35, leaves it after about one step); a spline's is its control
-//! polygon's, which holds the curve.
+//! issue 35, is caught a few steps past its end); a spline's is its
+//! control polygon's, which holds the curve. Only an arc whose start and
+//! end round to the same steps may be a full circle: the arc code must not
+//! take more than that for one (a coupling with issue 35's arc fix).
 //!
 //! Which moves may be running: those committed since the machine was last
 //! seen at rest ([`Envelope::settle`]), less those it has finished. A move
