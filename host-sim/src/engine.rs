@@ -104,6 +104,10 @@ struct Stats {
     blocks: u64,
     /// Stops where the planner ran empty waiting for a line (link or task time).
     starved: u32,
+    /// Steps per mm the recorder was last told of.
+    steps_per_mm: [f32; AXES],
+    /// Simulated work: step interrupts entered and task passes run.
+    work: u64,
 }
 
 fn kind(k: PathKind) -> MoveKind {
@@ -160,6 +164,7 @@ impl<'r> Sim<'r> {
                 s.axes.map(|a| a.steps_per_mm),
                 s.axes.map(|a| a.max_rate),
             ),
+            steps_per_mm: s.axes.map(|a| a.steps_per_mm),
             ..Stats::default()
         };
         Sim {
@@ -191,6 +196,12 @@ impl<'r> Sim<'r> {
     }
     pub fn tick_hz(&self) -> u32 {
         self.cfg.tick_hz
+    }
+    /// Simulated work so far: step interrupts entered and parse/plan task
+    /// passes run. A measure of host effort that does not depend on how
+    /// loaded the host is (the fuzz targets bound it per input).
+    pub fn work(&self) -> u64 {
+        self.stats.work
     }
     /// Errors so far.
     pub fn errors(&self) -> &[RunError] {
@@ -402,6 +413,11 @@ fn note(stats: &mut Stats, rec: &mut dyn Recorder, n: Note) {
         Note::Probed { position, .. } => {
             stats.last_path = Some(position);
         }
+        Note::Move {
+            line,
+            start,
+            geometry,
+        } => rec.motion(line, start, &geometry),
         Note::Homed { .. } => {}
         Note::Executed { .. } => {}
     }

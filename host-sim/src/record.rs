@@ -3,6 +3,7 @@
 //! held in memory. Writers for CSV traces, VCD, SVG plots and the JSON summary
 //! implement this trait; several can be chained with [`Tee`].
 
+use burin::executor::Geometry;
 use burin::AXES;
 
 /// One step-timer event that changed an output: after it, the axes stand at `pos`.
@@ -107,6 +108,12 @@ pub trait Recorder {
     fn commanded(&mut self, _line: u32, _kind: MoveKind, _to_mm: [f32; AXES]) {}
     /// The same path as [`commanded`](Self::commanded), with speeds and stops.
     fn path(&mut self, _ev: &PathEvent) {}
+    /// The executor committed to a move from `start` (machine mm), before
+    /// planning it: an arc or spline as commanded, not its chords.
+    fn motion(&mut self, _line: u32, _start: [f32; AXES], _geometry: &Geometry) {}
+    /// Steps per mm changed (`$100`-`$103`, only while idle): step positions
+    /// after this count in the new scale (the position was redefined).
+    fn rescaled(&mut self, _steps_per_mm: [f32; AXES]) {}
     /// Commanded path speed at `tick`, recorded whenever it changes.
     fn velocity(&mut self, _tick: u64, _mm_per_min: f32) {}
     fn finish(&mut self, _summary: &Summary) -> std::io::Result<()> {
@@ -138,6 +145,14 @@ impl Recorder for Tee<'_> {
     }
     fn path(&mut self, ev: &PathEvent) {
         self.0.iter_mut().for_each(|r| r.path(ev));
+    }
+    fn motion(&mut self, line: u32, start: [f32; AXES], geometry: &Geometry) {
+        self.0
+            .iter_mut()
+            .for_each(|r| r.motion(line, start, geometry));
+    }
+    fn rescaled(&mut self, steps_per_mm: [f32; AXES]) {
+        self.0.iter_mut().for_each(|r| r.rescaled(steps_per_mm));
     }
     fn velocity(&mut self, tick: u64, mm_per_min: f32) {
         self.0.iter_mut().for_each(|r| r.velocity(tick, mm_per_min));

@@ -93,6 +93,38 @@ fn device_ops(d: &[u8]) -> Vec<u8> {
     out
 }
 
+/// Issue 35's runaway, on the fuzz targets' machine (5 steps/mm, at
+/// X-10 Y-10): a short arc on a huge radius, which the arc code before the
+/// fix ran as a full circle. The chord is 1 mm (5 steps: start and end do
+/// not round to the same steps, so no reading of it is a full circle), as
+/// the issue's 0.01 mm chord rounds to the start's steps on this machine.
+/// Each line waits for the one before to finish (the device target's
+/// seed adds the time), so the arc runs from a known point.
+pub const RUNAWAY: &[&str] = &[
+    "G21 G90 G53 G0 X-15 Y-15\nG17 G91 G2 X1 Y0 R3000000 F600\n",
+    "G17 G91 G2 X1 Y0 I0.5 J-3000000 F600\n",
+    "G17 G91 G3 X1 Y0 I0.5 J3000000 F600\n",
+];
+
+/// A runaway as device ops: each line, then `wait_ms` of virtual time.
+pub fn device_runaway(text: &str, wait_ms: u32) -> Vec<u8> {
+    let mut out = Vec::new();
+    for l in text.lines() {
+        out.extend_from_slice(&[0, (l.len() + 1) as u8]);
+        out.extend_from_slice(l.as_bytes());
+        out.push(b'\n');
+        for _ in 0..wait_ms / 39 {
+            out.extend_from_slice(&[11, 39]);
+        }
+    }
+    out
+}
+
+/// A runaway as the executor target's input (flags 0: no soft limits).
+pub fn executor_runaway(text: &str) -> Vec<u8> {
+    [&[0u8][..], text.as_bytes()].concat()
+}
+
 const SETTINGS: &[&str] = &[
     "$$\n$100=5\n$110=3000\n$120=50\n$130=20\n",
     "$0=10\n$1=255\n$11=0.5\n$12=0.1\n$202=1\n$203=100\n$201=1000\n",
@@ -131,8 +163,13 @@ pub fn write(target: &str) -> Result<PathBuf> {
         "executor" => texts
             .iter()
             .map(|t| [&[0u8][..], &first_lines(t, 24)].concat())
+            .chain(RUNAWAY.iter().map(|t| executor_runaway(t)))
             .collect(),
-        "device" => texts.iter().map(|t| device_ops(t)).collect(),
+        "device" => texts
+            .iter()
+            .map(|t| device_ops(t))
+            .chain(RUNAWAY.iter().map(|t| device_runaway(t, 2000)))
+            .collect(),
         "settings" => SETTINGS
             .iter()
             .map(|s| [&[0u8, 8, 8, 8, 1][..], s.as_bytes()].concat())

@@ -16,7 +16,7 @@ pub use homing::Homing;
 pub use script::ToolEvent;
 
 use crate::arc::{ArcChords, SplineChords};
-use crate::command::{AxisMask, Command, Feed, Pos, ProbeKind};
+use crate::command::{Arc, AxisMask, Command, Feed, Pos, ProbeKind, Spline};
 use crate::planner::{Curve, Planner, Speed, Watch};
 use crate::realtime::{Realtime, Trip};
 use crate::settings::{RapidMode, Settings};
@@ -40,9 +40,28 @@ pub enum PathKind {
     Home,
 }
 
+/// A move's geometry as commanded, before arcs and splines become chords.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Geometry<'a> {
+    /// A line, rapid (independent legs included: they stay within its
+    /// box), probing or homing move, straight to here.
+    Straight(&'a Pos),
+    Arc(&'a Arc),
+    Spline(&'a Spline),
+}
+
 /// Things the executor reports as they happen.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Note<'a> {
+    /// The executor committed to a move from `start`, before any of it is
+    /// planned. The fuzz targets check every step against these (an arc's
+    /// box with its bulge), so the check does not trust the segmenter or
+    /// the planner it checks.
+    Move {
+        line: u32,
+        start: Pos,
+        geometry: Geometry<'a>,
+    },
     /// A straight piece of commanded path was planned, ending here (mm),
     /// at this requested speed (references such as bench-motion's time
     /// bound replan the job from these).
@@ -318,6 +337,11 @@ impl<const N: usize> Machine<N> {
         obs: &mut dyn FnMut(Note),
     ) -> Result<(), MachineError> {
         self.planner.push_line_mm(end, speed, watch, line)?;
+        obs(Note::Move {
+            line,
+            start: self.commanded,
+            geometry: Geometry::Straight(end),
+        });
         self.commanded = *end;
         obs(Note::Path {
             line,

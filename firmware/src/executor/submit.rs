@@ -47,6 +47,11 @@ impl<const N: usize> Machine<N> {
                 self.check_soft(end, end)?;
                 if self.planner.settings.rapid_mode == RapidMode::Independent {
                     let (pts, n) = self.rapid_legs(end);
+                    obs(Note::Move {
+                        line,
+                        start: self.commanded,
+                        geometry: Geometry::Straight(end),
+                    });
                     self.pending = Pending::Chords {
                         chords: Chords::Legs { pts, n, i: 0 },
                         speed: Speed::Rapid,
@@ -74,6 +79,11 @@ impl<const N: usize> Machine<N> {
                 let (lo, hi) = ch.bounds();
                 self.check_soft(&lo, &hi)?;
                 let speed = self.chord_speed(a.feed, Chords::Arc(ch.clone()))?;
+                obs(Note::Move {
+                    line,
+                    start: self.commanded,
+                    geometry: Geometry::Arc(a),
+                });
                 self.pending = Pending::Chords {
                     chords: Chords::Arc(ch),
                     speed,
@@ -86,6 +96,11 @@ impl<const N: usize> Machine<N> {
                 let (lo, hi) = ch.bounds();
                 self.check_soft(&lo, &hi)?;
                 let speed = self.chord_speed(sp.feed, Chords::Spline(ch.clone()))?;
+                obs(Note::Move {
+                    line,
+                    start: self.commanded,
+                    geometry: Geometry::Spline(sp),
+                });
                 self.pending = Pending::Chords {
                     chords: Chords::Spline(ch),
                     speed,

@@ -14,6 +14,7 @@ impl Sim<'_> {
     /// Prio 3: one step interrupt (a kick, a rise or a fall, see
     /// `burin::stepper::driver`), then what its pin stores did.
     pub(super) fn step_event(&mut self) {
+        self.stats.work += 1;
         let underruns = self.rt.underruns();
         let was_running = self.driver.is_running();
         self.hw.enter(self.now);

@@ -30,6 +30,7 @@ impl Sim<'_> {
             self.task_wanted = true;
             return;
         }
+        self.stats.work += 1;
         self.task.send(&mut self.lines, self.now);
         let blocks0 = self.stats.blocks;
         let costed = self.task.costed();
@@ -209,6 +210,12 @@ impl Sim<'_> {
                 }
             }
         });
+        self.stats.work += 1;
+        let spm = self.machine.settings().axes.map(|a| a.steps_per_mm);
+        if spm != self.stats.steps_per_mm {
+            self.stats.steps_per_mm = spm;
+            self.rec.rescaled(spm);
+        }
         let s = t.controller.session.stats;
         let lines = (s.lines_ok + s.lines_err).wrapping_sub(stats0.lines_ok + stats0.lines_err);
         let cost = self

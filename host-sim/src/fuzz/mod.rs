@@ -10,6 +10,7 @@
 //! targets still run usefully; turn one on when its issue is fixed.
 
 mod device;
+pub mod envelope;
 mod executor;
 mod gcode;
 mod protocol;

@@ -15,13 +15,18 @@
 //!   back within one session of the link;
 //! * nothing acknowledged is lost: a framed line that was acked, of a kind
 //!   that always queues a command, is in the executor's log at the end,
-//!   unless a reset, port close, error or alarm came after its ack.
+//!   unless a reset, port close, error or alarm came after its ack;
+//! * no step leaves the box of the moves committed ([`super::envelope`]),
+//!   at every step, whether or not the input ends idle.
 
 use burin::link::LinkMode;
 use protocol::frame::{self, FrameDecoder, MAX_WIRE};
 use protocol::msg::{DeviceMsg, HostMsg, LineText};
 use protocol::Rt;
 
+use std::cell::RefCell;
+
+use super::envelope::{Envelope, EnvelopeRec};
 use super::Bytes;
 use crate::config::HostModel;
 use crate::device_sim::VirtualDevice;
@@ -72,6 +77,8 @@ const RT_FRAMES: &[Rt] = &[
 
 struct Harness<'d, 'r> {
     dev: &'d mut VirtualDevice<'r>,
+    /// The motion envelope, told whenever the device is seen at rest.
+    env: &'d RefCell<Envelope>,
     ms: u64,
     dec: FrameDecoder,
     /// Next sequence number the device asked for (from its acks).
@@ -301,6 +308,9 @@ impl Harness<'_, '_> {
             }
         }
         self.read_output();
+        if self.dev.idle() {
+            self.env.borrow_mut().settle(self.dev.position_steps());
+        }
     }
 
     /// Let queued work finish, then check no acked counting line was lost.
@@ -362,12 +372,15 @@ pub fn device(data: &[u8]) {
     let mut cfg = super::executor::small_machine(false, false);
     cfg.host = HostModel::INSTANT;
     cfg.start_position_mm = [-10.0, -10.0, -1.0, 0.0];
-    let mut rec = Discard;
+    let env = RefCell::new(Envelope::new(cfg.settings.axes.map(|a| a.steps_per_mm)));
+    let mut rec = EnvelopeRec(&env);
     let mut dev = VirtualDevice::with_flash(&cfg, &mut rec, booted_flash(&cfg));
+    env.borrow_mut().settle(dev.position_steps());
     dev.log = Some(Vec::new());
     dev.tx.0.clear();
     let mut h = Harness {
         dev: &mut dev,
+        env: &env,
         ms: u64::from(cfg.tick_hz) / 1000,
         dec: FrameDecoder::new(),
         next_seq: 1,
