@@ -179,7 +179,6 @@ fn envelope_passes_jogs_and_resets_on_the_board() {
 /// not round to the start's steps): the arc leaves its box (the chord and
 /// its sagitta) at once when run as a 30 m circle.
 #[test]
-#[ignore = "un-ignore once arc fix lands (issue 35 item 1): fails on the arc code of this branch"]
 fn issue_35_short_arc_on_a_huge_radius_stays_in_its_box() {
     for arc in [
         "G2 X0.01 Y0 R30000",
@@ -195,10 +194,9 @@ fn issue_35_short_arc_on_a_huge_radius_stays_in_its_box() {
 
 /// The runaway seeds of the fuzz targets (`xtask/src/fuzz_seeds.rs`
 /// `RUNAWAY`, kept as inputs in `firmware/fuzz/known/<target>/`) pass the
-/// targets' checks. Once the arc fix lands, un-ignore this and move the
-/// inputs to `firmware/fuzz/regressions/<target>/` (it reads both).
+/// targets' checks (they are in `firmware/fuzz/regressions/<target>/`
+/// since the arc fix; `known/` is read too).
 #[test]
-#[ignore = "un-ignore once arc fix lands (issue 35 item 1): fails on the arc code of this branch"]
 fn fuzz_arc_runaway_seeds_stay_in_their_box() {
     let mut n = 0;
     for name in ["device", "executor"] {

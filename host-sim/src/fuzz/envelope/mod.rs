@@ -97,8 +97,8 @@ impl Committed {
 
 /// `(box, finishes at its end)` of a move from `start`. `spm`: steps per
 /// mm, for the one judgement that needs the machine's resolution: an arc
-/// whose start and end round to the same steps in its plane may be taken
-/// as a full circle (RS274NGC's full circle, written with an end that
+/// whose start and end round to the same steps in its plane, or lie
+/// closer than half its finest step, may be taken as a full circle (RS274NGC's full circle, written with an end that
 /// differs from the start by rounding only).
 pub fn move_bounds(start: &Pos, m: &Committed, spm: &[f64; AXES]) -> (Bounds, bool) {
     let mut b = Bounds::point(start);
@@ -135,8 +135,15 @@ fn arc_bulge(start: &Pos, a: &Arc, spm: &[f64; AXES]) -> (Bounds, bool) {
         return (b, false);
     }
     let cell = |i: usize, v: f32| (f64::from(v) * spm[i]).round();
-    let coincide =
-        cell(ia, start[ia]) == cell(ia, a.end[ia]) && cell(ib, start[ib]) == cell(ib, a.end[ib]);
+    // A full circle is allowed where the machine cannot tell start from
+    // end: the same steps, or closer than half the plane's finest step
+    // (the arc code's rule, `burin::arc::same_point`, is within both).
+    let half_step = 0.5 / spm[ia].max(spm[ib]);
+    let chord = (f64::from(a.end[ia]) - f64::from(start[ia]))
+        .hypot(f64::from(a.end[ib]) - f64::from(start[ib]));
+    let coincide = (cell(ia, start[ia]) == cell(ia, a.end[ia])
+        && cell(ib, start[ib]) == cell(ib, a.end[ib]))
+        || chord < half_step;
     let (t0, t1) = (s.1.atan2(s.0), e.1.atan2(e.0));
     // Angle swept in the arc's own direction, in (0, 2π].
     let fwd = match a.dir {
