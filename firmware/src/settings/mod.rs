@@ -162,13 +162,23 @@ impl ToolChange {
 
 impl Default for Settings {
     fn default() -> Self {
-        let axis = |steps: f32, rate: f32, accel: f32, travel: f32| AxisSettings {
-            steps_per_mm: steps,
-            max_rate: rate,
-            max_accel: accel,
-            max_travel: travel,
-        };
-        Settings {
+        Self::DEFAULT
+    }
+}
+
+const fn axis(steps: f32, rate: f32, accel: f32, travel: f32) -> AxisSettings {
+    AxisSettings {
+        steps_per_mm: steps,
+        max_rate: rate,
+        max_accel: accel,
+        max_travel: travel,
+    }
+}
+
+impl Settings {
+    /// The defaults, as a constant: the board's machine slot is a static
+    /// built from them at compile time (`Machine::placeholder`).
+    pub const DEFAULT: Settings = Settings {
             step_pulse_us: 2.0,
             idle_delay_ms: 25,
             step_invert: 0,
@@ -209,6 +219,5 @@ impl Default for Settings {
             report_axes: AXES as u8,
             g28_homes: false,
             tool_change: ToolChange::DEFAULT,
-        }
-    }
+        };
 }
