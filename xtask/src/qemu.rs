@@ -188,6 +188,7 @@ fn offline_end() -> Result<([i64; 4], [f64; 4])> {
 pub fn run() -> Result<i32> {
     let elf = build_bin("burin-fw", &["board-qemu"])?;
     ensure_installed()?;
+    image::check_fault_layout(&elf)?;
     let (bottom, top) = image::stack_region(&elf)?;
     let dir = elf.parent().context("ELF path has no directory")?;
     let sock = dir.join("qemu-monitor.sock");
@@ -260,14 +261,15 @@ fn drills(elf: &Path, dir: &Path) -> Result<()> {
         let mut cmd = command(elf);
         cmd.args(drill::args(d, &log));
         let said = drill::run_until_fault(cmd, Duration::from_secs(30))?;
-        let report = drill::report(&said)
-            .with_context(|| format!("{d:?}: no fault line in {said:?}"))?;
+        let report =
+            drill::report(&said).with_context(|| format!("{d:?}: no fault line in {said:?}"))?;
         let stores = std::fs::read_to_string(&log)
             .with_context(|| format!("reading QEMU's store log {}", log.display()))?;
         drill::check(d, &report, &stores)?;
         println!(
-            "drill {d:?}: outputs, drivers (under $4=1) and the step timer off; \
-             motion pins at their $2/$3/$4 idle levels from boot; {report:?}"
+            "drill {d:?}: outputs, drivers (under $4=1) and the step timer off; motion pins \
+             at their $2/$3/$4 idle levels from boot; fault with sp={:#010x} cfsr={:#010x}",
+            report.sp, report.cfsr
         );
     }
     Ok(())
@@ -386,7 +388,7 @@ mod tests {
             let text = std::fs::read_to_string(crate::util::root().join("firmware").join(file))
                 .expect("memory file");
             text.lines()
-                .find(|l| l.trim_start().starts_with("STACK"))
+                .find(|l| l.trim_start().starts_with("STACK") && l.contains("ORIGIN"))
                 .map(|l| l.split_whitespace().collect::<Vec<_>>().join(" "))
         };
         let f401 = stack("memory-f401.x");

@@ -47,7 +47,10 @@ impl Drill {
 pub fn args(drill: Drill, log: &Path) -> Vec<String> {
     vec![
         "-device".into(),
-        format!("loader,addr={DRILL_ADDR:#x},data={:#x},data-len=4", drill.word()),
+        format!(
+            "loader,addr={DRILL_ADDR:#x},data={:#x},data-len=4",
+            drill.word()
+        ),
         "-device".into(),
         format!("loader,addr={BOOT_ADDR:#x},data={BOOT_WORD:#x},data-len=4"),
         "-d".into(),
@@ -207,7 +210,9 @@ pub fn check_fault_stores(stores: &[Store]) -> Result<()> {
     let ccr1 = tim1.iter().rfind(|s| s.offset == 0x34).map(|s| s.value);
     let ccmr1 = tim1.iter().rfind(|s| s.offset == 0x18).map(|s| s.value);
     if ccr1 != Some(0) || ccmr1.is_none_or(|v| (v >> 4) & 0b111 != 0b100) {
-        bail!("TIM1 after the fault: CCR1 {ccr1:?}, CCMR1 {ccmr1:?} (want 0 and OC1M force inactive)");
+        bail!(
+            "TIM1 after the fault: CCR1 {ccr1:?}, CCMR1 {ccmr1:?} (want 0 and OC1M force inactive)"
+        );
     }
     Ok(())
 }
@@ -262,7 +267,11 @@ mod tests {
                 tim5_dier: 0
             })
         );
-        let log = [w("GPIOB", 0x18, 0x1000), "GPIOB: unimplemented device read (size 4, offset 0x000)".into()].join("\n");
+        let log = [
+            w("GPIOB", 0x18, 0x1000),
+            "GPIOB: unimplemented device read (size 4, offset 0x000)".into(),
+        ]
+        .join("\n");
         assert_eq!(
             stores(&log),
             vec![Store {
@@ -286,19 +295,40 @@ mod tests {
         let bad = [moder_all_outputs(), w("GPIOB", 0x18, idle), fault.clone()].join("\n");
         assert!(check_boot_levels(&stores(&bad)).is_err());
         // A later store of the default levels (no inverts) is caught too.
-        let later = [w("GPIOB", 0x18, idle), moder_all_outputs(), w("GPIOB", 0x18, 1 << 8), fault].join("\n");
+        let later = [
+            w("GPIOB", 0x18, idle),
+            moder_all_outputs(),
+            w("GPIOB", 0x18, 1 << 8),
+            fault,
+        ]
+        .join("\n");
         assert!(check_boot_levels(&stores(&later)).is_err());
     }
 
     #[test]
     fn fault_stores_must_come_last() {
-        let ok = [w("GPIOB", 0x18, 0x0701_0000), w("TIM1", 0x34, 0), w("TIM1", 0x18, 0x48)].join("\n");
+        let ok = [
+            w("GPIOB", 0x18, 0x0701_0000),
+            w("TIM1", 0x34, 0),
+            w("TIM1", 0x18, 0x48),
+        ]
+        .join("\n");
         assert!(check_fault_stores(&stores(&ok)).is_ok());
         // Drivers left on (PB8 not reset under `$4=1`).
-        let on = [w("GPIOB", 0x18, 0x0601_0000), w("TIM1", 0x34, 0), w("TIM1", 0x18, 0x48)].join("\n");
+        let on = [
+            w("GPIOB", 0x18, 0x0601_0000),
+            w("TIM1", 0x34, 0),
+            w("TIM1", 0x18, 0x48),
+        ]
+        .join("\n");
         assert!(check_fault_stores(&stores(&on)).is_err());
         // PWM only set to 0, not forced.
-        let pwm = [w("GPIOB", 0x18, 0x0701_0000), w("TIM1", 0x34, 0), w("TIM1", 0x18, 0x68)].join("\n");
+        let pwm = [
+            w("GPIOB", 0x18, 0x0701_0000),
+            w("TIM1", 0x34, 0),
+            w("TIM1", 0x18, 0x68),
+        ]
+        .join("\n");
         assert!(check_fault_stores(&stores(&pwm)).is_err());
     }
 }

@@ -79,11 +79,8 @@ impl Io {
         if self.written.as_ref() == Some(p) {
             return;
         }
-        let killed = burin::outputs::write_then_recheck(
-            &crate::RT,
-            || self.store(p),
-            board::kill_aux,
-        );
+        let killed =
+            burin::outputs::write_then_recheck(&crate::RT, || self.store(p), board::kill_aux);
         self.written = if killed { None } else { Some(*p) };
     }
 

@@ -280,14 +280,38 @@ pub fn split(
     // BSRR writes. The typed pins are dropped on purpose: nothing else can
     // obtain them again, so StepPort has the port bits to itself.
     let _ = (
-        gpiob.pb12.into_push_pull_output_in_state(idle.step(0)).speed(Speed::Medium),
-        gpiob.pb13.into_push_pull_output_in_state(idle.step(1)).speed(Speed::Medium),
-        gpiob.pb14.into_push_pull_output_in_state(idle.step(2)).speed(Speed::Medium),
-        gpiob.pb15.into_push_pull_output_in_state(idle.step(3)).speed(Speed::Medium),
-        gpiob.pb4.into_push_pull_output_in_state(idle.dir(0)).speed(Speed::Medium),
-        gpiob.pb5.into_push_pull_output_in_state(idle.dir(1)).speed(Speed::Medium),
-        gpiob.pb6.into_push_pull_output_in_state(idle.dir(2)).speed(Speed::Medium),
-        gpiob.pb7.into_push_pull_output_in_state(idle.dir(3)).speed(Speed::Medium),
+        gpiob
+            .pb12
+            .into_push_pull_output_in_state(idle.step(0))
+            .speed(Speed::Medium),
+        gpiob
+            .pb13
+            .into_push_pull_output_in_state(idle.step(1))
+            .speed(Speed::Medium),
+        gpiob
+            .pb14
+            .into_push_pull_output_in_state(idle.step(2))
+            .speed(Speed::Medium),
+        gpiob
+            .pb15
+            .into_push_pull_output_in_state(idle.step(3))
+            .speed(Speed::Medium),
+        gpiob
+            .pb4
+            .into_push_pull_output_in_state(idle.dir(0))
+            .speed(Speed::Medium),
+        gpiob
+            .pb5
+            .into_push_pull_output_in_state(idle.dir(1))
+            .speed(Speed::Medium),
+        gpiob
+            .pb6
+            .into_push_pull_output_in_state(idle.dir(2))
+            .speed(Speed::Medium),
+        gpiob
+            .pb7
+            .into_push_pull_output_in_state(idle.dir(3))
+            .speed(Speed::Medium),
         gpiob.pb8.into_push_pull_output_in_state(idle.enable_off()),
     );
     // SAFETY: only forms the address of GPIOB's BSRR from the PAC's fixed

@@ -14,7 +14,7 @@ use super::super::step::StepPort;
 use super::blackpill::PORT_PINS;
 use burin::seams::StepPins;
 use stm32f4xx_hal::{
-    gpio::{gpioa, gpiob, gpioc, Output, PinState, PA10, PA9, PC13},
+    gpio::{gpioa, gpiob, gpioc, Output, PA10, PA9, PC13},
     pac,
     prelude::*,
     rcc::{Config, Rcc},
