@@ -258,8 +258,9 @@ mod app {
         crate::fault::publish(settings.enable_invert);
 
         // Pins: the board's map, everything in its safe state (outputs off,
-        // drivers disabled), then at once the step/dir/enable idle levels
-        // under the stored `$2`/`$3`/`$4` inverts.
+        // drivers disabled): the step/dir/enable pins at their idle levels
+        // under the stored `$2`/`$3`/`$4` from the store that makes them
+        // outputs (`board::split`); `set_invert` below keeps them there.
         let gpioa = dp.GPIOA.split(&mut rcc);
         let gpiob = dp.GPIOB.split(&mut rcc);
         let gpioc = dp.GPIOC.split(&mut rcc);
