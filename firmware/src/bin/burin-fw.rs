@@ -538,7 +538,7 @@ mod app {
                 segments: &mut *segments,
                 tx: &mut tx,
             };
-            let pass = controller.pass(&mut *machine, io_rings, input, &mut |_| {});
+            let pass = controller.pass(machine, io_rings, input, &mut |_| {});
             crate::inputs::publish(machine.settings());
             crate::fault::publish(machine.settings().enable_invert);
             io.write(&pass.pins);
