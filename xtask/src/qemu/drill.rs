@@ -163,12 +163,12 @@ pub fn check_boot_levels(stores: &[Store]) -> Result<()> {
             break; // the fault path's store, checked on its own
         }
         if s.offset == BSRR {
-            for pin in 0..16 {
-                if s.value & (1 << (pin + 16)) != 0 {
-                    level[pin] = false;
-                }
+            // Set wins over reset in one BSRR store (RM0383 §8.4.7).
+            for (pin, high) in level.iter_mut().enumerate() {
                 if s.value & (1 << pin) != 0 {
-                    level[pin] = true;
+                    *high = true;
+                } else if s.value & (1 << (pin + 16)) != 0 {
+                    *high = false;
                 }
             }
         }
