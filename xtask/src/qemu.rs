@@ -225,6 +225,12 @@ pub fn run() -> Result<i32> {
     while let Ok(chunk) = rx.recv_timeout(Duration::from_millis(700)) {
         seen.extend(chunk);
     }
+    // The boot's share of the peak (init's frames), before any job runs.
+    let boot = stack::dump(&sock, bottom, top, &dir.join("qemu-stack-boot.bin"))?;
+    println!(
+        "stack_high_water_boot_bytes {}",
+        stack::used(&boot, top - bottom)
+    );
     let (want, spm) = offline_end()?;
     job_test(&mut stdin, &rx, &mut seen, want, spm)?;
     settings_test(&mut stdin, &rx, &mut seen)?;
