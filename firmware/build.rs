@@ -24,13 +24,22 @@ fn main() {
         .collect();
     // Zero or two boards is reported by the binary's compile_error!, which
     // names the features; here we only avoid a confusing linker error first.
-    let Some(memory) = chosen.first() else { return };
+    let Some(&memory) = chosen.first() else {
+        return;
+    };
+    // The benchmark keeps the stack at the top of RAM (memory-f405-bench.x).
+    let memory = if env::var_os("CARGO_FEATURE_BENCH_TARGET").is_some() {
+        "memory-f405-bench.x"
+    } else {
+        memory
+    };
     let manifest =
         PathBuf::from(env::var("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR"));
     let out = PathBuf::from(env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
     let text = fs::read(manifest.join(memory)).expect("board memory file exists");
     fs::write(out.join("memory.x"), text).expect("OUT_DIR is writable");
     println!("cargo:rerun-if-changed={memory}");
+    println!("cargo:rerun-if-env-changed=CARGO_FEATURE_BENCH_TARGET");
     println!("cargo:rustc-link-search={}", out.display());
     // Bins only: the library's own (host-style) tests never see these.
     println!("cargo:rustc-link-arg-bins=--nmagic");

@@ -271,6 +271,27 @@ impl Enable {
     }
 }
 
+/// The shells' write of the output pins, made safe against the e-stop: the
+/// e-stop interrupt (above the task that writes the pins) turns spindle and
+/// coolant off at once, but the pin levels the task is about to store were
+/// computed before it fired. So the task stores them (`write`), then reads
+/// the e-stop latch, which the interrupt sets before its own kill, and
+/// kills again (`kill`) if it is set: whichever way the two interleave, the
+/// last store is the kill. Returns whether it killed (the shell then forgets
+/// what it wrote, so the next pass writes again).
+pub fn write_then_recheck(
+    rt: &crate::realtime::Realtime,
+    write: impl FnOnce(),
+    kill: impl FnOnce(),
+) -> bool {
+    write();
+    let stopped = rt.estop();
+    if stopped {
+        kill();
+    }
+    stopped
+}
+
 #[cfg(test)]
 #[path = "outputs_tests.rs"]
 mod tests;

@@ -244,3 +244,36 @@ fn setting_change_applies() {
     e.set_idle_ms(ALWAYS_ON);
     assert!(e.update(1_000, false, false, false));
 }
+
+/// The pin state a write/kill sequence leaves: `true` = spindle on.
+fn race(estop_during_write: bool, estop_before: bool) -> (bool, bool) {
+    let rt = crate::realtime::Realtime::new();
+    rt.set_estop(estop_before);
+    let pin = core::cell::Cell::new(false);
+    let killed = write_then_recheck(
+        &rt,
+        || {
+            // The task stores the levels its pass computed (spindle on)...
+            pin.set(true);
+            // ...and the e-stop interrupt lands right after that store:
+            // it latches, kills, and returns into the task.
+            if estop_during_write {
+                rt.set_estop(true);
+                pin.set(false);
+            }
+        },
+        || pin.set(false),
+    );
+    (pin.get(), killed)
+}
+
+#[test]
+fn an_estop_during_the_output_write_wins() {
+    // Interrupt between the pass and the store (the latch was set, the
+    // interrupt's kill came before the task's stale store).
+    assert_eq!(race(false, true), (false, true));
+    // Interrupt in the middle of the stores.
+    assert_eq!(race(true, false), (false, true));
+    // No e-stop: the levels stand and nothing is killed.
+    assert_eq!(race(false, false), (true, false));
+}

@@ -73,3 +73,22 @@ fn a_rebuilt_machine_moves_as_a_new_one() {
     assert_eq!(used.settings(), fresh.settings());
     assert_eq!(used.commanded_position(), fresh.commanded_position());
 }
+
+/// The board's slot starts as `Machine::placeholder()` (a static built at
+/// compile time) and `parse` rebuilds it in place on the stored settings:
+/// it must then move exactly as `Machine::new` on those settings.
+#[test]
+fn a_rebuilt_placeholder_moves_as_a_new_machine() {
+    static SLOT: std::sync::Mutex<Machine<16>> = std::sync::Mutex::new(Machine::placeholder());
+    let mut b = Settings::default();
+    b.axes[0].max_accel = 123.0;
+    b.step_pulse_us = 5.0;
+    let mut slot = SLOT.lock().expect("slot");
+    slot.rebuild(b, 1_000_000);
+    let mut fresh = Machine::<16>::new(b, 1_000_000);
+    let from_fresh = segments(&mut fresh, &Realtime::new());
+    assert!(from_fresh.len() > 10, "{} segments", from_fresh.len());
+    assert_eq!(segments(&mut slot, &Realtime::new()), from_fresh);
+    assert_eq!(slot.settings(), fresh.settings());
+    assert_eq!(slot.step_config(), fresh.step_config());
+}

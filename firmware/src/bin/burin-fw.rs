@@ -48,6 +48,9 @@ fn main() {
 #[path = "burin-fw/boards/mod.rs"]
 mod boards;
 #[cfg(target_os = "none")]
+#[path = "burin-fw/fault.rs"]
+mod fault;
+#[cfg(target_os = "none")]
 #[path = "burin-fw/inputs.rs"]
 mod inputs;
 #[cfg(target_os = "none")]
@@ -62,9 +65,6 @@ mod rings;
 #[cfg(all(target_os = "none", not(feature = "board-qemu")))]
 #[path = "burin-fw/selfcheck.rs"]
 mod selfcheck;
-#[cfg(target_os = "none")]
-#[path = "burin-fw/stack.rs"]
-mod stack;
 #[cfg(target_os = "none")]
 #[path = "burin-fw/step.rs"]
 mod step;
@@ -82,14 +82,18 @@ mod usb;
 #[cfg(target_os = "none")]
 use defmt_rtt as _;
 
-/// A panic stops everything and formats nothing: the message and the
-/// panic locations (build paths) cost kilobytes of flash, and the debug
-/// probe's backtrace says where it happened. `udf` raises a HardFault (the
-/// probe shows it; without one the watchdog resets the chip).
+/// A panic turns the outputs and drivers off first (`fault.rs`), then
+/// formats nothing: the message and the panic locations (build paths) cost
+/// kilobytes of flash, and the debug probe's backtrace says where it
+/// happened. `udf` raises the HardFault, whose handler stops the step
+/// timer and waits for the watchdog (or the probe).
 #[cfg(target_os = "none")]
 #[panic_handler]
 fn panic(_: &core::panic::PanicInfo) -> ! {
+    // Masked first (one instruction, no memory access), so no interrupt
+    // can turn a driver or the spindle back on between the stores.
     cortex_m::interrupt::disable();
+    fault::outputs_off();
     defmt::error!("panic");
     cortex_m::asm::udf()
 }
@@ -183,10 +187,11 @@ mod app {
         rx_tokens: Consumer<'static, RxToken>,
         tx_bytes: Producer<'static, u8>,
         segments: Producer<'static, Segment>,
-        /// Built by `parse` when it starts, into init's static slot: in
-        /// init, on top of init's own frame, it took about 40 KB of stack
-        /// (the F401 has 29.5 KiB).
-        machine: &'static mut MaybeUninit<Machine<PLANNER_BLOCKS>>,
+        /// A static built at compile time (`Machine::placeholder`), which
+        /// `parse` rebuilds in place on the loaded settings when it starts:
+        /// `Machine::new` at run time built the whole machine (19.8 KB) as
+        /// a temporary on the stack (the F401 has 20 KiB).
+        machine: &'static mut Machine<PLANNER_BLOCKS>,
         /// What `parse` builds the machine on.
         boot: (Settings, u32),
         controller: &'static mut Controller<crate::storage::Store>,
@@ -205,7 +210,7 @@ mod app {
         rx_ring: Queue<RxToken, RX_RING> = Queue::new(),
         tx_ring: Queue<u8, TX_RING> = Queue::new(),
         seg_ring: Queue<Segment, SEGMENT_SLOTS> = Queue::new(),
-        machine_slot: MaybeUninit<Machine<PLANNER_BLOCKS>> = MaybeUninit::uninit(),
+        machine_slot: Machine<PLANNER_BLOCKS> = Machine::placeholder(),
         controller_slot: MaybeUninit<Controller<crate::storage::Store>> = MaybeUninit::uninit(),
         #[cfg(not(feature = "board-qemu"))]
         ep_memory: [u32; 1024] = [0; 1024],
@@ -213,6 +218,10 @@ mod app {
         usb_bus: Option<UsbBusAllocator<UsbBusType>> = None,
         #[cfg(not(feature = "board-qemu"))]
         serial: [u8; USB_SERIAL_LEN] = [0; USB_SERIAL_LEN],
+        #[cfg(feature = "board-qemu")]
+        ram_store: crate::storage::Mem = crate::storage::Mem::new(),
+        #[cfg(not(feature = "board-qemu"))]
+        backlog: burin::link::RxBacklog<{ crate::usb::BACKLOG }> = burin::link::RxBacklog::new(),
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
         let dp = cx.device;
@@ -243,16 +252,30 @@ mod app {
         watchdog.stop_on_debug(&dp.DBGMCU, true);
 
         // Settings and offsets first: the pins' idle levels depend on them.
-        let (persist, boot) = load_settings(dp.FLASH);
+        #[cfg(not(feature = "board-qemu"))]
+        let store = crate::storage::open(dp.FLASH);
+        #[cfg(feature = "board-qemu")]
+        let store = crate::storage::open(dp.FLASH, cx.local.ram_store);
+        #[allow(unused_mut)]
+        let (persist, mut boot) = load_settings(store);
+        #[cfg(feature = "board-qemu")]
+        board::boot_overrides(&mut boot.settings);
         let settings = boot.settings;
+        crate::fault::publish(settings.enable_invert);
 
         // Pins: the board's map, everything in its safe state (outputs off,
-        // drivers disabled), then at once the step/dir/enable idle levels
-        // under the stored `$2`/`$3`/`$4` inverts.
+        // drivers disabled): the step/dir/enable pins at their idle levels
+        // under the stored `$2`/`$3`/`$4` from the store that makes them
+        // outputs (`board::split`); `set_invert` below keeps them there.
         let gpioa = dp.GPIOA.split(&mut rcc);
         let gpiob = dp.GPIOB.split(&mut rcc);
         let gpioc = dp.GPIOC.split(&mut rcc);
-        let mut pins = board::split(gpioa, gpiob, gpioc, dp.TIM1, &mut rcc);
+        let idle = board::Idle {
+            step_invert: settings.step_invert,
+            dir_invert: settings.dir_invert,
+            enable_active_high: settings.enable_invert,
+        };
+        let mut pins = board::split(gpioa, gpiob, gpioc, dp.TIM1, &mut rcc, idle);
         pins.steppers.set_invert(
             settings.step_invert,
             settings.dir_invert,
@@ -280,7 +303,7 @@ mod app {
             .usb_bus
             .insert(UsbBus::new(usb, cx.local.ep_memory));
         #[cfg(not(feature = "board-qemu"))]
-        let link = Link::new(bus, serial, rx_send, tx_recv);
+        let link = Link::new(bus, serial, rx_send, tx_recv, cx.local.backlog);
         // QEMU: USART1 at BAUD 8N1 (the first `-serial` of the machine).
         // Early in init: QEMU drops what the host sends before UE is set.
         #[cfg(feature = "board-qemu")]
@@ -411,14 +434,11 @@ mod app {
         )
     }
 
-    /// Sleep until an interrupt; feed the watchdog every time through,
-    /// after checking the stack guard (`stack.rs`).
+    /// Sleep until an interrupt; feed the watchdog every time through. (A
+    /// stack overflow needs no check here: it faults, see `fault.rs`.)
     #[idle(local = [watchdog])]
     fn idle(cx: idle::Context) -> ! {
         loop {
-            if !crate::stack::intact() {
-                crate::stack::overflowed();
-            }
             cx.local.watchdog.feed();
             cortex_m::asm::wfi();
         }
@@ -514,12 +534,14 @@ mod app {
             io,
             ..
         } = cx.local;
-        let machine = build_machine(machine, boot.0, boot.1);
+        machine.rebuild(boot.0, boot.1);
         let mut tx = TxRing {
             ring: tx_bytes,
             dropped: 0,
         };
         controller.hello(&mut tx);
+        #[cfg(feature = "board-qemu")]
+        board::fault_drill();
         loop {
             #[cfg(not(feature = "board-qemu"))]
             let port_closed = crate::usb::PORT_CLOSED.swap(false, Ordering::AcqRel);
@@ -544,8 +566,9 @@ mod app {
                 segments: &mut *segments,
                 tx: &mut tx,
             };
-            let pass = controller.pass(&mut *machine, io_rings, input, &mut |_| {});
+            let pass = controller.pass(machine, io_rings, input, &mut |_| {});
             crate::inputs::publish(machine.settings());
+            crate::fault::publish(machine.settings().enable_invert);
             io.write(&pass.pins);
             if pass.kick {
                 rtic::pend(pac::Interrupt::TIM5);
@@ -609,19 +632,8 @@ mod app {
         let _ = wake_beat.try_send(());
     }
 
-    /// The machine, built straight into its static slot in a frame of its
-    /// own, once, when `parse` starts (init's frame is gone by then; the
-    /// stack peak is `cargo xtask qemu`'s `stack_high_water_bytes`).
-    #[inline(never)]
-    fn build_machine(
-        slot: &mut MaybeUninit<Machine<PLANNER_BLOCKS>>,
-        settings: Settings,
-        tick_hz: u32,
-    ) -> &mut Machine<PLANNER_BLOCKS> {
-        slot.write(Machine::new(settings, tick_hz))
-    }
-
-    /// The session and controller, as [`build_machine`].
+    /// The session and controller, built straight into its static slot in
+    /// a frame of its own.
     #[inline(never)]
     fn build_controller(
         slot: &'static mut MaybeUninit<Controller<crate::storage::Store>>,
@@ -666,9 +678,9 @@ mod app {
     /// Settings and offsets from the store, before the machine is built on
     /// them (flash sectors 1-2; RAM on QEMU, see storage.rs).
     fn load_settings(
-        flash: pac::FLASH,
+        store: crate::storage::Store,
     ) -> (Persist<crate::storage::Store>, burin::persist::Loaded) {
-        let mut persist = Persist::new(crate::storage::open(flash), Settings::default());
+        let mut persist = Persist::new(store, Settings::default());
         let boot = persist.load();
         if !boot.report.is_clean() {
             defmt::warn!(

@@ -196,6 +196,35 @@ impl<const N: usize> Machine<N> {
         }
     }
 
+    /// A machine on the default settings and no step clock, built at
+    /// compile time: the board's static slot starts as this and
+    /// [`Machine::rebuild`] turns it into `Machine::new(settings, tick_hz)`
+    /// in place. Built at run time, `Machine::new` needs the whole machine
+    /// (about 20 KB with 64 blocks) as a temporary on the stack, which the
+    /// F401's 20 KiB stack does not have.
+    pub const fn placeholder() -> Self {
+        Machine {
+            planner: Planner::new(Settings::DEFAULT),
+            prep: Preparer::new(Settings::DEFAULT, StepConfig::UNSET),
+            cfg: StepConfig::UNSET,
+            pending: Pending::None,
+            alarm: None,
+            position_lost: false,
+            homed: 0,
+            commanded: [0.0; AXES],
+            override_epoch: 0,
+            switches: Switches {
+                limits: 0,
+                probe: false,
+            },
+            probe_result: None,
+            script: None,
+            tool_event: None,
+            tool_reference: None,
+            fault: None,
+        }
+    }
+
     /// [`Machine::new`], in place (`$n=`): the planner keeps its ring's
     /// storage ([`Planner::reset`]), so no second machine is built on the
     /// stack (`Machine::new`'s frame is 15.6 KB on the F401 image).

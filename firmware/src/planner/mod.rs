@@ -267,7 +267,7 @@ pub struct Planner<const N: usize> {
 }
 
 impl<const N: usize> Planner<N> {
-    pub fn new(settings: Settings) -> Self {
+    pub const fn new(settings: Settings) -> Self {
         Planner {
             blocks: [Block::EMPTY; N],
             tail: 0,

@@ -309,6 +309,17 @@ pub struct Phase {
     pub t0: f32,
 }
 
+impl Phase {
+    /// `Phase::default()`, as a constant.
+    pub const ZERO: Phase = Phase {
+        v0: 0.0,
+        v1: 0.0,
+        time: 0.0,
+        dist: 0.0,
+        t0: 0.0,
+    };
+}
+
 /// Phases of a [`Profile`].
 pub const PHASES: usize = 5;
 
@@ -318,6 +329,13 @@ pub const PHASES: usize = 5;
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct Profile {
     pub phases: [Phase; PHASES],
+}
+
+impl Profile {
+    /// `Profile::default()`, as a constant.
+    pub const ZERO: Profile = Profile {
+        phases: [Phase::ZERO; PHASES],
+    };
 }
 
 impl Profile {

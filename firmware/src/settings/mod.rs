@@ -162,53 +162,62 @@ impl ToolChange {
 
 impl Default for Settings {
     fn default() -> Self {
-        let axis = |steps: f32, rate: f32, accel: f32, travel: f32| AxisSettings {
-            steps_per_mm: steps,
-            max_rate: rate,
-            max_accel: accel,
-            max_travel: travel,
-        };
-        Settings {
-            step_pulse_us: 2.0,
-            idle_delay_ms: 25,
-            step_invert: 0,
-            dir_invert: 0,
-            enable_invert: false,
-            limit_invert: 0,
-            probe_invert: false,
-            status_mask: 1,
-            junction_deviation: 0.01,
-            arc_tolerance: 0.002,
-            report_inches: false,
-            control_invert: 0,
-            soft_limits: false,
-            hard_limits: false,
-            homing_enable: false,
-            homing_dir_invert: 0,
-            homing_feed: 25.0,
-            homing_seek: 500.0,
-            homing_debounce_ms: 250,
-            homing_pulloff: 1.0,
-            spindle_max: 1000.0,
-            spindle_min: 0.0,
-            laser_mode: false,
-            axes: [
-                axis(80.0, 5000.0, 500.0, 300.0),
-                axis(80.0, 5000.0, 500.0, 300.0),
-                axis(400.0, 1000.0, 100.0, 100.0),
-                axis(10.0, 3600.0, 300.0, 0.0),
-            ],
-            dir_setup_us: 1.0,
-            max_step_rate_hz: 200_000.0,
-            profile: Profile::Trapezoid,
-            jerk: 5000.0,
-            rapid_mode: RapidMode::Coordinated,
-            verify_home_tolerance: 0.05,
-            homing_order: 0x34,
-            enable_delay_us: 0.0,
-            report_axes: AXES as u8,
-            g28_homes: false,
-            tool_change: ToolChange::DEFAULT,
-        }
+        Self::DEFAULT
     }
+}
+
+const fn axis(steps: f32, rate: f32, accel: f32, travel: f32) -> AxisSettings {
+    AxisSettings {
+        steps_per_mm: steps,
+        max_rate: rate,
+        max_accel: accel,
+        max_travel: travel,
+    }
+}
+
+impl Settings {
+    /// The defaults, as a constant: the board's machine slot is a static
+    /// built from them at compile time (`Machine::placeholder`).
+    pub const DEFAULT: Settings = Settings {
+        step_pulse_us: 2.0,
+        idle_delay_ms: 25,
+        step_invert: 0,
+        dir_invert: 0,
+        enable_invert: false,
+        limit_invert: 0,
+        probe_invert: false,
+        status_mask: 1,
+        junction_deviation: 0.01,
+        arc_tolerance: 0.002,
+        report_inches: false,
+        control_invert: 0,
+        soft_limits: false,
+        hard_limits: false,
+        homing_enable: false,
+        homing_dir_invert: 0,
+        homing_feed: 25.0,
+        homing_seek: 500.0,
+        homing_debounce_ms: 250,
+        homing_pulloff: 1.0,
+        spindle_max: 1000.0,
+        spindle_min: 0.0,
+        laser_mode: false,
+        axes: [
+            axis(80.0, 5000.0, 500.0, 300.0),
+            axis(80.0, 5000.0, 500.0, 300.0),
+            axis(400.0, 1000.0, 100.0, 100.0),
+            axis(10.0, 3600.0, 300.0, 0.0),
+        ],
+        dir_setup_us: 1.0,
+        max_step_rate_hz: 200_000.0,
+        profile: Profile::Trapezoid,
+        jerk: 5000.0,
+        rapid_mode: RapidMode::Coordinated,
+        verify_home_tolerance: 0.05,
+        homing_order: 0x34,
+        enable_delay_us: 0.0,
+        report_axes: AXES as u8,
+        g28_homes: false,
+        tool_change: ToolChange::DEFAULT,
+    };
 }

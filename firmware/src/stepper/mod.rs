@@ -114,6 +114,22 @@ pub struct StepConfig {
 }
 
 impl StepConfig {
+    /// All zero: a stand-in until [`StepConfig::new`] (the board's
+    /// machine slot before `Machine::rebuild`).
+    pub const UNSET: StepConfig = StepConfig {
+        tick_hz: 0,
+        pulse_ticks: 0,
+        dir_setup_ticks: 0,
+        min_period: 0,
+        min_low_ticks: 0,
+        enable_ticks: 0,
+        spin_ticks: 0,
+        step_invert: 0,
+        dir_invert: 0,
+        limit_invert: 0,
+        probe_invert: false,
+    };
+
     pub fn new(s: &Settings, tick_hz: u32) -> Self {
         let exact = |us: f32| libm::ceilf(us.max(0.0) * tick_hz as f32 / 1.0e6) as u32;
         let ticks = |us: f32| exact(us).max(1);

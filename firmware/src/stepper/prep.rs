@@ -111,7 +111,7 @@ pub struct Preparer {
 }
 
 impl Preparer {
-    pub fn new(settings: Settings, cfg: StepConfig) -> Self {
+    pub const fn new(settings: Settings, cfg: StepConfig) -> Self {
         Preparer {
             cfg,
             settings,
@@ -121,7 +121,7 @@ impl Preparer {
             steps_done: 0,
             s_done: 0.0,
             v: 0.0,
-            profile: Profile::default(),
+            profile: Profile::ZERO,
             phase: 0,
             tau: 0.0,
             s_phase0: 0.0,

@@ -35,6 +35,56 @@ pub fn check_vectors(elf: &Path) -> Result<()> {
     Ok(())
 }
 
+/// Thumb `cpsid i`.
+const CPSID_I: u16 = 0xB672;
+
+/// The fault and boot layout the board code relies on (`fault.rs`,
+/// `memory-*.x`): the stack at the bottom of SRAM with the statics above
+/// it (an overflow faults instead of overwriting them); `__pre_init` (run
+/// before RAM is set up, e.g. after a DFU `:leave`) and our `HardFault`
+/// (not cortex-m-rt's loop) each mask interrupts as their first instruction.
+pub fn check_fault_layout(elf: &Path) -> Result<()> {
+    let bytes = read(elf)?;
+    let file = parse(&bytes)?;
+    let (bottom, top) = (symbol(&file, "_stack_end")?, symbol(&file, "_stack_start")?);
+    let statics = symbol(&file, "__sdata")?;
+    if bottom != super::RAM_BASE || top > statics {
+        bail!(
+            "the stack {bottom:#010x}..{top:#010x} is not at the bottom of SRAM below the \
+             statics ({statics:#010x}): an overflow would overwrite them"
+        );
+    }
+    for name in ["__pre_init", "HardFault"] {
+        let at = symbol(&file, name)? & !1;
+        let first = halfword_at(&file, at).with_context(|| format!("no code at `{name}`"))?;
+        if first != CPSID_I {
+            bail!("`{name}` at {at:#010x} starts with {first:#06x}, not `cpsid i`");
+        }
+    }
+    if file.symbol_by_name("HardFault_").is_some_and(|d| {
+        symbol(&file, "HardFault").is_ok_and(|h| h & !1 == d.address() as u32 & !1)
+    }) {
+        bail!("HardFault is cortex-m-rt's default loop, not the fault path");
+    }
+    println!(
+        "  stack {} B at {bottom:#010x}..{top:#010x} below the statics; __pre_init and \
+         HardFault start with cpsid i",
+        top - bottom
+    );
+    Ok(())
+}
+
+/// The 16-bit word of loaded code at `addr`.
+fn halfword_at(file: &ElfFile32<'_>, addr: u32) -> Option<u16> {
+    file.sections().find_map(|s| {
+        let start = u32::try_from(s.address()).ok()?;
+        let off = addr.checked_sub(start)? as usize;
+        let data = s.data().ok()?;
+        let b = data.get(off..off + 2)?;
+        Some(u16::from_le_bytes([b[0], b[1]]))
+    })
+}
+
 pub(super) fn symbol(file: &ElfFile32<'_>, name: &str) -> Result<u32> {
     let sym = file
         .symbol_by_name(name)

@@ -6,8 +6,10 @@
 //! these pins, with two exceptions that need no lock: the step interrupt
 //! turns the drivers on when it starts (a BSRR store of the enable bit
 //! only) and the e-stop interrupt kills the spindle and coolant pins at
-//! once (`board::kill_aux`); both only ever move towards the state this
-//! module writes next anyway.
+//! once (`board::kill_aux`). The first only moves towards the state this
+//! module writes next anyway; the second could be undone by a store of
+//! levels computed before it, so [`Io::write`] re-checks the e-stop latch
+//! after its stores. The fault path (`fault.rs`) stores over all of them.
 use crate::boards::board;
 use burin::controller::Pins;
 use stm32f4xx_hal::gpio::PinState;
@@ -70,15 +72,22 @@ impl Io {
         }
     }
 
-    /// Copy the controller's pin levels to the hardware.
+    /// Copy the controller's pin levels to the hardware. The e-stop
+    /// interrupt may have killed spindle and coolant after the pass that
+    /// computed `p`: its kill wins (`burin::outputs::write_then_recheck`).
     pub fn write(&mut self, p: &Pins) {
         if self.written.as_ref() == Some(p) {
             return;
         }
+        let killed =
+            burin::outputs::write_then_recheck(&crate::RT, || self.store(p), board::kill_aux);
+        self.written = if killed { None } else { Some(*p) };
+    }
+
+    fn store(&mut self, p: &Pins) {
         if self.written.map(|w| w.enable) != Some(p.enable) {
             self.enable_pin.set(p.enable);
         }
-        self.written = Some(*p);
         let a = &mut self.aux;
         let max = a.spindle_pwm.get_max_duty();
         let duty = (p.spindle.duty * f32::from(max)) as u16;

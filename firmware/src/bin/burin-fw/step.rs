@@ -91,8 +91,18 @@ pub struct StepPort {
 
 impl StepPort {
     /// `bsrr` is the BSRR address of the port whose pins in `pins` the caller
-    /// has configured as push-pull outputs and owns exclusively.
-    pub fn new(bsrr: *mut u32, pins: PortPins) -> Self {
+    /// has configured as push-pull outputs and owns exclusively; the pins
+    /// go (stay) at their idle levels under the `$2`/`$3`/`$4` given, which
+    /// the board set before they became outputs: one store of the default
+    /// levels here would be a step edge under `$2` and enabled drivers
+    /// under `$4=1`.
+    pub fn new(
+        bsrr: *mut u32,
+        pins: PortPins,
+        step_invert: u8,
+        dir_invert: u8,
+        enable_invert: bool,
+    ) -> Self {
         let mut port = StepPort {
             bsrr: bsrr as usize,
             pins,
@@ -102,7 +112,7 @@ impl StepPort {
             enable_on: 0,
             enable_off: 0,
         };
-        port.set_invert(0, 0, false);
+        port.set_invert(step_invert, dir_invert, enable_invert);
         port
     }
 

@@ -15,7 +15,7 @@
 #[cfg(not(feature = "board-qemu"))]
 pub use board_flash::{open, Store};
 #[cfg(feature = "board-qemu")]
-pub use ram::{open, Store};
+pub use ram::{open, Mem, Store};
 
 #[cfg(not(feature = "board-qemu"))]
 mod board_flash {
@@ -155,10 +155,14 @@ mod ram {
     use stm32f4xx_hal::pac;
 
     /// Two 4 KiB pages of RAM: the map's code path, without persistence.
-    pub type Store = FlashMap<RamFlash<8192, 4096>>;
+    pub type Mem = RamFlash<8192, 4096>;
+    /// The pages stay in init's static (`mem`), lent to the map: held by
+    /// value they were 8 KB that init and the session moved on the stack,
+    /// which the board's flash handle is not.
+    pub type Store = FlashMap<&'static mut Mem>;
 
     /// The flash controller stays unused (QEMU ignores it).
-    pub fn open(_flash: pac::FLASH) -> Store {
-        FlashMap::new(RamFlash::new())
+    pub fn open(_flash: pac::FLASH, mem: &'static mut Mem) -> Store {
+        FlashMap::new(mem)
     }
 }

@@ -20,8 +20,10 @@ pub static PORT_OPENED: AtomicBool = AtomicBool::new(false);
 
 /// Received tokens held while the ring is full (8 KiB of RAM): realtime
 /// bytes behind that much text still act on arrival. Beyond it the OUT
-/// endpoint NAKs and the host holds the rest.
-const BACKLOG: usize = 4096;
+/// endpoint NAKs and the host holds the rest. A static of init's, lent to
+/// the link: inside it, the link was 8 KB that init built on the stack and
+/// moved twice (init's frame was 20.7 KB on the F401).
+pub const BACKLOG: usize = 4096;
 
 /// One full-speed OUT packet.
 const PACKET: usize = 64;
@@ -30,7 +32,7 @@ pub struct UsbLink {
     dev: UsbDevice<'static, UsbBusType>,
     serial: SerialPort<'static, UsbBusType>,
     splitter: RxSplitter,
-    backlog: RxBacklog<BACKLOG>,
+    backlog: &'static mut RxBacklog<BACKLOG>,
     rx: Producer<'static, RxToken>,
     tx: Consumer<'static, u8>,
     /// Reply bytes taken from the ring and how many the port has taken.
@@ -47,6 +49,7 @@ impl UsbLink {
         serial_number: &'static str,
         rx: Producer<'static, RxToken>,
         tx: Consumer<'static, u8>,
+        backlog: &'static mut RxBacklog<BACKLOG>,
     ) -> Self {
         // The class must be allocated before the device is built.
         let serial = SerialPort::new(bus);
@@ -65,7 +68,7 @@ impl UsbLink {
             dev,
             serial,
             splitter: RxSplitter::new(),
-            backlog: RxBacklog::new(),
+            backlog,
             rx,
             tx,
             pending: [0; 64],

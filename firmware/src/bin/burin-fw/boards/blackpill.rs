@@ -110,15 +110,68 @@ pub fn closed_now() -> u8 {
 /// E-stop: spindle enable, PWM, flood and mist off in three stores, from
 /// the e-stop interrupt, before the parse task hears of it.
 pub fn kill_aux() {
-    // Reset half of BSRR: bit 16 + n resets pin n.
-    const OFF: u32 = (1 << 16) | (1 << (16 + 9)) | (1 << (16 + 10));
     // SAFETY: BSRR is write-only set/reset: this store only resets PB0,
     // PB9 and PB10 (spindle enable, flood, mist, see `Aux`) and touches no
     // other pin. CCR1 of TIM1 is the spindle PWM compare value; a single
     // store of 0 is the duty the parse task also writes for "off".
     unsafe {
-        (*pac::GPIOB::ptr()).bsrr().write(|w| w.bits(OFF));
+        (*pac::GPIOB::ptr()).bsrr().write(|w| w.bits(AUX_OFF));
         (*pac::TIM1::ptr()).ccr1().write(|w| w.bits(0));
+    }
+}
+
+/// Spindle enable (PB0), flood (PB9), mist (PB10): the reset half of BSRR.
+const AUX_OFF: u32 = (1 << 16) | (1 << (16 + 9)) | (1 << (16 + 10));
+
+/// The fault path's GPIOB word: [`AUX_OFF`] and the stepper-enable pin
+/// (PB8) at "drivers off" under `$4` (`enable_active_high`).
+pub const fn outputs_off_word(enable_active_high: bool) -> u32 {
+    let pin = PORT_PINS.enable as u32;
+    AUX_OFF
+        | if enable_active_high {
+            1 << (pin + 16)
+        } else {
+            1 << pin
+        }
+}
+
+/// TIM1_CCMR1 OC1M (bits 6:4): "force inactive" (0b100), RM0383 §12.4.7.
+const OC1M_MASK: u32 = 0b111 << 4;
+const OC1M_FORCE_INACTIVE: u32 = 0b100 << 4;
+
+/// The fault path: spindle enable, coolant and drivers off in one GPIOB
+/// store (`word` from [`outputs_off_word`]), then the spindle/laser PWM
+/// forced low at once (CCR1 alone would wait for the preloaded update).
+/// Register stores only: no HAL, nothing that can fault on a sane chip.
+#[inline(always)]
+pub fn outputs_off(word: u32) {
+    // SAFETY: BSRR is write-only set/reset and `word` names only PB0, PB8,
+    // PB9 and PB10 (`outputs_off_word`). TIM1's CCR1 and CCMR1 belong to
+    // the spindle PWM (channel 1); duty 0 and OC1M = force inactive drive
+    // PA8 low now, whatever the preload holds. The RMW of CCMR1 can race
+    // nothing: a fault runs with interrupts masked.
+    unsafe {
+        (*pac::GPIOB::ptr()).bsrr().write(|w| w.bits(word));
+        let tim1 = &*pac::TIM1::ptr();
+        tim1.ccr1().write(|w| w.bits(0));
+        tim1.ccmr1_output()
+            .modify(|r, w| w.bits((r.bits() & !OC1M_MASK) | OC1M_FORCE_INACTIVE));
+    }
+}
+
+/// The fault path, after [`outputs_off`]: no step interrupt, no counter
+/// (so no compare event and no DMA request either).
+#[inline(always)]
+pub fn stop_step_timer() {
+    // SAFETY: TIM5 is the step timer; DIER = 0 and CR1 = 0 stop its
+    // interrupts and its counter. ICER is write-1-to-clear of TIM5's NVIC
+    // line alone (IRQ 50: ICER1 bit 18).
+    unsafe {
+        let tim5 = &*pac::TIM5::ptr();
+        tim5.dier().write(|w| w.bits(0));
+        tim5.cr1().write(|w| w.bits(0));
+        let irq = pac::Interrupt::TIM5 as u32;
+        (*cortex_m::peripheral::NVIC::PTR).icer[(irq / 32) as usize].write(1 << (irq % 32));
     }
 }
 
@@ -173,34 +226,104 @@ pub struct Board {
     pub usb_pins: (PA11, PA12),
 }
 
+/// Idle levels of the motion outputs under the stored `$2`, `$3`, `$4`,
+/// known before any of them becomes an output.
+#[derive(Clone, Copy)]
+pub struct Idle {
+    /// `$2`: bit n set = axis n's step pin rests high.
+    pub step_invert: u8,
+    /// `$3`: bit n set = axis n's "positive" direction is high.
+    pub dir_invert: u8,
+    /// `$4`: drivers enabled by a high level (rest low); default low-active.
+    pub enable_active_high: bool,
+}
+
+impl Idle {
+    pub fn step(self, axis: u8) -> PinState {
+        bit(self.step_invert, axis)
+    }
+    pub fn dir(self, axis: u8) -> PinState {
+        bit(self.dir_invert, axis)
+    }
+    pub fn enable_off(self) -> PinState {
+        level(!self.enable_active_high)
+    }
+}
+
+fn bit(mask: u8, axis: u8) -> PinState {
+    level(mask & (1 << axis) != 0)
+}
+
+fn level(high: bool) -> PinState {
+    if high {
+        PinState::High
+    } else {
+        PinState::Low
+    }
+}
+
 /// Configures every pin of the map and hands them out grouped by user.
+/// The step, direction and enable pins get their idle level (`idle`) in
+/// ODR before MODER makes them outputs (`into_push_pull_output_in_state`
+/// writes BSRR first): with `$2` a step pin never passes through low, a
+/// rising edge a driver would count, and with `$4=1` the drivers are
+/// never enabled for the cycles between the switch and the first store.
 pub fn split(
     gpioa: gpioa::Parts,
     gpiob: gpiob::Parts,
     gpioc: gpioc::Parts,
     tim1: pac::TIM1,
     rcc: &mut Rcc,
+    idle: Idle,
 ) -> Board {
     // Motion outputs: configured here, then driven only through StepPort's
     // BSRR writes. The typed pins are dropped on purpose: nothing else can
     // obtain them again, so StepPort has the port bits to itself.
     let _ = (
-        gpiob.pb12.into_push_pull_output().speed(Speed::Medium),
-        gpiob.pb13.into_push_pull_output().speed(Speed::Medium),
-        gpiob.pb14.into_push_pull_output().speed(Speed::Medium),
-        gpiob.pb15.into_push_pull_output().speed(Speed::Medium),
-        gpiob.pb4.into_push_pull_output().speed(Speed::Medium),
-        gpiob.pb5.into_push_pull_output().speed(Speed::Medium),
-        gpiob.pb6.into_push_pull_output().speed(Speed::Medium),
-        gpiob.pb7.into_push_pull_output().speed(Speed::Medium),
-        // Enable starts high (drivers off with the default active-low
-        // polarity) instead of passing through low for a few cycles.
-        gpiob.pb8.into_push_pull_output_in_state(PinState::High),
+        gpiob
+            .pb12
+            .into_push_pull_output_in_state(idle.step(0))
+            .speed(Speed::Medium),
+        gpiob
+            .pb13
+            .into_push_pull_output_in_state(idle.step(1))
+            .speed(Speed::Medium),
+        gpiob
+            .pb14
+            .into_push_pull_output_in_state(idle.step(2))
+            .speed(Speed::Medium),
+        gpiob
+            .pb15
+            .into_push_pull_output_in_state(idle.step(3))
+            .speed(Speed::Medium),
+        gpiob
+            .pb4
+            .into_push_pull_output_in_state(idle.dir(0))
+            .speed(Speed::Medium),
+        gpiob
+            .pb5
+            .into_push_pull_output_in_state(idle.dir(1))
+            .speed(Speed::Medium),
+        gpiob
+            .pb6
+            .into_push_pull_output_in_state(idle.dir(2))
+            .speed(Speed::Medium),
+        gpiob
+            .pb7
+            .into_push_pull_output_in_state(idle.dir(3))
+            .speed(Speed::Medium),
+        gpiob.pb8.into_push_pull_output_in_state(idle.enable_off()),
     );
     // SAFETY: only forms the address of GPIOB's BSRR from the PAC's fixed
     // base pointer; no register is accessed here.
     let bsrr = unsafe { (*pac::GPIOB::ptr()).bsrr().as_ptr() };
-    let mut steppers = StepPort::new(bsrr, PORT_PINS);
+    let mut steppers = StepPort::new(
+        bsrr,
+        PORT_PINS,
+        idle.step_invert,
+        idle.dir_invert,
+        idle.enable_active_high,
+    );
     steppers.set_enabled(false);
 
     let inputs = Inputs {

@@ -4,8 +4,8 @@
 use stm32f4xx_hal::{prelude::*, rcc::Config};
 
 pub use super::blackpill::{
-    blink_no_crystal, closed_now, enable_exti, enable_pin, kill_aux, split, start_hse, switches,
-    Aux,
+    blink_no_crystal, closed_now, enable_exti, enable_pin, kill_aux, outputs_off, outputs_off_word,
+    split, start_hse, stop_step_timer, switches, Aux, Idle,
 };
 
 /// Human-readable board name for the startup log and `$I`.

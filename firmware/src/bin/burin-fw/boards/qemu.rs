@@ -14,13 +14,15 @@ use super::super::step::StepPort;
 use super::blackpill::PORT_PINS;
 use burin::seams::StepPins;
 use stm32f4xx_hal::{
-    gpio::{gpioa, gpiob, gpioc, Output, PinState, PA10, PA9, PC13},
+    gpio::{gpioa, gpiob, gpioc, Output, PA10, PA9, PC13},
     pac,
     prelude::*,
     rcc::{Config, Rcc},
 };
 
-pub use super::blackpill::{enable_pin, kill_aux, Aux, Inputs};
+pub use super::blackpill::{
+    enable_pin, kill_aux, outputs_off, outputs_off_word, stop_step_timer, Aux, Idle, Inputs,
+};
 use burin::stepper::Switches;
 use stm32f4xx_hal::syscfg::SysCfg;
 
@@ -60,29 +62,39 @@ pub struct Board {
     pub usart_pins: (PA9, PA10),
 }
 
-/// The Black Pill's map (see `blackpill.rs`), with USART1 in place of USB.
+/// The Black Pill's map (see `blackpill.rs`), with USART1 in place of USB;
+/// the motion pins get their idle levels before they become outputs, as
+/// there (QEMU's GPIO is unimplemented: `cargo xtask qemu` checks the
+/// order of the stores in QEMU's log of them).
 pub fn split(
     gpioa: gpioa::Parts,
     gpiob: gpiob::Parts,
     gpioc: gpioc::Parts,
     tim1: pac::TIM1,
     rcc: &mut Rcc,
+    idle: Idle,
 ) -> Board {
     let _ = (
-        gpiob.pb12.into_push_pull_output(),
-        gpiob.pb13.into_push_pull_output(),
-        gpiob.pb14.into_push_pull_output(),
-        gpiob.pb15.into_push_pull_output(),
-        gpiob.pb4.into_push_pull_output(),
-        gpiob.pb5.into_push_pull_output(),
-        gpiob.pb6.into_push_pull_output(),
-        gpiob.pb7.into_push_pull_output(),
-        gpiob.pb8.into_push_pull_output_in_state(PinState::High),
+        gpiob.pb12.into_push_pull_output_in_state(idle.step(0)),
+        gpiob.pb13.into_push_pull_output_in_state(idle.step(1)),
+        gpiob.pb14.into_push_pull_output_in_state(idle.step(2)),
+        gpiob.pb15.into_push_pull_output_in_state(idle.step(3)),
+        gpiob.pb4.into_push_pull_output_in_state(idle.dir(0)),
+        gpiob.pb5.into_push_pull_output_in_state(idle.dir(1)),
+        gpiob.pb6.into_push_pull_output_in_state(idle.dir(2)),
+        gpiob.pb7.into_push_pull_output_in_state(idle.dir(3)),
+        gpiob.pb8.into_push_pull_output_in_state(idle.enable_off()),
     );
     // SAFETY: only forms the address of GPIOB's BSRR from the PAC's fixed
     // base pointer; no register is accessed here.
     let bsrr = unsafe { (*pac::GPIOB::ptr()).bsrr().as_ptr() };
-    let mut steppers = StepPort::new(bsrr, PORT_PINS);
+    let mut steppers = StepPort::new(
+        bsrr,
+        PORT_PINS,
+        idle.step_invert,
+        idle.dir_invert,
+        idle.enable_active_high,
+    );
     steppers.set_enabled(false);
 
     let inputs = Inputs {
@@ -119,3 +131,92 @@ pub fn split(
 
 /// The regulator as the clocks need it: nothing to do (QEMU models no regulator).
 pub fn regulator(_pwr: &stm32f4xx_hal::pac::PWR, _rcc: &stm32f4xx_hal::pac::RCC) {}
+
+/// Fault drills (QEMU only): `cargo xtask qemu` sets this word with QEMU's
+/// generic loader (`-device loader,addr=...,data=...`) to make the app
+/// fault on purpose once `parse` runs; 0 (QEMU's RAM at reset) runs the
+/// app normally. The address is outside the linker's RAM (memory-f405.x
+/// leaves the top 4 KiB of SRAM out).
+const DRILL_ADDR: usize = 0x2001_FFFC;
+/// `panic!`, `udf` (a HardFault), or a recursion that overflows the stack.
+const DRILL_PANIC: u32 = 0xFA17_0001;
+const DRILL_HARD_FAULT: u32 = 0xFA17_0002;
+const DRILL_OVERFLOW: u32 = 0xFA17_0003;
+
+/// Runs the drill the loader asked for, if any (see [`DRILL_ADDR`]).
+pub fn fault_drill() {
+    // SAFETY: a word of SRAM that no Rust object occupies (see DRILL_ADDR).
+    let word = unsafe { (DRILL_ADDR as *const u32).read_volatile() };
+    match word {
+        DRILL_PANIC => panic!("fault drill"),
+        DRILL_HARD_FAULT => cortex_m::asm::udf(),
+        DRILL_OVERFLOW => {
+            let _ = overflow(0);
+        }
+        _ => {}
+    }
+}
+
+/// Recurses with a 512-byte frame until the stack runs off SRAM.
+#[inline(never)]
+fn overflow(depth: u32) -> u32 {
+    let mut frame = [0u8; 512];
+    frame[depth as usize % 512] = depth as u8;
+    core::hint::black_box(&mut frame);
+    if depth < u32::MAX {
+        overflow(depth + 1).wrapping_add(u32::from(frame[7]))
+    } else {
+        0
+    }
+}
+
+/// The end of the fault path on QEMU, after the outputs and the step timer
+/// are off: one line on USART1 (plain register polling) for `cargo xtask
+/// qemu`: the stack pointer the fault came with, CFSR and BFAR (why), and
+/// TIM5's CR1 and DIER (stopped?).
+pub fn report_fault(sp: u32) {
+    // SAFETY: reads of the fault status registers (SCB 0xE000_ED28 CFSR,
+    // 0xE000_ED38 BFAR) and of TIM5; USART1 is the QEMU link, polled here
+    // with interrupts masked, so nothing else drives it.
+    unsafe {
+        let cfsr = (0xE000_ED28 as *const u32).read_volatile();
+        let bfar = (0xE000_ED38 as *const u32).read_volatile();
+        let tim5 = &*pac::TIM5::ptr();
+        let (cr1, dier) = (tim5.cr1().read().bits(), tim5.dier().read().bits());
+        let usart = &*pac::USART1::ptr();
+        let mut put = |b: u8| {
+            while usart.sr().read().txe().bit_is_clear() {}
+            usart.dr().write(|w| w.dr().bits(u16::from(b)));
+        };
+        for (name, value) in [
+            ("\r\nFAULT sp=", sp),
+            (" cfsr=", cfsr),
+            (" bfar=", bfar),
+            (" tim5_cr1=", cr1),
+            (" tim5_dier=", dier),
+        ] {
+            name.bytes().for_each(&mut put);
+            for shift in (0..8).rev() {
+                put(b"0123456789abcdef"[(value >> (shift * 4)) as usize & 0xF]);
+            }
+        }
+        b"\r\n".iter().for_each(|&b| put(b));
+    }
+}
+
+/// Stored-settings stand-in for the drills: `cargo xtask qemu` boots them
+/// with `$2`/`$3`/`$4` set (0x5E77 in the top half, then `$2` in bits 0-3,
+/// `$3` in 4-7, `$4` in bit 8), as if the store held them, to check the
+/// motion pins' levels from the first store on. Beside [`DRILL_ADDR`].
+const BOOT_ADDR: usize = 0x2001_FFF8;
+
+/// Applies the drill's stored inverts to `s`, if the loader set any.
+pub fn boot_overrides(s: &mut burin::settings::Settings) {
+    // SAFETY: a word of SRAM that no Rust object occupies (see DRILL_ADDR).
+    let word = unsafe { (BOOT_ADDR as *const u32).read_volatile() };
+    if word >> 16 == 0x5E77 {
+        s.step_invert = (word & 0xF) as u8;
+        s.dir_invert = ((word >> 4) & 0xF) as u8;
+        s.enable_invert = word & (1 << 8) != 0;
+    }
+}
