@@ -19,12 +19,27 @@ use super::World;
 use crate::config::IrqTicks;
 
 /// One pin store as the driver made it: levels after it (logical: bit n is
-/// axis n, step high, direction negative), at `tick`.
+/// axis n, step high, direction negative), at `tick`, with the `$2`/`$3`
+/// inverts it was made under ([`Edge::step_pins`], [`Edge::dir_pins`]: the
+/// levels on the wires).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Edge {
     pub tick: u64,
     pub step: u8,
     pub dir: u8,
+    pub step_invert: u8,
+    pub dir_invert: u8,
+}
+
+impl Edge {
+    /// Step pin levels (bit set: high).
+    pub fn step_pins(&self) -> u8 {
+        self.step ^ self.step_invert
+    }
+    /// Direction pin levels (bit set: high).
+    pub fn dir_pins(&self) -> u8 {
+        self.dir ^ self.dir_invert
+    }
 }
 
 /// The timer and the pin levels (see the module docs for its clock).
@@ -41,6 +56,10 @@ pub struct VirtualHw {
     tick_hz: u32,
     step: u8,
     dir: u8,
+    /// `$2`/`$3` as the pins were last configured (boot, then
+    /// `StepPins::apply_config`).
+    step_invert: u8,
+    dir_invert: u8,
     enabled: bool,
     /// This handler's stores, for the engine to apply after it returns.
     pub stores: Vec<Edge>,
@@ -49,7 +68,8 @@ pub struct VirtualHw {
 }
 
 impl VirtualHw {
-    pub fn new(irq: IrqTicks, tick_hz: u32) -> Self {
+    /// `step_invert`/`dir_invert`: `$2`/`$3` at power-up.
+    pub fn new(irq: IrqTicks, tick_hz: u32, step_invert: u8, dir_invert: u8) -> Self {
         VirtualHw {
             t: Cell::new(0),
             reads: Cell::new(2),
@@ -60,6 +80,8 @@ impl VirtualHw {
             tick_hz,
             step: 0,
             dir: 0,
+            step_invert,
+            dir_invert,
             enabled: false,
             stores: Vec::new(),
             log: None,
@@ -108,7 +130,13 @@ impl VirtualHw {
     fn record(&mut self, tick: u64, step: u8, dir: u8) {
         self.step = step;
         self.dir = dir;
-        let e = Edge { tick, step, dir };
+        let e = Edge {
+            tick,
+            step,
+            dir,
+            step_invert: self.step_invert,
+            dir_invert: self.dir_invert,
+        };
         self.stores.push(e);
         if let Some(log) = &mut self.log {
             log.push(e);
@@ -148,7 +176,7 @@ impl<const HW_FALL: bool> StepPins for Wired<'_, HW_FALL> {
         let work = hw.irq.rise - hw.irq.entry;
         let dir = hw.dir;
         hw.store(step_mask, dir, work);
-        self.world.step(step_mask, dir);
+        self.world.step(step_mask, dir ^ hw.dir_invert);
     }
     /// BSRR's direction word leaves the step pins as they are.
     fn set_directions(&mut self, dir_mask: u8) {
@@ -163,6 +191,15 @@ impl<const HW_FALL: bool> StepPins for Wired<'_, HW_FALL> {
     }
     fn set_enabled(&mut self, on: bool) {
         self.hw.enabled = on;
+    }
+    /// The new inverts, and the idle levels under them in one store (as
+    /// the board's BSRR word), made at once by the handler.
+    fn apply_config(&mut self, cfg: &burin::stepper::StepConfig, dir_mask: u8) {
+        let hw = &mut *self.hw;
+        hw.step_invert = cfg.step_invert;
+        hw.dir_invert = cfg.dir_invert;
+        let work = hw.irq.fall - hw.irq.entry;
+        hw.store(0, dir_mask, work);
     }
     fn switches(&self) -> Switches {
         self.world.switches()

@@ -106,10 +106,28 @@ impl StepPort {
         port
     }
 
-    /// Applies the `$2` step, `$3` direction and `$4` enable invert settings.
-    /// Default polarity: step pulses are high, enable is active low (the
-    /// common A4988/DRV8825/TMC convention).
+    /// Applies the `$2` step, `$3` direction and `$4` enable invert settings
+    /// at power-up. Default polarity: step pulses are high, enable is active
+    /// low (the common A4988/DRV8825/TMC convention).
     pub fn set_invert(&mut self, step_invert: u8, dir_invert: u8, enable_invert: bool) {
+        self.tables(step_invert, dir_invert, enable_invert);
+        // The idle levels under these inverts, at once and in one store:
+        // step pins at rest (so the first pulse has an edge with `$2`),
+        // directions for "positive" (so `$3` never changes DIR in the same
+        // store as a first STEP), drivers off (`$4`).
+        self.write(self.step_off | self.dirs[0] | self.enable_off);
+    }
+
+    /// A `$2`/`$3`/`$4` change while the step driver is stopped
+    /// (`StepPins::apply_config`): the new tables, then step pins at rest
+    /// and directions `dir_mask` under them in one store. The enable pin is
+    /// the parse task's at rest (`outputs::Io` rewrites it under `$4`).
+    pub fn reconfigure(&mut self, step_invert: u8, dir_invert: u8, enable_invert: bool, dir_mask: u8) {
+        self.tables(step_invert, dir_invert, enable_invert);
+        self.write(self.step_off | self.dirs[usize::from(dir_mask & 0xF)]);
+    }
+
+    fn tables(&mut self, step_invert: u8, dir_invert: u8, enable_invert: bool) {
         let p = self.pins;
         for mask in 0..16u8 {
             self.step_on[usize::from(mask)] = bsrr_word(&p.step, mask & !step_invert, mask);
@@ -123,11 +141,6 @@ impl StepPort {
         } else {
             (low, high)
         };
-        // The idle levels under these inverts, at once and in one store:
-        // step pins at rest (so the first pulse has an edge with `$2`),
-        // directions for "positive" (so `$3` never changes DIR in the same
-        // store as a first STEP), drivers off (`$4`).
-        self.write(self.step_off | self.dirs[0] | self.enable_off);
     }
 
     /// The BSRR word that lowers every step pin (under `$2`), and the
@@ -336,6 +349,13 @@ impl Tim5 {
         // `dma` is dropped: nothing else can take DMA1 from the PAC again.
     }
 
+    /// The word the pulse-end DMA copies to BSRR (step pins at rest under
+    /// `$2`), after a `$2` change. The stream reads CCR3 at each request,
+    /// so the next pulse ends at the new level.
+    fn set_step_off(&mut self, step_off: u32) {
+        self.tim.ccr3().write(|w| w.ccr().set(step_off));
+    }
+
     /// Arms compare 2: the step pins go low at `at`.
     #[inline(always)]
     fn end_pulse_at(&mut self, at: u32) {
@@ -376,6 +396,20 @@ impl StepPins for StepHw {
     }
     fn set_enabled(&mut self, on: bool) {
         self.port.set_enabled(on);
+    }
+    /// `$2`/`$3`/`$4` (and `$0`) after a `$n=`, while the timer is stopped.
+    fn apply_config(&mut self, cfg: &burin::stepper::StepConfig, dir_mask: u8) {
+        self.port.reconfigure(
+            cfg.step_invert,
+            cfg.dir_invert,
+            cfg.enable_invert,
+            dir_mask,
+        );
+        // The pulse-end hardware: its step-off word under the new `$2`.
+        // (Its pulse width is the driver's `cfg.pulse_ticks` per rise; a
+        // pulse end programmed once per configuration goes here.)
+        #[cfg(not(feature = "board-qemu"))]
+        self.timer.set_step_off(self.port.step_off_store().0);
     }
     #[inline(always)]
     fn switches(&self) -> Switches {
