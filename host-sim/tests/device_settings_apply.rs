@@ -9,6 +9,7 @@
 use host_sim::config::{MachineConfig, Wiring};
 use host_sim::engine::Edge;
 use host_sim::record::Discard;
+use protocol::client::grbl::parse_status;
 
 mod rig;
 
@@ -27,16 +28,22 @@ fn homing_machine(wiring: Wiring) -> MachineConfig {
     cfg
 }
 
-/// Runs until the machine reports Idle or Alarm (a failed homing alarms).
-fn settle(r: &mut Rig) -> String {
+/// Runs until the machine reports Idle or Alarm (a failed homing alarms):
+/// that state and every other line received meanwhile.
+fn settle(r: &mut Rig) -> (String, Vec<String>) {
+    let mut seen = Vec::new();
     for _ in 0..20_000 {
         r.run(10);
-        let st = r.status();
-        if st.state == "Idle" || st.state == "Alarm" {
-            return st.state;
+        r.send(b"?");
+        r.run(1);
+        let lines = r.lines();
+        let st = lines.iter().rev().find_map(|l| parse_status(l));
+        seen.extend(lines.into_iter().filter(|l| !l.starts_with('<')));
+        if let Some(st) = st.filter(|s| s.state == "Idle" || s.state == "Alarm") {
+            return (st.state, seen);
         }
     }
-    panic!("neither idle nor in alarm");
+    panic!("neither idle nor in alarm: {seen:?}");
 }
 
 /// `$H` to the end: homed without an alarm, machine zero at the switches
@@ -44,8 +51,7 @@ fn settle(r: &mut Rig) -> String {
 /// agree on -1 mm for X, Y and Z.
 fn home_and_check(r: &mut Rig) {
     r.send(b"$H\n");
-    let state = settle(r);
-    let lines = r.lines();
+    let (state, lines) = settle(r);
     assert_eq!(state, "Idle", "homing failed: {lines:?}");
     assert!(lines.iter().any(|l| l == "ok"), "{lines:?}");
     assert!(!lines.iter().any(|l| l.starts_with("ALARM")), "{lines:?}");
