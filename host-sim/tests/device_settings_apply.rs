@@ -105,7 +105,10 @@ fn dollar_3_for_reversed_motors_then_homing_seeks_the_new_way() {
     // The seek (Z first) left with Z's direction pin high: towards the
     // switch on this machine.
     let first = r.dev.sim.edges()[from..].iter().find(|e| e.step != 0);
-    assert_eq!(first.map(|e| (e.step, e.dir_pins() & 0b100)), Some((0b100, 0b100)));
+    assert_eq!(
+        first.map(|e| (e.step, e.dir_pins() & 0b100)),
+        Some((0b100, 0b100))
+    );
 }
 
 /// Rise-to-fall time of every pulse in `edges`, ticks.
@@ -158,7 +161,10 @@ fn dollar_2_moves_the_idle_step_level_at_once() {
     // No motion yet: X's step pin rests high now.
     let edges = r.dev.sim.edges().to_vec();
     assert_eq!(
-        edges.iter().map(|e| (e.step, e.step_pins())).collect::<Vec<_>>(),
+        edges
+            .iter()
+            .map(|e| (e.step, e.step_pins()))
+            .collect::<Vec<_>>(),
         [(0, 1)],
         "{edges:?}"
     );

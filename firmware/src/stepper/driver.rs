@@ -254,7 +254,10 @@ impl StepDriver {
     /// `$5`/`$6` for its switch reads) and the pins (`$2`/`$3`/`$4`, idle
     /// levels at once). True when there was one.
     fn take_config<H: StepPins>(&self, stepper: &mut Stepper, hw: &mut H, rt: &Realtime) -> bool {
-        debug_assert!(self.phase == Phase::Stopped, "a new configuration while running");
+        debug_assert!(
+            self.phase == Phase::Stopped,
+            "a new configuration while running"
+        );
         let Some(cfg) = rt.step_config().take() else {
             return false;
         };

@@ -122,7 +122,13 @@ impl StepPort {
     /// (`StepPins::apply_config`): the new tables, then step pins at rest
     /// and directions `dir_mask` under them in one store. The enable pin is
     /// the parse task's at rest (`outputs::Io` rewrites it under `$4`).
-    pub fn reconfigure(&mut self, step_invert: u8, dir_invert: u8, enable_invert: bool, dir_mask: u8) {
+    pub fn reconfigure(
+        &mut self,
+        step_invert: u8,
+        dir_invert: u8,
+        enable_invert: bool,
+        dir_mask: u8,
+    ) {
         self.tables(step_invert, dir_invert, enable_invert);
         self.write(self.step_off | self.dirs[usize::from(dir_mask & 0xF)]);
     }
@@ -399,12 +405,8 @@ impl StepPins for StepHw {
     }
     /// `$2`/`$3`/`$4` (and `$0`) after a `$n=`, while the timer is stopped.
     fn apply_config(&mut self, cfg: &burin::stepper::StepConfig, dir_mask: u8) {
-        self.port.reconfigure(
-            cfg.step_invert,
-            cfg.dir_invert,
-            cfg.enable_invert,
-            dir_mask,
-        );
+        self.port
+            .reconfigure(cfg.step_invert, cfg.dir_invert, cfg.enable_invert, dir_mask);
         // The pulse-end hardware: its step-off word under the new `$2`.
         // (Its pulse width is the driver's `cfg.pulse_ticks` per rise; a
         // pulse end programmed once per configuration goes here.)

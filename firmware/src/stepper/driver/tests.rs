@@ -353,5 +353,8 @@ fn a_configuration_waiting_at_the_last_slot_stops_the_driver_there() {
     let fall = log.last().copied();
     assert!(rise.is_some_and(|r| r.0 >= t0), "{log:?}");
     let high = rise.zip(fall).map(|(r, f)| f.0 - r.0);
-    assert!(high.is_some_and(|h| (7 * US..8 * US).contains(&h)), "{log:?}");
+    assert!(
+        high.is_some_and(|h| (7 * US..8 * US).contains(&h)),
+        "{log:?}"
+    );
 }
