@@ -63,8 +63,10 @@ pub struct Pass {
     /// Enter the step interrupt now (the board pends it): segments wait,
     /// the drivers are awake and the step timer is stopped (start it),
     /// motion was flushed while it runs (stop it without waiting for its
-    /// next slot), or a `$n=` published a step configuration the stopped
-    /// timer has not taken (it sets the idle pin levels under it at once).
+    /// next slot), or a `$n=` published a step configuration the step
+    /// interrupt has not taken (stopped, it takes it and sets the idle pin
+    /// levels under it at once; in the slot after its last event it stops
+    /// as soon as the last pulse is over, and takes it then).
     pub kick: bool,
 }
 
@@ -245,7 +247,7 @@ impl<S: Storage> Controller<S> {
             },
             kick: (queued && !stepping && self.enable.may_step())
                 || self.halting
-                || (!stepping && rt.step_config().pending()),
+                || rt.step_config().pending(),
         }
     }
 }

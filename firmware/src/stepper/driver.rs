@@ -191,13 +191,16 @@ impl StepDriver {
         loop {
             let early = self.target.wrapping_sub(hw.now()) as i32;
             if early > stepper.cfg.spin_ticks as i32 {
-                if self.phase == Phase::Low && stepper.is_flushed(rt) {
+                if self.phase == Phase::Low && (stepper.is_flushed(rt) || self.reconfigure(rt)) {
                     // A kick after a flush: the pending event is the last
                     // of flushed motion (the stepper already counted its
                     // steps into the position the executor took), so it
                     // runs as soon as the pin timing allows instead of at
                     // its slot, seconds away in a slow move; the stepper's
-                    // next event is idle and the timer stops.
+                    // next event is idle and the timer stops. Likewise the
+                    // slot after the last event when a new configuration
+                    // waits: the stop that takes it comes as soon as the
+                    // last pulse is over.
                     let cfg = &stepper.cfg;
                     let soonest = later(
                         self.last_fall.wrapping_add(cfg.min_low_ticks),
@@ -223,8 +226,7 @@ impl StepDriver {
                     // configuration waits, even if more was queued
                     // meanwhile: it is taken here, at rest, and the
                     // task's kick starts the rest on it.
-                    let reconfigure = self.pending.ticks == 0 && rt.step_config().pending();
-                    if reconfigure || !self.rise(stepper, hw, rt, pop) {
+                    if self.reconfigure(rt) || !self.rise(stepper, hw, rt, pop) {
                         self.phase = Phase::Stopped;
                         hw.stop();
                         rt.set_stepping(false);
@@ -247,6 +249,12 @@ impl StepDriver {
         sw: impl FnOnce() -> crate::stepper::Switches,
     ) -> StepEvent {
         stepper.on_event(rt, pop, sw)
+    }
+
+    /// The pending slot is the one after the last event and a new
+    /// configuration waits: the driver stops there to take it.
+    fn reconfigure(&self, rt: &Realtime) -> bool {
+        self.pending.ticks == 0 && rt.step_config().pending()
     }
 
     /// Only while stopped: takes the configuration the parse task

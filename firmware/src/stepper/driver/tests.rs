@@ -358,3 +358,43 @@ fn a_configuration_waiting_at_the_last_slot_stops_the_driver_there() {
         "{log:?}"
     );
 }
+
+#[test]
+fn a_kick_after_a_slow_last_step_takes_the_configuration_without_waiting() {
+    // One step 10 ms long: the slot after it is 10 ms away when `$0=` is
+    // published; the task's kick stops the driver as soon as the pulse is
+    // over and the configuration is taken then.
+    let tick_hz = 1_000_000 * US as u32;
+    let rt = Realtime::new();
+    let base = Settings::default();
+    let wide = Settings {
+        step_pulse_us: 7.0,
+        ..base
+    };
+    let mut stepper = Stepper::new(StepConfig::new(&base, tick_hz));
+    let mut d = StepDriver::new();
+    let mut hw = Toy::<true>::new();
+    let mut seg = segment(1, 0, true);
+    seg.period = 10_000 * US as u32;
+    let mut q = [seg].into_iter();
+    let mut pop = || q.next();
+    // The kick from rest makes the step at once (`$207` = 0).
+    d.on_interrupt(&mut stepper, &mut hw, &rt, &mut pop);
+    let rise = hw.log[..hw.n].iter().find(|e| e.1 != 0).map_or(0, |e| e.0);
+    assert!(rise > 0 && d.pending().ticks == 0 && d.is_running());
+    assert!(hw.target.is_some_and(|t| t >= rise + 10_000 * US - 10));
+    rt.step_config().publish(&StepConfig::new(&wide, tick_hz));
+    // The kick moves the stop to the end of the pulse's timing...
+    d.on_interrupt(&mut stepper, &mut hw, &rt, &mut pop);
+    let stop = hw.target.unwrap_or(u64::MAX);
+    assert!(
+        stop < rise + 100 * US,
+        "the stop waits for the slot: {stop}"
+    );
+    // ...where it stops and takes it.
+    hw.t.set(stop);
+    d.on_interrupt(&mut stepper, &mut hw, &rt, &mut pop);
+    assert!(!d.is_running() && !rt.stepping());
+    assert_eq!(stepper.cfg.pulse_ticks, 7 * US as u32);
+    assert!(hw.applied.is_some());
+}
