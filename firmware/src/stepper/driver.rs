@@ -74,7 +74,7 @@ enum Phase {
 /// The step interrupt's state. It holds no configuration: timing comes
 /// from the stepper's [`StepConfig`], which the driver replaces only while
 /// stopped, with what the parse task published after a `$n=`
-/// ([`Realtime::step_config`]; see [`StepDriver::take_config`]).
+/// ([`Realtime::step_config`]; see `take_config`).
 #[derive(Clone, Debug)]
 pub struct StepDriver {
     phase: Phase,
