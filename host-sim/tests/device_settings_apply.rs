@@ -181,3 +181,39 @@ fn dollar_2_moves_the_idle_step_level_at_once() {
     assert_eq!(r.cmd("$4=1"), ["ok"]);
     assert_eq!(r.dev.pins().map(|p| p.enable_invert), Some(true));
 }
+
+/// Ticks from each direction store to the first rise after it.
+fn setups(edges: &[Edge]) -> Vec<u64> {
+    let mut out = Vec::new();
+    let mut dir = edges.first().map_or(0, |e| e.dir);
+    let mut changed = None;
+    for e in edges {
+        if e.dir != dir {
+            dir = e.dir;
+            changed = Some(e.tick);
+        }
+        if e.step != 0 {
+            if let Some(t) = changed.take() {
+                out.push(e.tick - t);
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn a_raised_dollar_200_holds_the_step_after_a_reversal() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    assert_eq!(r.cmd("G1 X1 F600"), ["ok"]);
+    assert_eq!(r.until_idle().state, "Idle");
+    r.dev.sim.record_edges();
+    assert_eq!(r.cmd("$200=20"), ["ok"]);
+    assert_eq!(r.cmd("G1 X0 F600"), ["ok"]);
+    assert_eq!(r.until_idle().state, "Idle");
+    let s = setups(r.dev.sim.edges());
+    assert_eq!(s.len(), 1, "one reversal: {s:?}");
+    assert!(s[0] >= 20 * TICKS_PER_US, "direction setup {} ticks", s[0]);
+}
