@@ -118,22 +118,17 @@ impl StepPort {
         self.write(self.step_off | self.dirs[0] | self.enable_off);
     }
 
-    /// A `$2`/`$3`/`$4` change while the step driver is stopped
-    /// (`StepPins::apply_config`): the new tables, then step pins at rest
-    /// and directions `dir_mask` under them in one store. The enable pin is
-    /// the parse task's at rest (`outputs::Io` rewrites it under `$4`).
-    pub fn reconfigure(
-        &mut self,
-        step_invert: u8,
-        dir_invert: u8,
-        enable_invert: bool,
-        dir_mask: u8,
-    ) {
-        self.tables(step_invert, dir_invert, enable_invert);
+    /// After [`StepPort::tables`] for a `$2`/`$3` change while the step
+    /// driver is stopped (`StepPins::apply_config`): step pins at rest and
+    /// directions `dir_mask` under the new inverts, in one store. The
+    /// enable pin is the parse task's at rest (`outputs::Io` rewrites it
+    /// under `$4`).
+    pub fn rest(&mut self, dir_mask: u8) {
         self.write(self.step_off | self.dirs[usize::from(dir_mask & 0xF)]);
     }
 
-    fn tables(&mut self, step_invert: u8, dir_invert: u8, enable_invert: bool) {
+    /// The BSRR words under `$2`/`$3`/`$4`; writes nothing.
+    pub fn tables(&mut self, step_invert: u8, dir_invert: u8, enable_invert: bool) {
         let p = self.pins;
         for mask in 0..16u8 {
             self.step_on[usize::from(mask)] = bsrr_word(&p.step, mask & !step_invert, mask);
@@ -406,12 +401,15 @@ impl StepPins for StepHw {
     /// `$2`/`$3`/`$4` (and `$0`) after a `$n=`, while the timer is stopped.
     fn apply_config(&mut self, cfg: &burin::stepper::StepConfig, dir_mask: u8) {
         self.port
-            .reconfigure(cfg.step_invert, cfg.dir_invert, cfg.enable_invert, dir_mask);
-        // The pulse-end hardware: its step-off word under the new `$2`.
-        // (Its pulse width is the driver's `cfg.pulse_ticks` per rise; a
-        // pulse end programmed once per configuration goes here.)
+            .tables(cfg.step_invert, cfg.dir_invert, cfg.enable_invert);
+        // The pulse-end hardware first: its step-off word under the new
+        // `$2`, so no stray match can restore the old rest level after the
+        // store below. (Its pulse width is the driver's `cfg.pulse_ticks`
+        // per rise; a pulse end programmed once per configuration goes
+        // here.)
         #[cfg(not(feature = "board-qemu"))]
         self.timer.set_step_off(self.port.step_off_store().0);
+        self.port.rest(dir_mask);
     }
     #[inline(always)]
     fn switches(&self) -> Switches {
