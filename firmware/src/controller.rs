@@ -48,6 +48,9 @@ pub struct Inputs {
 pub struct Pins {
     /// Stepper drivers powered (before the `$4` polarity).
     pub enable: bool,
+    /// `$4` as it is now: the polarity the shell writes `enable` with (a
+    /// change rewrites the pin at once).
+    pub enable_invert: bool,
     pub spindle: Spindle,
     pub flood: bool,
     pub mist: bool,
@@ -58,9 +61,12 @@ pub struct Pins {
 pub struct Pass {
     pub pins: Pins,
     /// Enter the step interrupt now (the board pends it): segments wait,
-    /// the drivers are awake and the step timer is stopped (start it), or
+    /// the drivers are awake and the step timer is stopped (start it),
     /// motion was flushed while it runs (stop it without waiting for its
-    /// next slot).
+    /// next slot), or a `$n=` published a step configuration the step
+    /// interrupt has not taken (stopped, it takes it and sets the idle pin
+    /// levels under it at once; in the slot after its last event it stops
+    /// as soon as the last pulse is over, and takes it then).
     pub kick: bool,
 }
 
@@ -195,6 +201,7 @@ impl<S: Storage> Controller<S> {
         let queued = !core.segments.is_empty();
         let state = core.machine.state(rt);
         let settings = core.machine.settings();
+        let enable_invert = settings.enable_invert;
         let stepping = rt.stepping();
         let busy = queued || stepping || !rt.stepper_idle();
         // A flush (reset, alarm, e-stop, hard limit) while the timer runs:
@@ -233,11 +240,14 @@ impl<S: Storage> Controller<S> {
         Pass {
             pins: Pins {
                 enable,
+                enable_invert,
                 spindle: self.outputs.spindle(motion),
                 flood: self.outputs.flood,
                 mist: self.outputs.mist,
             },
-            kick: (queued && !stepping && self.enable.may_step()) || self.halting,
+            kick: (queued && !stepping && self.enable.may_step())
+                || self.halting
+                || rt.step_config().pending(),
         }
     }
 }
@@ -374,14 +384,16 @@ impl<Q: SegmentSink, const N: usize> MotionPort for Core<'_, Q, N> {
         self.pins
     }
     /// Rebuilds the executor with the new settings (only ever called while
-    /// idle), keeping the position. The step interrupt keeps the pin timing
-    /// and inverts it was started with until the next reset.
+    /// idle), keeping the position, and publishes the step interrupt's
+    /// share of them (pin timing, inverts, rate ceiling), which the stopped
+    /// step driver takes at this pass's kick: every setting applies at once.
     fn set_setting(&mut self, n: u16, value: f32) -> Result<(), SettingError> {
         let mut s = *self.machine.settings();
         s.set(n, value)?;
         let pos = self.machine.commanded_position();
         let tick_hz = self.machine.step_config().tick_hz;
         self.machine.rebuild(s, tick_hz);
+        self.rt.step_config().publish(&self.machine.step_config());
         if self.machine.set_position(self.rt, &pos).is_err() {
             let _ = self.machine.set_position(self.rt, &[0.0; crate::AXES]);
         }

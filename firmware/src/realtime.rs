@@ -74,6 +74,9 @@ pub struct Realtime {
     /// stepper has seen it). One byte, so the event tests all three with
     /// one load and one AND; the board's limit interrupts read it too.
     attention: AtomicU8,
+    /// The step interrupt's configuration after a `$n=`, taken by the step
+    /// driver while it is stopped (`stepper::config`).
+    step_config: crate::stepper::StepConfigCell,
 }
 
 impl Default for Realtime {
@@ -107,6 +110,7 @@ impl Realtime {
             running_line: AtomicU32::new(0),
             running_cut: AtomicU32::new(0),
             attention: AtomicU8::new(crate::stepper::SENSE_WATCH),
+            step_config: crate::stepper::StepConfigCell::new(),
         }
     }
 
@@ -342,6 +346,12 @@ impl Realtime {
     #[inline(always)]
     pub(crate) fn attention(&self) -> u8 {
         self.attention.load(Relaxed)
+    }
+
+    /// Where the parse task publishes a new step configuration and the
+    /// step driver takes it.
+    pub fn step_config(&self) -> &crate::stepper::StepConfigCell {
+        &self.step_config
     }
 
     pub(crate) fn take_new_position(&self) -> Option<[i32; AXES]> {

@@ -53,6 +53,17 @@ pub trait StepPins {
     fn pulse_end_failed(&self) -> bool {
         false
     }
+    /// A new configuration (`$n=`), taken by the step driver while it is
+    /// stopped: no pulse is high and the timer is off. Adopt its `$2`/`$3`/
+    /// `$4` inverts for every later store and put the idle levels under
+    /// them at once: step pins at rest, direction pins at `dir_mask` (the
+    /// logical directions as they stand, so the next step never needs a
+    /// direction change nobody scheduled). The enable pin keeps its level:
+    /// the parse task owns it at rest and writes it under the new `$4`
+    /// itself; only the store [`StepPins::set_enabled`] makes changes.
+    /// Hardware that ends pulses by itself takes the new step-off level
+    /// and pulse width here too.
+    fn apply_config(&mut self, _cfg: &crate::stepper::StepConfig, _dir_mask: u8) {}
     /// Limit and probe pin levels (before the `$5`/`$6` inverts). The
     /// driver reads them right after each rising edge of a move that
     /// watches a switch (homing, probing) or while hard limits are armed

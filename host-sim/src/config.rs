@@ -36,6 +36,35 @@ pub struct ProbeSurface {
     pub towards_negative: bool,
 }
 
+/// How the machine is wired, where that is a fact of the machine and not
+/// of its settings: normally-closed switches read active while open, a
+/// reversed motor turns negative while its direction pin is low. The
+/// settings (`$3`, `$5`, `$6`) must match for the machine to work; a
+/// machine file that leaves the wiring out is wired as its settings say
+/// ([`Wiring::matching`]), and tests wire it otherwise to see the firmware
+/// adopt a corrected setting (`$5=7` for NC switches) at once.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Wiring {
+    /// Axes whose limit switch is normally closed (`$5` needs the bit).
+    pub limits_nc: u8,
+    /// The probe is normally closed (`$6=1` reads it right).
+    pub probe_nc: bool,
+    /// Axes whose motor turns towards negative while its direction pin is
+    /// low (`$3` needs the bit).
+    pub motors_reversed: u8,
+}
+
+impl Wiring {
+    /// The machine the settings `s` describe correctly.
+    pub fn matching(s: &Settings) -> Self {
+        Wiring {
+            limits_nc: s.limit_invert,
+            probe_nc: s.probe_invert,
+            motors_reversed: s.dir_invert,
+        }
+    }
+}
+
 /// How fast the host side of the simulation is: the link a streamed job
 /// arrives on and the run time of the parse/plan task (RTIC priority 1,
 /// which the step timer preempts). Zero means "no cost".
@@ -94,6 +123,9 @@ pub struct MachineConfig {
     pub host: HostModel,
     /// Step interrupt latency, handler times and masked windows.
     pub interrupts: Interrupts,
+    /// The switches' and motors' wiring; `None`: as the settings the
+    /// machine starts with say ([`Wiring::matching`]).
+    pub wiring: Option<Wiring>,
 }
 
 /// The default machine: a small 300 × 300 × 100 mm gantry mill on the
@@ -138,6 +170,7 @@ impl Default for MachineConfig {
             start_position_mm: [-1.0, -1.0, -1.0, 0.0],
             host: HostModel::default(),
             interrupts: Interrupts::default(),
+            wiring: None,
         }
     }
 }

@@ -175,7 +175,7 @@ impl<'r> Sim<'r> {
             stepper,
             world,
             driver: StepDriver::new(),
-            hw: VirtualHw::new(irq, cfg.tick_hz),
+            hw: VirtualHw::new(irq, cfg.tick_hz, s.step_invert, s.dir_invert),
             masks: irq.masks,
             now: 0,
             next_step: None,

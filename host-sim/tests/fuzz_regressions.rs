@@ -153,7 +153,7 @@ fn envelope_passes_jogs_and_resets_on_the_board() {
     let mut dev = host_sim::device_sim::VirtualDevice::new(&cfg, &mut rec);
     env.borrow_mut().settle(dev.position_steps());
     let ms = u64::from(cfg.tick_hz) / 1000;
-    let mut wait = |dev: &mut host_sim::device_sim::VirtualDevice, t: u64| {
+    let wait = |dev: &mut host_sim::device_sim::VirtualDevice, t: u64| {
         let end = dev.sim.now() + t * ms;
         dev.advance_to(end);
     };

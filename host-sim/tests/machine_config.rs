@@ -237,3 +237,28 @@ fn interrupt_model_keys() {
     assert_eq!(m.unmasked_at(96_000 + start + 10), 96_000 + end);
     assert_eq!(m.unmasked_at(end), end);
 }
+
+#[test]
+fn wiring_defaults_to_the_settings_and_can_differ_from_them() {
+    use host_sim::config::Wiring;
+    let cfg = MachineConfig::from_toml_str("[limits]\ninvert = \"X\"\n").unwrap();
+    assert_eq!(cfg.wiring, None, "wired as the settings say");
+    let cfg = MachineConfig::from_toml_str(
+        "[pulses]\ndir_invert = \"Z\"\n[wiring]\nlimits_nc = \"XYZ\"\n",
+    )
+    .unwrap();
+    assert_eq!(cfg.settings.limit_invert, 0, "$5 stays as the file sets it");
+    assert_eq!(
+        cfg.wiring,
+        Some(Wiring {
+            limits_nc: 0b111,
+            probe_nc: false,
+            motors_reversed: 0b100,
+        })
+    );
+    let bad = MachineConfig::from_toml_str("[wiring]\nmotors_reversed = \"Q\"\n");
+    assert!(
+        bad.is_err_and(|e| e.to_string().contains("wiring.motors_reversed")),
+        "the key at fault is named"
+    );
+}

@@ -215,6 +215,8 @@ fn old_scheme(n: u64, period: u64, pulse: u64, cfg: &MachineConfig) -> Vec<Edge>
                 tick: store,
                 step: 0,
                 dir: 0,
+                step_invert: 0,
+                dir_invert: 0,
             });
         }
         if up {
@@ -223,6 +225,8 @@ fn old_scheme(n: u64, period: u64, pulse: u64, cfg: &MachineConfig) -> Vec<Edge>
                 tick: store + u64::from(cc),
                 step: 1,
                 dir: 0,
+                step_invert: 0,
+                dir_invert: 0,
             });
         }
         free = enter + if up { irq.rise } else { irq.fall };

@@ -348,7 +348,8 @@ mod app {
         let cfg = burin::stepper::StepConfig::new(&settings, tick_hz);
         let steppers = pins.steppers;
         // Outputs: spindle, coolant, and the enable pin for the idle timer
-        // (same `$4` polarity as the step port, fixed until reset like it).
+        // (same `$4` polarity as the step port; both follow a `$4=` at once,
+        // the step port in the step interrupt, this one in `Io::write`).
         let io = Io::new(pins.aux, board::enable_pin(settings.enable_invert));
         // Inputs: EXTI on both edges; the levels at power-up are settled.
         crate::inputs::publish(&settings);

@@ -33,6 +33,13 @@
 //! [`Realtime::stepping`] is false) enables the drivers and holds the first
 //! edge `$207` back; an idle event from the stepper (underrun, end of
 //! motion, halt) stops the timer at its slot, after the last fall.
+//!
+//! Settings (`$n=`) reach the interrupt only while it is stopped: the parse
+//! task publishes a new [`StepConfig`] in [`Realtime::step_config`] and
+//! kicks; a stopped driver takes it at that kick (the idle pin levels under
+//! new `$2`/`$3` change then), at a start from rest, and at the slot where
+//! it stops (which it does then even if more was queued: the task's next
+//! kick starts that on the new configuration).
 
 use super::{Segment, StepConfig, StepEvent, Stepper, SENSE_FLUSH};
 use crate::realtime::Realtime;
@@ -65,8 +72,9 @@ enum Phase {
 }
 
 /// The step interrupt's state. It holds no configuration: timing comes
-/// from the stepper's [`StepConfig`], so a settings change that rebuilds
-/// the stepper needs nothing else.
+/// from the stepper's [`StepConfig`], which the driver replaces only while
+/// stopped, with what the parse task published after a `$n=`
+/// ([`Realtime::step_config`]; see `take_config`).
 #[derive(Clone, Debug)]
 pub struct StepDriver {
     phase: Phase,
@@ -172,20 +180,27 @@ impl StepDriver {
         rt: &Realtime,
         pop: &mut impl FnMut() -> Option<Segment>,
     ) -> WakeTask {
-        if self.phase == Phase::Stopped && !self.start(stepper, hw, rt, pop) {
-            stepper.take_popped();
-            return true;
+        if self.phase == Phase::Stopped {
+            // A kick: from rest, or only to take a new configuration.
+            let fresh = self.take_config(stepper, hw, rt);
+            if !self.start(stepper, hw, rt, pop, fresh) {
+                stepper.take_popped();
+                return true;
+            }
         }
         loop {
             let early = self.target.wrapping_sub(hw.now()) as i32;
             if early > stepper.cfg.spin_ticks as i32 {
-                if self.phase == Phase::Low && stepper.is_flushed(rt) {
+                if self.phase == Phase::Low && (stepper.is_flushed(rt) || self.reconfigure(rt)) {
                     // A kick after a flush: the pending event is the last
                     // of flushed motion (the stepper already counted its
                     // steps into the position the executor took), so it
                     // runs as soon as the pin timing allows instead of at
                     // its slot, seconds away in a slow move; the stepper's
-                    // next event is idle and the timer stops.
+                    // next event is idle and the timer stops. Likewise the
+                    // slot after the last event when a new configuration
+                    // waits: the stop that takes it comes as soon as the
+                    // last pulse is over.
                     let cfg = &stepper.cfg;
                     let soonest = later(
                         self.last_fall.wrapping_add(cfg.min_low_ticks),
@@ -207,10 +222,15 @@ impl StepDriver {
             match self.phase {
                 Phase::High => self.fall(&stepper.cfg, hw),
                 _ => {
-                    if !self.rise(stepper, hw, rt, pop) {
+                    // The slot after the last event stops while a new
+                    // configuration waits, even if more was queued
+                    // meanwhile: it is taken here, at rest, and the
+                    // task's kick starts the rest on it.
+                    if self.reconfigure(rt) || !self.rise(stepper, hw, rt, pop) {
                         self.phase = Phase::Stopped;
                         hw.stop();
                         rt.set_stepping(false);
+                        self.take_config(stepper, hw, rt);
                         stepper.take_popped();
                         return true;
                     }
@@ -231,15 +251,42 @@ impl StepDriver {
         stepper.on_event(rt, pop, sw)
     }
 
+    /// The pending slot is the one after the last event and a new
+    /// configuration waits: the driver stops there to take it.
+    fn reconfigure(&self, rt: &Realtime) -> bool {
+        self.pending.ticks == 0 && rt.step_config().pending()
+    }
+
+    /// Only while stopped: takes the configuration the parse task
+    /// published since the last one taken (`$n=`), for the stepper (timing,
+    /// `$5`/`$6` for its switch reads) and the pins (`$2`/`$3`/`$4`, idle
+    /// levels at once). True when there was one.
+    fn take_config<H: StepPins>(&self, stepper: &mut Stepper, hw: &mut H, rt: &Realtime) -> bool {
+        debug_assert!(
+            self.phase == Phase::Stopped,
+            "a new configuration while running"
+        );
+        let Some(cfg) = rt.step_config().take() else {
+            return false;
+        };
+        stepper.cfg = cfg;
+        // Pulse-end hardware programs its width and step-off level in there.
+        hw.apply_config(&stepper.cfg, self.dirs);
+        true
+    }
+
     /// From rest: the first event, drivers on, its rise `$207` from now.
-    /// False when there is nothing to run (the queue held only flushed
-    /// segments, or a halt holds).
+    /// `fresh`: a new configuration was just taken, so the pins' idle
+    /// levels moved this instant; the first edge also waits `$200` and the
+    /// minimum low time after that. False when there is nothing to run
+    /// (the queue held only flushed segments, or a halt holds).
     fn start<H: StepPins + StepTimer>(
         &mut self,
         stepper: &mut Stepper,
         hw: &mut H,
         rt: &Realtime,
         pop: &mut impl FnMut() -> Option<Segment>,
+        fresh: bool,
     ) -> bool {
         let ev = Self::poll_cold(stepper, rt, pop, || hw.switches());
         if ev.ticks == 0 {
@@ -262,7 +309,14 @@ impl StepDriver {
         let now = hw.now();
         let cfg = &stepper.cfg;
         self.pending = ev;
-        self.planned = now.wrapping_add(cfg.enable_ticks);
+        let hold = if fresh {
+            cfg.enable_ticks
+                .max(cfg.dir_setup_ticks)
+                .max(cfg.min_low_ticks)
+        } else {
+            cfg.enable_ticks
+        };
+        self.planned = now.wrapping_add(hold);
         // Long low and long since the last rise: no bound applies.
         self.last_fall = now.wrapping_sub(cfg.min_low_ticks);
         self.last_rise = now.wrapping_sub(cfg.min_period);

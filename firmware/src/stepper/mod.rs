@@ -24,12 +24,14 @@
 //!   ([`Realtime::stepping`]), the task pends the step interrupt, which
 //!   starts it (this also lets the stepper drop flushed segments).
 
+mod config;
 pub mod driver;
 pub mod prep;
 pub mod sink;
 
+pub use config::{StepConfig, StepConfigCell};
+
 use crate::realtime::{Realtime, Trip};
-use crate::settings::Settings;
 use crate::AXES;
 
 /// Highest smoothing level: at low step rates the Bresenham runs at up to
@@ -84,72 +86,6 @@ pub struct StepEvent {
     pub step_mask: u8,
     /// Ticks until the next event; 0: stop the timer (idle or stopped).
     pub ticks: u32,
-}
-
-/// Pin timing in timer ticks and the invert masks.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct StepConfig {
-    pub tick_hz: u32,
-    pub pulse_ticks: u32,
-    pub dir_setup_ticks: u32,
-    /// Shortest time between two events: the pulse must end first.
-    pub min_period: u32,
-    /// Shortest low time between two pulses the step driver guarantees,
-    /// however late its interrupt runs: the pulse width (`$0`), and at
-    /// least 1 µs (drivers specify low minimums alike; a few need more,
-    /// and then `$0` should be raised).
-    pub min_low_ticks: u32,
-    /// `$207`: from driver enable to the first step edge.
-    pub enable_ticks: u32,
-    /// How close a target may be for the step interrupt to wait for it
-    /// rather than arm the compare: [`driver::SPIN_TICKS`] at 96 MHz,
-    /// scaled to the timer's clock (0 below 12 MHz, where the compare
-    /// write's latency is a fraction of a tick). A slow counter (a fuzzing
-    /// clock of 48 kHz) spun 8 whole ticks per event, 167 µs each.
-    pub spin_ticks: u32,
-    pub step_invert: u8,
-    pub dir_invert: u8,
-    pub limit_invert: u8,
-    pub probe_invert: bool,
-}
-
-impl StepConfig {
-    /// All zero: a stand-in until [`StepConfig::new`] (the board's
-    /// machine slot before `Machine::rebuild`).
-    pub const UNSET: StepConfig = StepConfig {
-        tick_hz: 0,
-        pulse_ticks: 0,
-        dir_setup_ticks: 0,
-        min_period: 0,
-        min_low_ticks: 0,
-        enable_ticks: 0,
-        spin_ticks: 0,
-        step_invert: 0,
-        dir_invert: 0,
-        limit_invert: 0,
-        probe_invert: false,
-    };
-
-    pub fn new(s: &Settings, tick_hz: u32) -> Self {
-        let exact = |us: f32| libm::ceilf(us.max(0.0) * tick_hz as f32 / 1.0e6) as u32;
-        let ticks = |us: f32| exact(us).max(1);
-        let pulse_ticks = ticks(s.step_pulse_us);
-        let ceiling = libm::ceilf(tick_hz as f32 / s.max_step_rate_hz.max(1.0)) as u32;
-        StepConfig {
-            tick_hz,
-            pulse_ticks,
-            dir_setup_ticks: ticks(s.dir_setup_us),
-            min_period: ceiling.max(pulse_ticks + 1),
-            min_low_ticks: pulse_ticks.max(ticks(1.0)),
-            enable_ticks: exact(s.enable_delay_us),
-            spin_ticks: (driver::SPIN_TICKS as u64 * tick_hz as u64 / 96_000_000)
-                .min(driver::SPIN_TICKS as u64) as u32,
-            step_invert: s.step_invert,
-            dir_invert: s.dir_invert,
-            limit_invert: s.limit_invert,
-            probe_invert: s.probe_invert,
-        }
-    }
 }
 
 /// What the interrupt keeps of the running segment, pre-computed once per

@@ -63,6 +63,17 @@ struct File {
     interrupts: Irq,
     #[serde(default)]
     gcode: Gcode,
+    wiring: Option<WiringFile>,
+}
+
+/// `[wiring]`: the machine's own wiring where it differs from its settings
+/// (see `config::Wiring`); keys left out follow the settings.
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct WiringFile {
+    limits_nc: Option<String>,
+    probe_nc: Option<bool>,
+    motors_reversed: Option<String>,
 }
 
 #[derive(Deserialize, Default)]
@@ -344,6 +355,17 @@ pub(super) fn apply(text: &str, cfg: &mut MachineConfig) -> Result<(), ConfigErr
     bit(&mut s.status_mask, 2, r.buffer_state);
     set(&mut s.report_inches, r.inches);
     set(&mut s.report_axes, r.axes);
+    if let Some(w) = f.wiring {
+        let mut wiring = super::Wiring::matching(s);
+        set_mask(&mut wiring.limits_nc, "wiring.limits_nc", w.limits_nc)?;
+        set(&mut wiring.probe_nc, w.probe_nc);
+        set_mask(
+            &mut wiring.motors_reversed,
+            "wiring.motors_reversed",
+            w.motors_reversed,
+        )?;
+        cfg.wiring = Some(wiring);
+    }
     Ok(())
 }
 

@@ -20,12 +20,27 @@ use super::World;
 use crate::config::IrqTicks;
 
 /// One pin store as the driver made it: levels after it (logical: bit n is
-/// axis n, step high, direction negative), at `tick`.
+/// axis n, step high, direction negative), at `tick`, with the `$2`/`$3`
+/// inverts it was made under ([`Edge::step_pins`], [`Edge::dir_pins`]: the
+/// levels on the wires).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Edge {
     pub tick: u64,
     pub step: u8,
     pub dir: u8,
+    pub step_invert: u8,
+    pub dir_invert: u8,
+}
+
+impl Edge {
+    /// Step pin levels (bit set: high).
+    pub fn step_pins(&self) -> u8 {
+        self.step ^ self.step_invert
+    }
+    /// Direction pin levels (bit set: high).
+    pub fn dir_pins(&self) -> u8 {
+        self.dir ^ self.dir_invert
+    }
 }
 
 /// The timer and the pin levels (see the module docs for its clock).
@@ -42,6 +57,10 @@ pub struct VirtualHw {
     tick_hz: u32,
     step: u8,
     dir: u8,
+    /// `$2`/`$3` as the pins were last configured (boot, then
+    /// `StepPins::apply_config`).
+    step_invert: u8,
+    dir_invert: u8,
     enabled: bool,
     /// The pulse-end DMA stream (with hardware pulse ends) and the width
     /// the driver gave it, ticks.
@@ -54,7 +73,8 @@ pub struct VirtualHw {
 }
 
 impl VirtualHw {
-    pub fn new(irq: IrqTicks, tick_hz: u32) -> Self {
+    /// `step_invert`/`dir_invert`: `$2`/`$3` at power-up.
+    pub fn new(irq: IrqTicks, tick_hz: u32, step_invert: u8, dir_invert: u8) -> Self {
         VirtualHw {
             t: Cell::new(0),
             reads: Cell::new(2),
@@ -65,6 +85,8 @@ impl VirtualHw {
             tick_hz,
             step: 0,
             dir: 0,
+            step_invert,
+            dir_invert,
             enabled: false,
             dma: PulseDma::new(irq.pulse_dma.0, irq.pulse_dma.1),
             width: 0,
@@ -119,7 +141,13 @@ impl VirtualHw {
     fn record(&mut self, tick: u64, step: u8, dir: u8) {
         self.step = step;
         self.dir = dir;
-        let e = Edge { tick, step, dir };
+        let e = Edge {
+            tick,
+            step,
+            dir,
+            step_invert: self.step_invert,
+            dir_invert: self.dir_invert,
+        };
         self.stores.push(e);
         if let Some(log) = &mut self.log {
             log.push(e);
@@ -163,7 +191,7 @@ impl<const HW_FALL: bool> StepPins for Wired<'_, HW_FALL> {
         let (dir, rising) = (hw.dir, step_mask & !hw.step);
         let at = hw.t.get();
         hw.store(hw.step | step_mask, dir, work);
-        self.world.step(rising, dir);
+        self.world.step(rising, dir ^ hw.dir_invert);
         if HW_FALL {
             let end = at + hw.width + hw.irq.pulse_end.unwrap_or(0);
             hw.fall_at(end);
@@ -182,6 +210,15 @@ impl<const HW_FALL: bool> StepPins for Wired<'_, HW_FALL> {
     }
     fn set_enabled(&mut self, on: bool) {
         self.hw.enabled = on;
+    }
+    /// The new inverts, and the idle levels under them in one store (as
+    /// the board's BSRR word), made at once by the handler.
+    fn apply_config(&mut self, cfg: &burin::stepper::StepConfig, dir_mask: u8) {
+        let hw = &mut *self.hw;
+        hw.step_invert = cfg.step_invert;
+        hw.dir_invert = cfg.dir_invert;
+        let work = hw.irq.fall - hw.irq.entry;
+        hw.store(0, dir_mask, work);
     }
     fn switches(&self) -> Switches {
         self.world.switches()

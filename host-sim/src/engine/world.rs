@@ -1,11 +1,12 @@
 //! The physical machine around the steppers: where the carriage really is
-//! (counted from the step pulses, independent of what the core believes)
-//! and which switches that closes.
+//! (counted from the step pulses and the direction pins' levels,
+//! independent of what the core believes) and which switches that closes,
+//! as pin levels through the machine's [`Wiring`].
 
 use burin::stepper::Switches;
 use burin::AXES;
 
-use crate::config::MachineConfig;
+use crate::config::{MachineConfig, Wiring};
 
 #[derive(Clone, Copy, Debug)]
 struct Limit {
@@ -25,8 +26,7 @@ pub struct World {
     pub steps: [i64; AXES],
     limits: [Option<Limit>; AXES],
     probe: Option<(usize, i64, i64)>,
-    limit_invert: u8,
-    probe_invert: bool,
+    wiring: Wiring,
     pins: Switches,
     watched: u8,
 }
@@ -70,8 +70,7 @@ impl World {
             steps,
             limits,
             probe,
-            limit_invert: s.limit_invert,
-            probe_invert: s.probe_invert,
+            wiring: cfg.wiring.unwrap_or(Wiring::matching(s)),
             pins: Switches::default(),
             watched,
         };
@@ -89,17 +88,20 @@ impl World {
         self.update();
     }
 
-    /// Pin levels as the firmware would read them (inversion applied).
+    /// Pin levels as the firmware reads them: a normally-closed switch
+    /// reads active while open (the firmware's `$5`/`$6` must say so).
     pub fn switches(&self) -> Switches {
         self.pins
     }
 
-    /// Apply one step event.
+    /// Apply one step event; `dir_pins`: the direction pins' levels (bit
+    /// set: high), which turn each motor as it is wired.
     #[inline]
-    pub fn step(&mut self, step_mask: u8, dir_mask: u8) {
+    pub fn step(&mut self, step_mask: u8, dir_pins: u8) {
+        let negative = dir_pins ^ self.wiring.motors_reversed;
         for i in 0..AXES {
             if step_mask & (1 << i) != 0 {
-                self.steps[i] += if dir_mask & (1 << i) != 0 { -1 } else { 1 };
+                self.steps[i] += if negative & (1 << i) != 0 { -1 } else { 1 };
             }
         }
         if step_mask & self.watched != 0 {
@@ -127,8 +129,8 @@ impl World {
             .probe
             .is_some_and(|(a, trip, sense)| self.steps[a] * sense >= trip * sense);
         self.pins = Switches {
-            limits: limits ^ self.limit_invert,
-            probe: contact ^ self.probe_invert,
+            limits: limits ^ self.wiring.limits_nc,
+            probe: contact ^ self.wiring.probe_nc,
         };
     }
 }

@@ -64,6 +64,7 @@ pub fn small_machine(soft_limits: bool, probe: bool) -> MachineConfig {
         start_position_mm: [-10.0, -10.0, -1.0, 0.0],
         host: HostModel::INSTANT,
         interrupts: Default::default(),
+        wiring: None,
     }
 }
 

@@ -65,6 +65,7 @@ fn motion(settings: Settings, tick_hz: u32, target: [f32; 4]) {
         start_position_mm: [0.0; 4],
         host: HostModel::INSTANT,
         interrupts: Default::default(),
+        wiring: None,
     };
     let mut rec = Discard;
     let mut sim = Sim::new(&cfg, &mut rec);

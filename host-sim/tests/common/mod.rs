@@ -54,6 +54,7 @@ pub fn config() -> MachineConfig {
         start_position_mm: [0.0; AXES],
         host: host_sim::config::HostModel::default(),
         interrupts: host_sim::config::Interrupts::default(),
+        wiring: None,
     }
 }
 

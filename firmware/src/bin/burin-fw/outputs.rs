@@ -24,6 +24,8 @@ pub const WAKE_MS: u16 = 0;
 /// The stepper-enable pin alone: one BSRR store per change.
 pub struct EnablePin {
     bsrr: usize,
+    pin: u8,
+    active_high: bool,
     on: u32,
     off: u32,
 }
@@ -32,17 +34,28 @@ impl EnablePin {
     /// `bsrr` is the BSRR of the port holding `pin` (configured as an
     /// output); `active_high` after `$4`.
     pub fn new(bsrr: *mut u32, pin: u8, active_high: bool) -> Self {
-        let (set, reset) = (1u32 << (pin & 0xF), 1u32 << ((pin & 0xF) + 16));
-        let (on, off) = if active_high {
+        let mut p = EnablePin {
+            bsrr: bsrr as usize,
+            pin,
+            active_high: !active_high,
+            on: 0,
+            off: 0,
+        };
+        p.set_active_high(active_high);
+        p
+    }
+
+    /// `$4` changed: the words for the new polarity (the caller rewrites
+    /// the level).
+    fn set_active_high(&mut self, active_high: bool) {
+        let pin = self.pin & 0xF;
+        let (set, reset) = (1u32 << pin, 1u32 << (pin + 16));
+        (self.on, self.off) = if active_high {
             (set, reset)
         } else {
             (reset, set)
         };
-        EnablePin {
-            bsrr: bsrr as usize,
-            on,
-            off,
-        }
+        self.active_high = active_high;
     }
 
     fn set(&mut self, on: bool) {
@@ -79,6 +92,11 @@ impl Io {
         if self.written.as_ref() == Some(p) {
             return;
         }
+        // `$4` applies at once: a new polarity rewrites the level.
+        if self.enable_pin.active_high != p.enable_invert {
+            self.enable_pin.set_active_high(p.enable_invert);
+            self.written = None;
+        }
         let killed =
             burin::outputs::write_then_recheck(&crate::RT, || self.store(p), board::kill_aux);
         self.written = if killed { None } else { Some(*p) };
@@ -99,8 +117,9 @@ impl Io {
         a.flood.set_state(level(p.flood));
         a.mist.set_state(level(p.mist));
         defmt::debug!(
-            "outputs: enable {}, spindle {} ccw {} duty {}/{}, flood {}, mist {}",
+            "outputs: enable {} (active high {}), spindle {} ccw {} duty {}/{}, flood {}, mist {}",
             p.enable,
+            p.enable_invert,
             p.spindle.enable,
             p.spindle.ccw,
             duty,

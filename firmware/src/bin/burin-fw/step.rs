@@ -116,10 +116,29 @@ impl StepPort {
         port
     }
 
-    /// Applies the `$2` step, `$3` direction and `$4` enable invert settings.
-    /// Default polarity: step pulses are high, enable is active low (the
-    /// common A4988/DRV8825/TMC convention).
+    /// Applies the `$2` step, `$3` direction and `$4` enable invert settings
+    /// at power-up. Default polarity: step pulses are high, enable is active
+    /// low (the common A4988/DRV8825/TMC convention).
     pub fn set_invert(&mut self, step_invert: u8, dir_invert: u8, enable_invert: bool) {
+        self.tables(step_invert, dir_invert, enable_invert);
+        // The idle levels under these inverts, at once and in one store:
+        // step pins at rest (so the first pulse has an edge with `$2`),
+        // directions for "positive" (so `$3` never changes DIR in the same
+        // store as a first STEP), drivers off (`$4`).
+        self.write(self.step_off | self.dirs[0] | self.enable_off);
+    }
+
+    /// After [`StepPort::tables`] for a `$2`/`$3` change while the step
+    /// driver is stopped (`StepPins::apply_config`): step pins at rest and
+    /// directions `dir_mask` under the new inverts, in one store. The
+    /// enable pin is the parse task's at rest (`outputs::Io` rewrites it
+    /// under `$4`).
+    pub fn rest(&mut self, dir_mask: u8) {
+        self.write(self.step_off | self.dirs[usize::from(dir_mask & 0xF)]);
+    }
+
+    /// The BSRR words under `$2`/`$3`/`$4`; writes nothing.
+    pub fn tables(&mut self, step_invert: u8, dir_invert: u8, enable_invert: bool) {
         let p = self.pins;
         for mask in 0..16u8 {
             self.step_on[usize::from(mask)] = bsrr_word(&p.step, mask & !step_invert, mask);
@@ -133,11 +152,6 @@ impl StepPort {
         } else {
             (low, high)
         };
-        // The idle levels under these inverts, at once and in one store:
-        // step pins at rest (so the first pulse has an edge with `$2`),
-        // directions for "positive" (so `$3` never changes DIR in the same
-        // store as a first STEP), drivers off (`$4`).
-        self.write(self.step_off | self.dirs[0] | self.enable_off);
     }
 
     /// The BSRR word that lowers every step pin (under `$2`), and the
@@ -333,6 +347,21 @@ impl StepPins for StepHw {
     }
     fn set_enabled(&mut self, on: bool) {
         self.port.set_enabled(on);
+    }
+    /// `$2`/`$3`/`$4` (and `$0`) after a `$n=`, while the timer is stopped.
+    fn apply_config(&mut self, cfg: &burin::stepper::StepConfig, dir_mask: u8) {
+        self.port
+            .tables(cfg.step_invert, cfg.dir_invert, cfg.enable_invert);
+        // The pulse-end hardware first: its step-off word under the new
+        // `$2` (the stream restarted so it preloads it), so no stray match
+        // can restore the old rest level after the store below. Its width
+        // follows at the next start (`set_pulse_width`).
+        #[cfg(not(feature = "board-qemu"))]
+        {
+            let (word, bsrr) = self.port.step_off_store();
+            self.pulse.set_step_off(word, bsrr);
+        }
+        self.port.rest(dir_mask);
     }
     #[inline(always)]
     fn switches(&self) -> Switches {

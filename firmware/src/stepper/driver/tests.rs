@@ -20,6 +20,8 @@ struct Toy<const HW: bool> {
     dir: u8,
     /// The pulse width the driver gave (`HW`).
     width: u64,
+    /// The last configuration the driver handed over, with its directions.
+    applied: Option<(StepConfig, u8)>,
 }
 
 impl<const HW: bool> Toy<HW> {
@@ -33,6 +35,7 @@ impl<const HW: bool> Toy<HW> {
             irqs: 0,
             dir: 0,
             width: 0,
+            applied: None,
         }
     }
     fn push(&mut self, step: u8, dir: u8) {
@@ -67,6 +70,9 @@ impl<const HW: bool> StepPins for Toy<HW> {
     }
     fn set_enabled(&mut self, on: bool) {
         self.enabled = on;
+    }
+    fn apply_config(&mut self, cfg: &StepConfig, dir_mask: u8) {
+        self.applied = Some((*cfg, dir_mask));
     }
     fn switches(&self) -> Switches {
         Switches::default()
@@ -302,4 +308,176 @@ fn no_pulse_after_a_hard_limit_halt() {
     // The count the executor may already have read stays.
     assert_eq!(stepper.position()[0], 4);
     assert!(!d.is_running());
+}
+
+/// Interrupts at each target until the driver stops; `before` runs ahead
+/// of every one (a publish mid-move).
+fn drive<const HW: bool>(
+    d: &mut StepDriver,
+    stepper: &mut Stepper,
+    hw: &mut Toy<HW>,
+    rt: &Realtime,
+    pop: &mut impl FnMut() -> Option<Segment>,
+    before: &mut impl FnMut(usize),
+) {
+    for i in 0..200 {
+        let Some(t) = hw.target else { break };
+        hw.t.set(hw.t.get().max(t));
+        before(i);
+        d.on_interrupt(stepper, hw, rt, pop);
+    }
+    assert!(!d.is_running());
+}
+
+#[test]
+fn a_new_configuration_is_taken_at_rest_only() {
+    let tick_hz = 1_000_000 * US as u32;
+    let rt = Realtime::new();
+    let base = Settings {
+        step_pulse_us: 2.0,
+        max_step_rate_hz: 50_000.0,
+        ..Settings::default()
+    };
+    let wide = Settings {
+        step_pulse_us: 7.0,
+        step_invert: 0b1,
+        dir_invert: 0b1,
+        ..base
+    };
+    let wider = Settings {
+        step_pulse_us: 9.0,
+        ..wide
+    };
+    let mut stepper = Stepper::new(StepConfig::new(&base, tick_hz));
+    let mut d = StepDriver::new();
+    let mut hw = Toy::<true>::new();
+    // A kick at rest with nothing queued only takes the configuration: the
+    // pins get it (idle levels) with the directions as they stand.
+    rt.step_config().publish(&StepConfig::new(&wide, tick_hz));
+    assert!(d.on_interrupt(&mut stepper, &mut hw, &rt, &mut || None));
+    assert_eq!(hw.applied, Some((StepConfig::new(&wide, tick_hz), 0)));
+    assert_eq!(stepper.cfg, StepConfig::new(&wide, tick_hz));
+    assert!(!rt.step_config().pending() && !d.is_running());
+    // A move on it; `$0` raised again half way is not taken mid-move.
+    let segs = [segment(3, 1, true)];
+    let mut q = segs.iter().copied();
+    let mut pop = || q.next();
+    d.on_interrupt(&mut stepper, &mut hw, &rt, &mut pop);
+    let mut publish = |i: usize| {
+        if i == 2 {
+            rt.step_config().publish(&StepConfig::new(&wider, tick_hz));
+        }
+    };
+    drive(&mut d, &mut stepper, &mut hw, &rt, &mut pop, &mut publish);
+    let log = &hw.log[..hw.n];
+    let rises: Vec<_> = log.iter().filter(|e| e.1 != 0).collect();
+    let falls: Vec<_> = log.iter().filter(|e| e.2 == 0xFF).collect();
+    assert_eq!((rises.len(), falls.len()), (3, 3), "{log:?}");
+    for (r, f) in rises.iter().zip(&falls) {
+        let high = f.0 - r.0;
+        assert!((7 * US..8 * US).contains(&high), "7 µs, not 9: {log:?}");
+    }
+    // Taken at the stop, with X's direction (negative) as it stands.
+    assert_eq!(hw.applied, Some((StepConfig::new(&wider, tick_hz), 1)));
+    assert_eq!(stepper.cfg.pulse_ticks, 9 * US as u32);
+}
+
+#[test]
+fn a_configuration_waiting_at_the_last_slot_stops_the_driver_there() {
+    // The task published after the stepper went idle but before the
+    // driver's slot after the last event; a move queued meanwhile starts
+    // from rest on the new configuration (the task's kick), not on the old.
+    let tick_hz = 1_000_000 * US as u32;
+    let rt = Realtime::new();
+    let base = Settings {
+        step_pulse_us: 2.0,
+        ..Settings::default()
+    };
+    let wide = Settings {
+        step_pulse_us: 7.0,
+        ..base
+    };
+    let mut stepper = Stepper::new(StepConfig::new(&base, tick_hz));
+    let mut d = StepDriver::new();
+    let mut hw = Toy::<true>::new();
+    let segs = [segment(1, 0, true), segment(1, 0, true)];
+    let mut q = segs.iter().copied();
+    let mut n = 0;
+    // The first segment alone, then the second appears with the config.
+    let mut pop = || {
+        n += 1;
+        if n == 2 {
+            return None;
+        }
+        q.next()
+    };
+    d.on_interrupt(&mut stepper, &mut hw, &rt, &mut pop);
+    let mut first = true;
+    for _ in 0..20 {
+        let Some(t) = hw.target else { break };
+        hw.t.set(hw.t.get().max(t));
+        if first && d.pending().ticks == 0 {
+            first = false;
+            rt.step_config().publish(&StepConfig::new(&wide, tick_hz));
+        }
+        d.on_interrupt(&mut stepper, &mut hw, &rt, &mut pop);
+    }
+    assert!(!first, "never reached the slot after the last event");
+    assert!(!d.is_running() && !rt.stepping(), "stopped for the config");
+    assert_eq!(stepper.cfg.pulse_ticks, 7 * US as u32);
+    assert_eq!(hw.log[..hw.n].iter().filter(|e| e.1 != 0).count(), 1);
+    // The kick: the queued step on the new width, `$0`+ after the start.
+    let t0 = hw.t.get();
+    d.on_interrupt(&mut stepper, &mut hw, &rt, &mut pop);
+    drive(&mut d, &mut stepper, &mut hw, &rt, &mut pop, &mut |_| {});
+    let log = &hw.log[..hw.n];
+    let rise = log.iter().rposition(|e| e.1 != 0);
+    let rise = rise.map(|i| log[i]);
+    let fall = log.last().copied();
+    assert!(rise.is_some_and(|r| r.0 >= t0), "{log:?}");
+    let high = rise.zip(fall).map(|(r, f)| f.0 - r.0);
+    assert!(
+        high.is_some_and(|h| (7 * US..8 * US).contains(&h)),
+        "{log:?}"
+    );
+}
+
+#[test]
+fn a_kick_after_a_slow_last_step_takes_the_configuration_without_waiting() {
+    // One step 10 ms long: the slot after it is 10 ms away when `$0=` is
+    // published; the task's kick stops the driver as soon as the pulse is
+    // over and the configuration is taken then.
+    let tick_hz = 1_000_000 * US as u32;
+    let rt = Realtime::new();
+    let base = Settings::default();
+    let wide = Settings {
+        step_pulse_us: 7.0,
+        ..base
+    };
+    let mut stepper = Stepper::new(StepConfig::new(&base, tick_hz));
+    let mut d = StepDriver::new();
+    let mut hw = Toy::<true>::new();
+    let mut seg = segment(1, 0, true);
+    seg.period = 10_000 * US as u32;
+    let mut q = [seg].into_iter();
+    let mut pop = || q.next();
+    // The kick from rest makes the step at once (`$207` = 0).
+    d.on_interrupt(&mut stepper, &mut hw, &rt, &mut pop);
+    let rise = hw.log[..hw.n].iter().find(|e| e.1 != 0).map_or(0, |e| e.0);
+    assert!(rise > 0 && d.pending().ticks == 0 && d.is_running());
+    assert!(hw.target.is_some_and(|t| t >= rise + 10_000 * US - 10));
+    rt.step_config().publish(&StepConfig::new(&wide, tick_hz));
+    // The kick moves the stop to the end of the pulse's timing...
+    d.on_interrupt(&mut stepper, &mut hw, &rt, &mut pop);
+    let stop = hw.target.unwrap_or(u64::MAX);
+    assert!(
+        stop < rise + 100 * US,
+        "the stop waits for the slot: {stop}"
+    );
+    // ...where it stops and takes it.
+    hw.t.set(stop);
+    d.on_interrupt(&mut stepper, &mut hw, &rt, &mut pop);
+    assert!(!d.is_running() && !rt.stepping());
+    assert_eq!(stepper.cfg.pulse_ticks, 7 * US as u32);
+    assert!(hw.applied.is_some());
 }
