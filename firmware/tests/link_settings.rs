@@ -240,7 +240,7 @@ fn step_rate_beyond_the_ceiling_is_refused() {
     assert_eq!(s.set(201, 450_000.0), Err(SettingError::StepRateCeiling));
     assert_eq!(SettingError::StepRateCeiling.code().code(), 114);
     assert_eq!(s, before);
-    // `$0=5` needs 5 + 0.5 + 5 µs a step: 95 kHz, not the default 200 kHz.
+    // `$0=5` needs 5 + 1 + 5 µs a step: 91 kHz, not the default 200 kHz.
     assert_eq!(s.set(0, 5.0), Err(SettingError::StepRateCeiling));
     assert_eq!(s, before);
     let top = libm::floorf(ceiling::ceiling_hz(5.0));
