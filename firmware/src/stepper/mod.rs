@@ -371,13 +371,13 @@ impl Stepper {
     }
 
     /// One axis's Bresenham step: its bit in the step mask if it steps.
-    /// An axis without steps in this segment costs a load and a branch.
+    /// An axis without steps in this segment (its increment 0, its
+    /// accumulator below the threshold) runs the same add, compare and
+    /// store: no taken branch, which costs more than the store once flash
+    /// wait states are counted (bench-target, issue 28).
     #[inline(always)]
     fn axis<const I: usize>(&mut self, rt: &Realtime, threshold: u32) -> u8 {
         let inc = self.run.inc[I];
-        if inc == 0 {
-            return 0;
-        }
         let acc = self.acc[I] + inc;
         if acc < threshold {
             self.acc[I] = acc;
