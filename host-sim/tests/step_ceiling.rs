@@ -81,7 +81,10 @@ fn planner_and_driver_share_the_ceiling() {
         drop(sim);
         let planned_hz = f64::from(rec.0) / 60.0 * 80.0;
         let planned = (f64::from(cfg.tick_hz) / planned_hz).ceil() as u64;
-        assert!(planned >= period, "{pulse_us} µs: planned {planned} < {period} ticks");
+        assert!(
+            planned >= period,
+            "{pulse_us} µs: planned {planned} < {period} ticks"
+        );
         // At the top rate (the ramps take a few steps at 1e7 mm/s²) the
         // driver keeps the plan's period: no gap longer than it (it does
         // not fall behind and catch up).

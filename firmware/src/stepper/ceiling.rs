@@ -34,6 +34,8 @@ pub const CPU_HZ: f32 = 84.0e6;
 pub const STEP_PATH_SHARE: f32 = 0.75;
 /// The fastest stepping the CPU sustains, Hz.
 pub const CPU_RATE_HZ: f32 = CPU_HZ * STEP_PATH_SHARE / STEP_PATH_CYCLES;
+// The default `$201` (200 kHz) must stay valid.
+const _: () = assert!(CPU_RATE_HZ >= 200_000.0);
 /// What the pins need beyond `$0` and the low time, µs. The driver
 /// (`driver::StepDriver`) spaces a step after a step by the pins from the
 /// counter read that follows the rising store (so a late interrupt can
@@ -66,7 +68,7 @@ pub fn min_period_ticks(s: &Settings, tick_hz: u32) -> u32 {
     let pins = pulse_ticks(s.step_pulse_us, tick_hz)
         .saturating_add(ticks(PIN_ALLOWANCE_US, tick_hz))
         .saturating_add(min_low_ticks(s.step_pulse_us, tick_hz));
-    let hz = s.max_step_rate_hz.min(CPU_RATE_HZ).max(1.0);
+    let hz = crate::num::clamp(s.max_step_rate_hz, 1.0, CPU_RATE_HZ);
     let rate = libm::ceilf(tick_hz as f32 / hz) as u32;
     pins.max(rate).max(1)
 }
@@ -90,7 +92,6 @@ mod tests {
     fn the_cpu_caps_short_pulses_and_the_pins_long_ones() {
         // 2 µs: the pins allow 1/(2 + 1 + 2 µs) = 200 kHz; the CPU more.
         assert_eq!(ceiling_hz(2.0), CPU_RATE_HZ.min(1.0e6 / 5.0));
-        assert!(CPU_RATE_HZ >= 200_000.0, "the default $201 must fit");
         // 5 µs: 1/(5 + 1 + 5 µs) = 90.9 kHz.
         assert!((ceiling_hz(5.0) - 1.0e6 / 11.0).abs() < 1.0);
         // The default settings fit; 450 kHz never does.

@@ -55,7 +55,7 @@
 //! (the handler touches far fewer than 64). So a taken branch (or the
 //! entry) to a line not yet touched costs the wait states; a line reached
 //! by running on costs what the prefetch has not hidden: the wait states
-//! + 1 minus the cycles spent since the previous line was entered; a
+//! plus 1, minus the cycles spent since the previous line was entered; a
 //! literal load from a line not yet read costs the wait states. The
 //! "warm" figure assumes every line hits (no wait state at all).
 //!
@@ -66,7 +66,6 @@ use std::collections::HashSet;
 /// One clock configuration of a board.
 #[derive(Clone, Copy, Debug)]
 pub struct Chip {
-    pub name: &'static str,
     pub hz: f64,
     /// Flash wait states at `hz` (RM0383 table 6 / RM0368 table 6).
     pub ws: u32,
@@ -78,7 +77,6 @@ pub struct Chip {
 }
 
 pub const F411: Chip = Chip {
-    name: "F411 96 MHz",
     hz: 96.0e6,
     ws: 3,
     apb1_div: 2,
@@ -86,7 +84,6 @@ pub const F411: Chip = Chip {
     warm: false,
 };
 pub const F401: Chip = Chip {
-    name: "F401 84 MHz",
     hz: 84.0e6,
     ws: 2,
     apb1_div: 2,
@@ -437,7 +434,7 @@ pub fn handler_detail(
         }
         let refill = |target: u32| -> u64 {
             let wide = insn(target).is_some_and(|t| t.size == 4);
-            if wide && target % 4 != 0 {
+            if wide && !target.is_multiple_of(4) {
                 3
             } else {
                 2
