@@ -227,3 +227,33 @@ fn enable_delay_is_checked() {
     assert_eq!(s.set(207, f32::NAN), Err(SettingError::NotANumber));
     assert_eq!(s.enable_delay_us, 5.0);
 }
+
+/// Issue 28: one step-rate ceiling. `$201` above what the CPU sustains
+/// (450 kHz, once accepted) and a `$0` that makes the current `$201`
+/// impossible are refused with `error:114`, and nothing changes; a `$201`
+/// within the ceiling of the new `$0` makes that `$0` acceptable.
+#[test]
+fn step_rate_beyond_the_ceiling_is_refused() {
+    use burin::stepper::ceiling;
+    let mut s = Settings::default();
+    let before = s;
+    assert_eq!(s.set(201, 450_000.0), Err(SettingError::StepRateCeiling));
+    assert_eq!(SettingError::StepRateCeiling.code().code(), 114);
+    assert_eq!(s, before);
+    // `$0=5` needs 5 + 1 + 5 µs a step: 91 kHz, not the default 200 kHz.
+    assert_eq!(s.set(0, 5.0), Err(SettingError::StepRateCeiling));
+    assert_eq!(s, before);
+    let top = libm::floorf(ceiling::ceiling_hz(5.0));
+    assert!((90_000.0..100_000.0).contains(&top), "{top}");
+    assert_eq!(s.set(201, top), Ok(()));
+    assert_eq!(s.set(0, 5.0), Ok(()));
+    // And back: `$201` above the new `$0`'s ceiling is refused.
+    assert_eq!(s.set(201, 200_000.0), Err(SettingError::StepRateCeiling));
+    assert_eq!(s.max_step_rate_hz, top);
+    // The CPU's share is the top whatever `$0`: the default fits.
+    assert!(ceiling::settings_fit(&Settings::default()));
+    assert_eq!(
+        s.set(201, libm::floorf(ceiling::CPU_RATE_HZ) + 1.0),
+        Err(SettingError::StepRateCeiling)
+    );
+}

@@ -285,12 +285,16 @@ impl MachineConfig {
         if let MaskPhase::Fixed(at) = irq.mask_phase {
             at_least_zero("interrupts.mask_phase", at)?;
         }
-        if s.step_pulse_us * s.max_step_rate_hz >= 1e6 {
+        // The firmware's own rule (`$0`/`$201` refused beyond the one
+        // step-rate ceiling, `error:114`).
+        if !burin::stepper::ceiling::settings_fit(s) {
             return Err(ConfigError::invalid(
                 "pulses.step_pulse_us",
                 format!(
-                    "a {} µs pulse does not fit in one period of motion.max_step_rate_hz = {} Hz",
-                    s.step_pulse_us, s.max_step_rate_hz
+                    "a {} µs pulse allows at most {:.0} Hz, motion.max_step_rate_hz is {} Hz",
+                    s.step_pulse_us,
+                    burin::stepper::ceiling::ceiling_hz(s.step_pulse_us),
+                    s.max_step_rate_hz
                 ),
             ));
         }

@@ -54,11 +54,14 @@ pub enum Code {
     /// A settings write (`$n=`, `$RST=`) with the spindle or coolant on:
     /// the flash erase would stall the e-stop handler (M5 M9 first).
     OutputsOn = 113,
+    /// `$201` above the step-rate ceiling of `$0` and the step path's
+    /// cost, or a `$0` that makes the current `$201` impossible.
+    StepRateCeiling = 114,
 }
 
 impl Code {
     /// Every code, for tables and tests.
-    pub const ALL: [Code; 22] = [
+    pub const ALL: [Code; 23] = [
         Code::BadNumber,
         Code::InvalidStatement,
         Code::NegativeValue,
@@ -81,6 +84,7 @@ impl Code {
         Code::SettingNotInteger,
         Code::SettingBadMask,
         Code::OutputsOn,
+        Code::StepRateCeiling,
     ];
 
     /// The stable number.
@@ -118,6 +122,9 @@ impl Code {
             Code::SettingNotInteger => "setting needs a whole number",
             Code::SettingBadMask => "mask names axes that do not exist",
             Code::OutputsOn => "no flash write with spindle or coolant on (M5 M9 first)",
+            Code::StepRateCeiling => {
+                "step rate beyond the ceiling of the pulse width and the CPU (lower $201 or $0)"
+            }
         }
     }
 }

@@ -10,7 +10,13 @@
 //! times a `subs`/`bne` loop written in assembly, run N times (exactly 2N
 //! instructions), and divides. A metric is then
 //! `(ticks − empty-measurement ticks) / ticks_per_insn / repetitions`. QEMU
-//! counts instructions, not cycles: the cycle figures below assume a CPI.
+//! counts instructions, not cycles.
+//!
+//! Cycles: the same ELF runs a second time with a word set at the stand-in
+//! window's end (QEMU's loader device), and then only the step handler's
+//! phases, with QEMU logging every instruction and the registers before
+//! it; `cargo xtask bench-target` charges each executed instruction by
+//! Cortex-M4 timings, bus and flash included (xtask/src/bench_target/).
 //!
 //! Output: one `name value` line per metric on the semihosting console, lines
 //! starting with `#` are context; the exit status is 0 when all ran.

@@ -162,10 +162,22 @@ impl<S: Storage> Persist<S> {
     pub fn load(&mut self) -> Loaded {
         let mut report = Report::default();
         let mut settings = self.defaults;
+        // `$0` is checked against `$201` (the step-rate ceiling), which is
+        // read after it: a `$0` refused for the default `$201` gets a
+        // second try once the stored `$201` is in.
+        let mut again = None;
         for (i, n) in table::numbers().enumerate().take(SETTINGS) {
             let mut v = [0.0];
             let ok = match self.read(record::setting_key(n), &mut v) {
-                Ok(found) => found && settings.set(n, v[0]).is_ok(),
+                Ok(found) => {
+                    found && {
+                        let r = settings.set(n, v[0]);
+                        if r == Err(table::SettingError::StepRateCeiling) {
+                            again = Some((i, n, v[0]));
+                        }
+                        r.is_ok()
+                    }
+                }
                 Err(_) => {
                     report.failed = true;
                     false
@@ -173,6 +185,30 @@ impl<S: Storage> Persist<S> {
             };
             self.saved[i] = if ok { v[0] } else { f32::NAN };
             report.defaulted += u16::from(!ok);
+        }
+        if let Some((i, n, v)) = again {
+            if n == 0 && settings.set(0, v).is_err() {
+                // A pair older firmware took ($0=5 with $201=200000): the
+                // drivers need the pulse width, a lower rate is only
+                // slower, so `$201` comes down to the ceiling (and is
+                // written back as a changed item).
+                let ceiling = libm::floorf(crate::stepper::ceiling::ceiling_hz(v));
+                if settings
+                    .set(201, ceiling.min(settings.max_step_rate_hz))
+                    .is_ok()
+                {
+                    if let Some(k) = table::numbers().position(|m| m == 201) {
+                        if let Some(s) = self.saved.get_mut(k) {
+                            *s = f32::NAN;
+                            report.defaulted += 1;
+                        }
+                    }
+                }
+            }
+            if settings.set(n, v).is_ok() {
+                self.saved[i] = v;
+                report.defaulted -= 1;
+            }
         }
         let mut offsets = Offsets::default();
         for (k, o) in vectors_mut(&mut offsets).enumerate() {

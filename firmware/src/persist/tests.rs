@@ -291,3 +291,40 @@ fn the_index_reads_what_a_scan_reads() {
         );
     }
 }
+
+/// `$0` loads before `$201` and is checked against it (the one step-rate
+/// ceiling, issue 28): a stored wide pulse with a matching low `$201`
+/// comes back whole, and a pair older firmware took (`$0=5` with
+/// `$201=200000`) keeps the pulse the drivers need and lowers `$201` to
+/// its ceiling, written back.
+#[test]
+fn a_wide_pulse_survives_the_step_rate_ceiling_on_load() {
+    use crate::stepper::ceiling::ceiling_hz;
+    let mut p = persist(Board::new());
+    let mut s = p.load().settings;
+    s.set(201, 90_000.0).expect("valid");
+    s.set(0, 5.0).expect("valid with $201 at 90 kHz");
+    p.save_settings(&s).expect("saved");
+    let back = persist(flash_of(&mut p)).load();
+    assert!(back.report.is_clean(), "{:?}", back.report);
+    assert_eq!(back.settings.step_pulse_us, 5.0);
+    assert_eq!(back.settings.max_step_rate_hz, 90_000.0);
+
+    let mut p = persist(Board::new());
+    let mut old = p.load().settings;
+    old.step_pulse_us = 5.0;
+    old.max_step_rate_hz = 200_000.0;
+    p.save_settings(&old).expect("saved");
+    let mut again = persist(flash_of(&mut p));
+    let back = again.load();
+    assert_eq!(back.settings.step_pulse_us, 5.0);
+    assert_eq!(
+        back.settings.max_step_rate_hz,
+        libm::floorf(ceiling_hz(5.0))
+    );
+    assert_eq!(back.report.defaulted, 1, "{:?}", back.report);
+    // Written back by the load: the next boot is clean.
+    assert_eq!(again.save_settings(&back.settings).ok(), Some(0));
+    let third = persist(flash_of(&mut again)).load();
+    assert!(third.report.is_clean(), "{:?}", third.report);
+}

@@ -42,6 +42,8 @@ pub fn level(dominant: f32, tick_hz: u32, minor: bool) -> u8 {
 /// `steps` (dominant `count`) steps faster than its limit, with `2^amass`
 /// events per dominant step.
 pub fn floor_ticks(s: &Settings, tick_hz: u32, steps: &[u32; AXES], count: u32, amass: u8) -> u32 {
+    // The one ceiling (`$201`, the pins, the CPU), as the driver spaces rises.
+    let ceiling = crate::stepper::ceiling::min_period_ticks(s, tick_hz) as f32;
     let tick_hz = tick_hz as f32;
     let events = (count as u64) << amass;
     let mut floor = 0u32;
@@ -50,11 +52,11 @@ pub fn floor_ticks(s: &Settings, tick_hz: u32, steps: &[u32; AXES], count: u32, 
             continue;
         }
         let ax = &s.axes[i];
-        let hz = (ax.max_rate / 60.0 * ax.steps_per_mm).min(s.max_step_rate_hz);
+        let hz = ax.max_rate / 60.0 * ax.steps_per_mm;
         if !(hz.is_finite() && hz > 0.0) {
             continue;
         }
-        let limit = libm::ceilf(tick_hz / hz);
+        let limit = libm::ceilf(tick_hz / hz).max(ceiling);
         let k = (events / n as u64).max(1) as f32;
         let p = libm::ceilf(limit / k);
         if p.is_finite() && p > floor as f32 {

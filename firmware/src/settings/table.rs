@@ -21,6 +21,10 @@ pub enum SettingError {
     NotInteger,
     /// A mask with bits for axes that do not exist.
     BadMask,
+    /// `$201` above the step-rate ceiling that `$0` and the step path's
+    /// cost allow ([`crate::stepper::ceiling::ceiling_hz`]), or a `$0`
+    /// that makes the current `$201` impossible.
+    StepRateCeiling,
 }
 
 impl SettingError {
@@ -33,6 +37,7 @@ impl SettingError {
             SettingError::OutOfRange => Code::SettingRange,
             SettingError::NotInteger => Code::SettingNotInteger,
             SettingError::BadMask => Code::SettingBadMask,
+            SettingError::StepRateCeiling => Code::StepRateCeiling,
         }
     }
 }
@@ -131,8 +136,10 @@ const AXIS_GROUPS: [(u16, Kind); 4] = [
     (130, Kind::Real { min: 0.0, max: BIG }),
 ];
 
-/// `$201`'s maximum, Hz (see its table entry).
-pub const MAX_STEP_RATE_HZ: f32 = 450_000.0;
+/// `$201`'s maximum, Hz: what the CPU sustains whatever `$0` is
+/// ([`crate::stepper::ceiling::CPU_RATE_HZ`]); `$0` may lower it further
+/// ([`Settings::set`] refuses a pair beyond it).
+pub const MAX_STEP_RATE_HZ: f32 = crate::stepper::ceiling::CPU_RATE_HZ;
 
 /// burin's own, `$200`–`$208` and `$210` (documented on the [`Settings`]
 /// fields).
@@ -144,15 +151,13 @@ const BURIN: [(u16, Kind); 10] = [
             max: 100.0,
         },
     ),
-    // The ceiling follows the step path's measured cost (`cargo xtask
-    // bench-target`: 184 cycles a step with the DMA pulse end, so 522 kHz
-    // would take the whole F411 at 96 MHz and 456 kHz the F401 at 84 MHz);
-    // the next step-path change moves it.
+    // Range only: the ceiling (`$0` and the step path's cost) is checked
+    // in `set`, with its own error.
     (
         201,
         Kind::Real {
             min: 1.0,
-            max: MAX_STEP_RATE_HZ,
+            max: 1.0e7,
         },
     ),
     (202, Kind::Int { min: 0, max: 1 }),
@@ -346,6 +351,18 @@ impl Settings {
     /// Set `$n` to `v` after validating it; on error nothing changes.
     pub fn set(&mut self, n: u16, v: f32) -> Result<(), SettingError> {
         check(kind(n).ok_or(SettingError::Unknown)?, v)?;
+        if n == 0 || n == 201 {
+            let mut next = *self;
+            next.set_checked(n, v)?;
+            if !crate::stepper::ceiling::settings_fit(&next) {
+                return Err(SettingError::StepRateCeiling);
+            }
+        }
+        self.set_checked(n, v)
+    }
+
+    /// [`Settings::set`] after the checks.
+    fn set_checked(&mut self, n: u16, v: f32) -> Result<(), SettingError> {
         // Validated above: whole numbers in range, so these casts are exact.
         let (u8v, u16v, on) = (v as u8, v as u16, v != 0.0);
         match n {

@@ -17,7 +17,6 @@
 
 use core::sync::atomic::{fence, AtomicU32, Ordering};
 
-use super::driver;
 use crate::settings::Settings;
 
 /// Pin timing in timer ticks and the invert masks.
@@ -26,7 +25,9 @@ pub struct StepConfig {
     pub tick_hz: u32,
     pub pulse_ticks: u32,
     pub dir_setup_ticks: u32,
-    /// Shortest time between two events: the pulse must end first.
+    /// Shortest time between two step events: the one step-rate ceiling
+    /// ([`super::ceiling::min_period_ticks`]: `$201`, the pins and the
+    /// CPU), which the preparer plans with and the driver spaces rises by.
     pub min_period: u32,
     /// Shortest low time between two pulses the step driver guarantees,
     /// however late its interrupt runs: the pulse width (`$0`), and at
@@ -69,19 +70,16 @@ impl StepConfig {
     };
 
     pub fn new(s: &Settings, tick_hz: u32) -> Self {
-        let exact = |us: f32| libm::ceilf(us.max(0.0) * tick_hz as f32 / 1.0e6) as u32;
-        let ticks = |us: f32| exact(us).max(1);
-        let pulse_ticks = ticks(s.step_pulse_us);
-        let ceiling = libm::ceilf(tick_hz as f32 / s.max_step_rate_hz.max(1.0)) as u32;
+        let exact = |us: f32| super::ceiling::ticks(us, tick_hz);
         StepConfig {
             tick_hz,
-            pulse_ticks,
-            dir_setup_ticks: ticks(s.dir_setup_us),
-            min_period: ceiling.max(pulse_ticks + 1),
-            min_low_ticks: pulse_ticks.max(ticks(1.0)),
+            pulse_ticks: super::ceiling::pulse_ticks(s.step_pulse_us, tick_hz),
+            dir_setup_ticks: exact(s.dir_setup_us).max(1),
+            min_period: super::ceiling::min_period_ticks(s, tick_hz),
+            min_low_ticks: super::ceiling::min_low_ticks(s.step_pulse_us, tick_hz),
             enable_ticks: exact(s.enable_delay_us),
-            spin_ticks: (driver::SPIN_TICKS as u64 * tick_hz as u64 / 96_000_000)
-                .min(driver::SPIN_TICKS as u64) as u32,
+            spin_ticks: (super::driver::SPIN_TICKS as u64 * tick_hz as u64 / 96_000_000)
+                .min(super::driver::SPIN_TICKS as u64) as u32,
             step_invert: s.step_invert,
             dir_invert: s.dir_invert,
             limit_invert: s.limit_invert,

@@ -91,10 +91,9 @@ pub struct StepDriver {
     dirs: u8,
     /// Where the hardware ends pulses: ticks from a rise to the latest
     /// moment its pulse is over (`$0` + the hardware's latency), and the
-    /// shortest rise-to-rise time that leaves both the minimum low time
-    /// after it and `$201` (the larger of the two). Set at each start from
-    /// rest (the stepper's configuration only changes while stopped), so
-    /// the step event adds one number instead of bounding by two.
+    /// shortest time from a rise's counter read to the next rise that
+    /// leaves the minimum low time after the pulse. Set at each start from
+    /// rest (the stepper's configuration only changes while stopped).
     fall_after: u32,
     rise_gap: u32,
 }
@@ -321,9 +320,7 @@ impl StepDriver {
         self.last_fall = now.wrapping_sub(cfg.min_low_ticks);
         self.last_rise = now.wrapping_sub(cfg.min_period);
         self.fall_after = cfg.pulse_ticks.saturating_add(hw.pulse_end_latency());
-        self.rise_gap = cfg
-            .min_period
-            .max(self.fall_after.saturating_add(cfg.min_low_ticks));
+        self.rise_gap = self.fall_after.saturating_add(cfg.min_low_ticks);
         self.phase = Phase::Low;
         self.target = self.planned;
         hw.schedule_at(self.target);
@@ -403,9 +400,14 @@ impl StepDriver {
         self.pending.step_mask = ev.step_mask;
         if H::ENDS_PULSES && steps {
             // What the fall handler does in the two-interrupt scheme; a
-            // step after a step is `rise_gap` after this rise at the soonest.
+            // step after a step is `rise_gap` after this rise's counter
+            // read (the pins) and the one ceiling after this rise's target
+            // (`min_period`, which the plan also keeps: measured from the
+            // late counter read it made every step late by the interrupt's
+            // latency, and the driver fell behind the plan at the ceiling).
             self.target = if self.pending.step_mask != 0 {
-                later(self.planned, now.wrapping_add(self.rise_gap))
+                let pins = later(self.planned, now.wrapping_add(self.rise_gap));
+                later(pins, self.target.wrapping_add(stepper.cfg.min_period))
             } else {
                 self.rise_target::<H>(&stepper.cfg)
             };
