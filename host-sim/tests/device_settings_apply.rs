@@ -140,6 +140,10 @@ fn a_raised_dollar_0_widens_the_next_pulses() {
     let before = widths(r.dev.sim.edges());
     assert_eq!(before.len(), 80);
     assert!(before.iter().all(|&w| w < 10 * TICKS_PER_US), "{before:?}");
+    // A 10 µs pulse needs the step rate under the one ceiling first
+    // (10 + 1 + 10 µs a step: 47.6 kHz at most).
+    assert_eq!(r.cmd("$0=10"), ["error:114"]);
+    assert_eq!(r.cmd("$201=40000"), ["ok"]);
     assert_eq!(r.cmd("$0=10"), ["ok"]);
     let from = r.dev.sim.edges().len();
     assert_eq!(r.cmd("G1 X0 F600"), ["ok"]);
