@@ -112,10 +112,6 @@ struct BenchHw<const HW: bool, const COUNT: bool> {
 
 impl<const HW: bool, const COUNT: bool> StepPins for BenchHw<HW, COUNT> {
     const ENDS_PULSES: bool = HW;
-    /// The pulse end is armed inside [`StepPins::step_high`] (TIM1 CCR2):
-    /// the driver's TIM5 CCR2 store is gone on the boards.
-    #[inline(always)]
-    fn end_pulse_at(&mut self, _at: u32) {}
     fn pulse_end_latency(&self) -> u32 {
         32
     }
