@@ -108,6 +108,8 @@ struct BenchHw<const HW: bool, const COUNT: bool> {
     step_off: u32,
     /// The pulse width in TIM1 ticks plus the margin (precomputed).
     w1: u32,
+    /// TIM1's ARR as `PulseEnd` caches it (the 1 kHz PWM at 48 MHz).
+    arr1: u32,
 }
 
 impl<const HW: bool, const COUNT: bool> StepPins for BenchHw<HW, COUNT> {
@@ -117,22 +119,24 @@ impl<const HW: bool, const COUNT: bool> StepPins for BenchHw<HW, COUNT> {
     }
     /// With `HW` the boards' rise: interrupts masked (an EXTI handler can
     /// no longer land between the counter read and the stores), TIM1's
-    /// counter read, the pulse end computed modulo its period (TIM1 also
-    /// carries the spindle PWM: ARR is read, as a `$`-setting may change
-    /// it), CCR2 written, then the rising BSRR store.
+    /// counter read, the pulse end computed modulo its period (kept in
+    /// RAM, as `PulseEnd` keeps TIM1's ARR), CCR2 written, then the rising
+    /// BSRR store.
     #[inline(always)]
     fn step_high(&mut self, step_mask: u8) {
         let on = self.step_on[usize::from(step_mask & 0xF)];
         if HW {
+            // Everything from RAM first, as the board's `StepHw::step_high`:
+            // inside the masked window only the registers.
+            let (bsrr, w1, arr) = (self.bsrr, self.w1, self.arr1);
             cortex_m::interrupt::disable();
             let c = regs::tim1_cnt().load(Relaxed);
-            let mut e = c.wrapping_add(self.w1);
-            let arr = regs::tim1_arr().load(Relaxed);
+            let mut e = c.wrapping_add(w1);
             if e > arr {
                 e -= arr + 1;
             }
             regs::tim1_ccr2().store(e, Relaxed);
-            self.bsrr.store(on, Relaxed);
+            bsrr.store(on, Relaxed);
             // SAFETY: register level (PRIMASK): the step handler runs with
             // interrupts enabled, so this restores the state it found.
             unsafe { cortex_m::interrupt::enable() };
@@ -333,6 +337,7 @@ fn step_event<const HW: bool, const COUNT: bool>(
             dirs: core::array::from_fn(|m| ((m as u32) << 4) | ((!m as u32 & 0xF) << 20)),
             step_off: STEP_OFF,
             w1: 2 * 48 + 8,
+            arr1: 47_999,
         },
         queue: rx,
     };

@@ -157,14 +157,20 @@ impl PulseEnd {
         self.latency
     }
 
-    /// Arms the end of a pulse that rises right after: compare 2 at the
-    /// counter now + the width, on TIM1's period.
+    /// The width and TIM1's ARR, loaded before the masked window.
     #[inline(always)]
-    pub fn arm_end(&self) {
+    pub fn params(&self) -> (u32, u32) {
+        (self.width, self.arr)
+    }
+
+    /// Arms the end of a pulse that rises right after: compare 2 at the
+    /// counter now + `width`, on TIM1's period (`arr` + 1).
+    #[inline(always)]
+    pub fn arm_end(width: u32, arr: u32) {
         let tim = tim1();
-        let mut end = tim.cnt().read().bits() + self.width;
-        if end > self.arr {
-            end -= self.arr + 1;
+        let mut end = tim.cnt().read().bits() + width;
+        if end > arr {
+            end -= arr + 1;
         }
         tim.ccr2().write(|w| w.ccr().set(end as u16));
     }

@@ -161,6 +161,14 @@ impl StepPort {
         (self.step_off, self.bsrr as u32)
     }
 
+    /// The BSRR address and the rising word for `step_mask` (the store
+    /// [`StepPins::step_high`] makes), for a caller that stores it itself.
+    #[cfg(not(feature = "board-qemu"))]
+    #[inline(always)]
+    pub fn rise_store(&self, step_mask: u8) -> (usize, u32) {
+        (self.bsrr, self.step_on[usize::from(step_mask & 0xF)])
+    }
+
     #[inline(always)]
     fn write(&mut self, word: u32) {
         // SAFETY: `bsrr` is the BSRR of a GPIO port (see `new`). BSRR is a
@@ -315,10 +323,18 @@ impl StepPins for StepHw {
     #[cfg(not(feature = "board-qemu"))]
     #[inline(always)]
     fn step_high(&mut self, step_mask: u8) {
-        cortex_m::interrupt::free(|_| {
-            self.pulse.arm_end();
-            self.port.step_high(step_mask);
-        });
+        // From RAM first: inside the masked window only the registers.
+        let (bsrr, word) = self.port.rise_store(step_mask);
+        let (width, arr) = self.pulse.params();
+        cortex_m::interrupt::disable();
+        crate::pulse_end::PulseEnd::arm_end(width, arr);
+        // SAFETY: register level: `bsrr` is the step port's BSRR and `word`
+        // one of `StepPort`'s precomputed words (see `StepPort::write`).
+        unsafe { core::ptr::write_volatile(bsrr as *mut u32, word) };
+        // SAFETY: register level (PRIMASK): the TIM5 handler runs with
+        // PRIMASK clear (RTIC masks by BASEPRI), so this restores what it
+        // found; nothing between the two changes the mask.
+        unsafe { cortex_m::interrupt::enable() };
     }
     #[cfg(feature = "board-qemu")]
     #[inline(always)]
