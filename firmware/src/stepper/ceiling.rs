@@ -41,8 +41,9 @@ const _: () = assert!(CPU_RATE_HZ >= 200_000.0);
 /// counter read that follows the rising store (so a late interrupt can
 /// never shorten the low time) and by the ceiling from the rise's target:
 /// at the ceiling it keeps the plan while the pulse end's lateness
-/// (`StepPins::pulse_end_latency`: 0.33 µs on the boards' DMA, host-sim's
-/// model alike) plus the interrupt's lateness to that counter read stay
+/// (`StepPins::pulse_end_latency`: on the boards TIM1's margin and
+/// rounding plus the DMA's allowance, 50 step-timer ticks, 0.52 µs at
+/// 96 MHz and 0.60 µs at 84 MHz; host-sim's tests model 0.33 µs) plus the interrupt's lateness to that counter read stay
 /// within this. 1 µs keeps the default `$0=2`, `$201=200000` valid.
 pub const PIN_ALLOWANCE_US: f32 = 1.0;
 

@@ -105,18 +105,23 @@ pub enum Region {
 
 /// The region of `addr`: the bench's stand-in blocks by their roles
 /// (TIM5 at 0x2001_F000, the GPIO port at 0x2001_F400, TIM1 at
-/// 0x2001_F800), the chip's own map otherwise.
+/// 0x2001_F800), the chip's own map otherwise (`burin::chip`'s, the one
+/// the board code is checked against; AHB2 costs as AHB1, anything off
+/// the bus matrix as the core's own).
 pub fn region(addr: u32) -> Region {
+    use burin::chip::bus::Region as Map;
     match addr {
         0x2001_F000..=0x2001_F3FF => Region::Apb1,
         0x2001_F400..=0x2001_F7FF => Region::Ahb1,
         0x2001_F800..=0x2001_FBFF => Region::Apb2,
-        0x0000_0000..=0x1FFF_FFFF => Region::Flash,
-        0x2000_0000..=0x3FFF_FFFF => Region::Sram,
-        0x4000_0000..=0x4000_FFFF => Region::Apb1,
-        0x4001_0000..=0x4001_FFFF => Region::Apb2,
-        0x4002_0000..=0x5FFF_FFFF => Region::Ahb1,
-        _ => Region::Core,
+        _ => match burin::chip::Chip::F411.region(addr) {
+            Map::Flash => Region::Flash,
+            Map::Sram => Region::Sram,
+            Map::Apb1 => Region::Apb1,
+            Map::Apb2 => Region::Apb2,
+            Map::Ahb1 | Map::Ahb2 => Region::Ahb1,
+            Map::Other => Region::Core,
+        },
     }
 }
 

@@ -38,6 +38,8 @@ const DMA_LATENCY_TICKS: u32 = 32;
 
 /// TIM1's compare 2 and DMA2 stream 2, as the step interrupt uses them.
 pub struct PulseEnd {
+    /// The stream's configuration, for a restart.
+    path: DmaPath,
     /// TIM1's period minus one (ARR) and its tick rate.
     arr: u32,
     tick_hz: u32,
@@ -93,6 +95,7 @@ impl PulseEnd {
         Self::arm(&path);
         tim.dier().modify(|_, w| w.cc2de().set_bit());
         let mut pe = PulseEnd {
+            path,
             arr,
             tick_hz: tim1_clk / (psc + 1),
             step_hz,
@@ -134,9 +137,9 @@ impl PulseEnd {
 
     /// A new step-off word (`$2` changed): stored and the stream restarted,
     /// only while no pulse is high (the step timer is stopped).
-    pub fn set_step_off(&mut self, word: u32, bsrr: u32) {
+    pub fn set_step_off(&mut self, word: u32) {
         if STEP_OFF.swap(word, Relaxed) != word {
-            Self::arm(&DmaPath::pulse_end(bsrr, STEP_OFF.as_ptr() as u32));
+            Self::arm(&self.path);
         }
     }
 

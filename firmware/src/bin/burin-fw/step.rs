@@ -373,10 +373,7 @@ impl StepPins for StepHw {
         // can restore the old rest level after the store below. Its width
         // follows at the next start (`set_pulse_width`).
         #[cfg(not(feature = "board-qemu"))]
-        {
-            let (word, bsrr) = self.port.step_off_store();
-            self.pulse.set_step_off(word, bsrr);
-        }
+        self.pulse.set_step_off(self.port.step_off_store().0);
         self.port.rest(dir_mask);
     }
     #[inline(always)]
