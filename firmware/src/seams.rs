@@ -62,7 +62,8 @@ pub trait StepPins {
     /// the parse task owns it at rest and writes it under the new `$4`
     /// itself; only the store [`StepPins::set_enabled`] makes changes.
     /// Hardware that ends pulses by itself takes the new step-off level
-    /// and pulse width here too.
+    /// here too (the width comes at every start:
+    /// [`StepPins::set_pulse_width`]).
     fn apply_config(&mut self, _cfg: &crate::stepper::StepConfig, _dir_mask: u8) {}
     /// Limit and probe pin levels (before the `$5`/`$6` inverts). The
     /// driver reads them right after each rising edge of a move that

@@ -269,7 +269,8 @@ impl StepDriver {
             return false;
         };
         stepper.cfg = cfg;
-        // Pulse-end hardware programs its width and step-off level in there.
+        // Pulse-end hardware takes its step-off level in there (its width
+        // at every start: `StepPins::set_pulse_width`).
         hw.apply_config(&stepper.cfg, self.dirs);
         true
     }
