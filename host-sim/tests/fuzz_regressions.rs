@@ -203,7 +203,13 @@ fn fuzz_arc_runaway_seeds_stay_in_their_box() {
         let f = host_sim::fuzz::target(name).expect("target");
         for kind in ["known", "regressions"] {
             let dir = root().join("firmware/fuzz").join(kind).join(name);
-            for e in std::fs::read_dir(&dir).expect("fuzz inputs").flatten() {
+            // Git keeps no empty directory: `known/<target>` exists only
+            // while a finding there is open.
+            let Ok(entries) = std::fs::read_dir(&dir) else {
+                assert_eq!(kind, "known", "{} missing", dir.display());
+                continue;
+            };
+            for e in entries.flatten() {
                 if e.file_name().to_string_lossy().starts_with("arc-runaway") {
                     eprintln!("{name}: {}", e.path().display());
                     f(&std::fs::read(e.path()).expect("input"));
