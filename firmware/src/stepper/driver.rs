@@ -241,6 +241,7 @@ impl StepDriver {
     /// [`Stepper::on_event`] off the hot path (start, the slot after the
     /// last event): kept out of line so the rise's own call inlines alone.
     #[inline(never)]
+    #[cold]
     fn poll_cold(
         stepper: &mut Stepper,
         rt: &Realtime,
