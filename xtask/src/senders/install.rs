@@ -1,0 +1,192 @@
+//! Bringing the senders in from their registries, into caches that outlive
+//! a run: PyPI into `target/senders/venv`, npm into `target/senders/npm`,
+//! Debian's packages into the system (apt, as root). A second run finds
+//! them all and installs nothing. Each install writes its output to a log
+//! beside its cache; a sender that could not be installed is skipped with
+//! the reason, never failed (CI does not fail for the network's sake).
+//!
+//! `cargo xtask ci` starts [`prepare`] on a thread before its first step, so
+//! the downloads overlap the builds; the apt installs take the same lock as
+//! the QEMU step's.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+use crate::util::{apt_lock, have, target_dir};
+
+/// PyPI, pinned (what the scripts were written against).
+const PYPI: [(&str, &[&str]); 2] = [
+    ("grbl-streamer", &["grbl-streamer==2.0.2", "pyserial==3.5"]),
+    ("printrun", &["--no-deps", "printrun==2.2.0"]),
+];
+/// npm, pinned.
+pub const CNCJS: &str = "1.11.5";
+/// Where Debian's `bcnc` puts its Python modules.
+pub const BCNC_DIR: &str = "/usr/share/bcnc/bCNC";
+/// Debian's interpreter: the one `bcnc`'s dependencies (pyserial, numpy,
+/// Tk) are installed for, whatever `python3` is first on PATH.
+pub const SYSTEM_PYTHON: &str = "/usr/bin/python3";
+
+/// What each registry gave: a path to run from, or why not.
+pub struct Ready {
+    /// The venv's python, with grbl-streamer and printrun.
+    pub pypi: Result<PathBuf, String>,
+    /// bCNC's module directory.
+    pub bcnc: Result<PathBuf, String>,
+    /// The npm prefix holding `node_modules/cncjs`.
+    pub cncjs: Result<PathBuf, String>,
+}
+
+fn cache() -> PathBuf {
+    target_dir().join("senders")
+}
+
+/// All three, PyPI beside apt-then-npm (npm may need apt's nodejs first).
+pub fn prepare() -> Ready {
+    let _ = std::fs::create_dir_all(cache());
+    let pypi = std::thread::spawn(pypi);
+    let (bcnc, node) = apt();
+    let cncjs = node.and_then(|()| cncjs());
+    let pypi = pypi
+        .join()
+        .unwrap_or_else(|_| Err("the PyPI install panicked".into()));
+    Ready { pypi, bcnc, cncjs }
+}
+
+/// Run `cmd` with its output in `log`; Err names the log.
+fn logged(cmd: &mut Command, log: &Path) -> Result<(), String> {
+    let file = std::fs::File::create(log).map_err(|e| format!("{}: {e}", log.display()))?;
+    let err = file.try_clone().map_err(|e| e.to_string())?;
+    let prog = cmd.get_program().to_string_lossy().into_owned();
+    match cmd.stdout(file).stderr(err).stdin(Stdio::null()).status() {
+        Ok(s) if s.success() => Ok(()),
+        Ok(s) => Err(format!("{prog} failed ({s}; see {})", log.display())),
+        Err(e) => Err(format!("{prog} did not start: {e}")),
+    }
+}
+
+fn pypi() -> Result<PathBuf, String> {
+    let dir = cache().join("venv");
+    let python = dir.join("bin").join("python");
+    if !python.exists() {
+        logged(
+            Command::new("python3").args(["-m", "venv"]).arg(&dir),
+            &cache().join("venv.log"),
+        )
+        .map_err(|e| format!("python3 -m venv: {e}"))?;
+    }
+    for (name, args) in PYPI {
+        let have = Command::new(&python)
+            .args(["-m", "pip", "show", "-q", name])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .status()
+            .is_ok_and(|s| s.success());
+        if !have {
+            let log = cache().join(format!("pip-{name}.log"));
+            let mut pip = Command::new(&python);
+            pip.args(["-m", "pip", "install", "--disable-pip-version-check"])
+                .args(["--timeout", "30"])
+                .args(args);
+            logged(&mut pip, &log).map_err(|e| format!("PyPI: {e}"))?;
+        }
+    }
+    Ok(python)
+}
+
+fn bcnc_there() -> bool {
+    Path::new(BCNC_DIR).join("Sender.py").is_file() && Path::new(SYSTEM_PYTHON).is_file()
+}
+
+/// bCNC, and node with npm when missing, in one apt-get run.
+fn apt() -> (Result<PathBuf, String>, Result<(), String>) {
+    let node_there = || have("node") && have("npm");
+    let mut want = Vec::new();
+    if !bcnc_there() {
+        want.push("bcnc");
+    }
+    if !node_there() {
+        want.extend(["nodejs", "npm"]);
+    }
+    let mut why = String::new();
+    if !want.is_empty() {
+        if let Err(e) = apt_install(&want) {
+            why = e;
+        }
+    }
+    let bcnc = if bcnc_there() {
+        Ok(PathBuf::from(BCNC_DIR))
+    } else {
+        Err(format!("Debian's bcnc is not installed: {why}"))
+    };
+    let node = if node_there() {
+        Ok(())
+    } else {
+        Err(format!("node and npm are not installed: {why}"))
+    };
+    (bcnc, node)
+}
+
+fn apt_install(pkgs: &[&str]) -> Result<(), String> {
+    let root = Command::new("id")
+        .arg("-u")
+        .output()
+        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0");
+    if !root {
+        return Err(format!("not root; `apt-get install {}`", pkgs.join(" ")));
+    }
+    let log = cache().join("apt.log");
+    let _lock = apt_lock();
+    let install = || {
+        logged(
+            Command::new("apt-get")
+                .env("DEBIAN_FRONTEND", "noninteractive")
+                .args(["install", "-y", "--no-install-recommends"])
+                .args(pkgs),
+            &log,
+        )
+    };
+    if install().is_ok() {
+        return Ok(());
+    }
+    logged(
+        Command::new("apt-get").arg("update"),
+        &cache().join("apt-update.log"),
+    )
+    .map_err(|e| format!("apt-get update: {e}"))?;
+    install()
+}
+
+fn cncjs() -> Result<PathBuf, String> {
+    let dir = cache().join("npm");
+    let manifest = dir.join("node_modules").join("cncjs").join("package.json");
+    let pinned = format!("\"version\": \"{CNCJS}\"");
+    let there = || std::fs::read_to_string(&manifest).is_ok_and(|t| t.contains(&pinned));
+    if there() {
+        return Ok(dir);
+    }
+    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    // A package.json of our own, so npm keeps to this prefix.
+    let pkg = dir.join("package.json");
+    if !pkg.exists() {
+        std::fs::write(&pkg, "{\"private\": true}\n").map_err(|e| e.to_string())?;
+    }
+    logged(
+        Command::new("npm")
+            .arg("install")
+            .arg("--prefix")
+            .arg(&dir)
+            .args(["--no-audit", "--no-fund", "--omit=dev"])
+            .arg(format!("cncjs@{CNCJS}")),
+        &cache().join("npm.log"),
+    )
+    .map_err(|e| format!("npm: {e}"))?;
+    if there() {
+        Ok(dir)
+    } else {
+        Err(format!(
+            "npm installed no cncjs {CNCJS} in {}",
+            dir.display()
+        ))
+    }
+}
