@@ -166,21 +166,21 @@ def finished():
 
 
 until("job did not finish (%d of %d lines)" % (s._gcount, s._runLines), 90, finished)
-# bCNC purges the controller when the job ends: '!', 1 s, Ctrl-X, 1 s, $X,
-# then its modal state back ($G, G43.1).
-until("no Idle after the job", 20, lambda: CNC.vars["state"] == "Idle")
-time.sleep(3)
+# bCNC purges the controller when the job ends: '!', 1 s, Ctrl-X, 1 s, $X
+# (which its queue drops on the banner), then $G. The position must stay.
+def after_reset():
+    with lock:
+        resets = [i for i, e in enumerate(log) if " > " in e and "\\x18" in e]
+        return log[resets[0] :] if resets else []
+
+
+until("bCNC sent no Ctrl-X after the job", 20, after_reset)
+until("no banner after bCNC's Ctrl-X", 10, lambda: any(" < Grbl " in e for e in after_reset()))
+time.sleep(0.5)
 until("no Idle after bCNC's end-of-job purge", 10, lambda: CNC.vars["state"] == "Idle")
 end = mpos()
 if any(abs(a - b) > 0.01 for a, b in zip(end, want)):
     fail("job ended at %s, want %s" % (end, want))
-with lock:
-    resets = [i for i, e in enumerate(log) if " > " in e and "\\x18" in e]
-    after_reset = log[resets[0]:] if resets else []
-if not after_reset:
-    fail("bCNC sent no Ctrl-X at the end of the job")
-if not any(" < Grbl " in e for e in after_reset):
-    fail("no banner after bCNC's Ctrl-X")
 
 # A jog (ControlPage's X+ button with a 100 mm step), cancelled as soon as
 # bCNC shows it. The button asks F100000, which GRBL clamps to the axis's

@@ -41,27 +41,33 @@ fn cache() -> PathBuf {
     target_dir().join("senders")
 }
 
-/// All three, PyPI beside apt-then-npm (npm may need apt's nodejs first).
+/// All three side by side; npm after apt only when apt must bring node.
 pub fn prepare() -> Ready {
     let _ = std::fs::create_dir_all(cache());
     let pypi = std::thread::spawn(pypi);
+    let npm = node_there().then(|| std::thread::spawn(cncjs));
     let (bcnc, node) = apt();
-    let cncjs = node.and_then(|()| cncjs());
+    let cncjs = match npm {
+        Some(npm) => npm
+            .join()
+            .unwrap_or_else(|_| Err("the npm install panicked".into())),
+        None => node.and_then(|()| cncjs()),
+    };
     let pypi = pypi
         .join()
         .unwrap_or_else(|_| Err("the PyPI install panicked".into()));
     Ready { pypi, bcnc, cncjs }
 }
 
-/// Run `cmd` with its output in `log`; Err names the log.
-fn logged(cmd: &mut Command, log: &Path) -> Result<(), String> {
+/// Run `cmd` (a `what` for messages) with its output in `log`; Err names
+/// the log.
+fn logged(what: &str, cmd: &mut Command, log: &Path) -> Result<(), String> {
     let file = std::fs::File::create(log).map_err(|e| format!("{}: {e}", log.display()))?;
     let err = file.try_clone().map_err(|e| e.to_string())?;
-    let prog = cmd.get_program().to_string_lossy().into_owned();
     match cmd.stdout(file).stderr(err).stdin(Stdio::null()).status() {
         Ok(s) if s.success() => Ok(()),
-        Ok(s) => Err(format!("{prog} failed ({s}; see {})", log.display())),
-        Err(e) => Err(format!("{prog} did not start: {e}")),
+        Ok(s) => Err(format!("{what} failed ({s}; see {})", log.display())),
+        Err(e) => Err(format!("{what} did not start: {e}")),
     }
 }
 
@@ -70,10 +76,10 @@ fn pypi() -> Result<PathBuf, String> {
     let python = dir.join("bin").join("python");
     if !python.exists() {
         logged(
+            "python3 -m venv",
             Command::new("python3").args(["-m", "venv"]).arg(&dir),
             &cache().join("venv.log"),
-        )
-        .map_err(|e| format!("python3 -m venv: {e}"))?;
+        )?;
     }
     for (name, args) in PYPI {
         let have = Command::new(&python)
@@ -88,7 +94,7 @@ fn pypi() -> Result<PathBuf, String> {
             pip.args(["-m", "pip", "install", "--disable-pip-version-check"])
                 .args(["--timeout", "30"])
                 .args(args);
-            logged(&mut pip, &log).map_err(|e| format!("PyPI: {e}"))?;
+            logged(&format!("pip install {name} (PyPI)"), &mut pip, &log)?;
         }
     }
     Ok(python)
@@ -98,9 +104,12 @@ fn bcnc_there() -> bool {
     Path::new(BCNC_DIR).join("Sender.py").is_file() && Path::new(SYSTEM_PYTHON).is_file()
 }
 
+fn node_there() -> bool {
+    have("node") && have("npm")
+}
+
 /// bCNC, and node with npm when missing, in one apt-get run.
 fn apt() -> (Result<PathBuf, String>, Result<(), String>) {
-    let node_there = || have("node") && have("npm");
     let mut want = Vec::new();
     if !bcnc_there() {
         want.push("bcnc");
@@ -117,12 +126,12 @@ fn apt() -> (Result<PathBuf, String>, Result<(), String>) {
     let bcnc = if bcnc_there() {
         Ok(PathBuf::from(BCNC_DIR))
     } else {
-        Err(format!("Debian's bcnc is not installed: {why}"))
+        Err(format!("no Debian bcnc: {why}"))
     };
     let node = if node_there() {
         Ok(())
     } else {
-        Err(format!("node and npm are not installed: {why}"))
+        Err(format!("no node and npm: {why}"))
     };
     (bcnc, node)
 }
@@ -137,8 +146,10 @@ fn apt_install(pkgs: &[&str]) -> Result<(), String> {
     }
     let log = cache().join("apt.log");
     let _lock = apt_lock();
+    let what = format!("apt-get install {}", pkgs.join(" "));
     let install = || {
         logged(
+            &what,
             Command::new("apt-get")
                 .env("DEBIAN_FRONTEND", "noninteractive")
                 .args(["install", "-y", "--no-install-recommends"])
@@ -150,10 +161,10 @@ fn apt_install(pkgs: &[&str]) -> Result<(), String> {
         return Ok(());
     }
     logged(
+        "apt-get update",
         Command::new("apt-get").arg("update"),
         &cache().join("apt-update.log"),
-    )
-    .map_err(|e| format!("apt-get update: {e}"))?;
+    )?;
     install()
 }
 
@@ -172,6 +183,7 @@ fn cncjs() -> Result<PathBuf, String> {
         std::fs::write(&pkg, "{\"private\": true}\n").map_err(|e| e.to_string())?;
     }
     logged(
+        &format!("npm install cncjs@{CNCJS}"),
         Command::new("npm")
             .arg("install")
             .arg("--prefix")
@@ -179,8 +191,7 @@ fn cncjs() -> Result<PathBuf, String> {
             .args(["--no-audit", "--no-fund", "--omit=dev"])
             .arg(format!("cncjs@{CNCJS}")),
         &cache().join("npm.log"),
-    )
-    .map_err(|e| format!("npm: {e}"))?;
+    )?;
     if there() {
         Ok(dir)
     } else {
