@@ -173,7 +173,9 @@ fn cncjs() -> Result<PathBuf, String> {
     let manifest = dir.join("node_modules").join("cncjs").join("package.json");
     let pinned = format!("\"version\": \"{CNCJS}\"");
     let there = || std::fs::read_to_string(&manifest).is_ok_and(|t| t.contains(&pinned));
-    if there() {
+    // Written once npm has finished: an install cut short is done again.
+    let done = dir.join(format!("installed-cncjs-{CNCJS}"));
+    if done.is_file() && there() {
         return Ok(dir);
     }
     std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
@@ -193,6 +195,7 @@ fn cncjs() -> Result<PathBuf, String> {
         &cache().join("npm.log"),
     )?;
     if there() {
+        std::fs::write(&done, "").map_err(|e| e.to_string())?;
         Ok(dir)
     } else {
         Err(format!(
