@@ -14,6 +14,7 @@ exit 0 on success; the last stdout line says what failed otherwise, and
 the exchange with the device (bytes both ways) goes to stderr."""
 import faulthandler
 import os
+import shutil
 import sys
 import tempfile
 import threading
@@ -43,6 +44,12 @@ def note(way, data):
 restore = []  # settings to put back, even when failing
 
 
+def leave(code):
+    shutil.rmtree(os.environ["HOME"], ignore_errors=True)
+    # bCNC's serial thread is not a daemon: exit without waiting for it.
+    os._exit(code)
+
+
 def fail(why):
     print("FAIL: " + why, flush=True)
     for line in restore:
@@ -56,8 +63,7 @@ def fail(why):
         for entry in lines:
             print(entry, file=sys.stderr)
     sys.stderr.flush()
-    # bCNC's serial thread is not a daemon: exit without waiting for it.
-    os._exit(1)
+    leave(1)
 
 
 faulthandler.dump_traceback_later(200, exit=True)
@@ -217,4 +223,4 @@ s.thread = None  # ends bCNC's serial loop
 time.sleep(0.3)
 s.serial.close()
 print("ok: ended at %s; jog cancelled after %.3f of 100 mm" % (end, jogged))
-os._exit(0)
+leave(0)

@@ -74,6 +74,16 @@ fn logged(what: &str, cmd: &mut Command, log: &Path) -> Result<(), String> {
 fn pypi() -> Result<PathBuf, String> {
     let dir = cache().join("venv");
     let python = dir.join("bin").join("python");
+    // Written once pip has installed every pin (asking pip costs seconds).
+    let pins: Vec<&str> = PYPI
+        .iter()
+        .flat_map(|(_, a)| a.iter().copied())
+        .filter(|a| !a.starts_with('-'))
+        .collect();
+    let done = dir.join(format!("installed-{}", pins.join(",")));
+    if python.exists() && done.is_file() {
+        return Ok(python);
+    }
     if !python.exists() {
         logged(
             "python3 -m venv",
@@ -82,21 +92,14 @@ fn pypi() -> Result<PathBuf, String> {
         )?;
     }
     for (name, args) in PYPI {
-        let have = Command::new(&python)
-            .args(["-m", "pip", "show", "-q", name])
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .status()
-            .is_ok_and(|s| s.success());
-        if !have {
-            let log = cache().join(format!("pip-{name}.log"));
-            let mut pip = Command::new(&python);
-            pip.args(["-m", "pip", "install", "--disable-pip-version-check"])
-                .args(["--timeout", "30"])
-                .args(args);
-            logged(&format!("pip install {name} (PyPI)"), &mut pip, &log)?;
-        }
+        let log = cache().join(format!("pip-{name}.log"));
+        let mut pip = Command::new(&python);
+        pip.args(["-m", "pip", "install", "--disable-pip-version-check"])
+            .args(["--timeout", "30"])
+            .args(args);
+        logged(&format!("pip install {name} (PyPI)"), &mut pip, &log)?;
     }
+    std::fs::write(&done, "").map_err(|e| e.to_string())?;
     Ok(python)
 }
 
