@@ -171,7 +171,11 @@ def finished():
     return not s.running
 
 
-until("job did not finish (%d of %d lines)" % (s._gcount, s._runLines), 90, finished)
+deadline = time.time() + 90
+while not finished():
+    if time.time() > deadline:
+        fail("job did not finish (%d of %d lines acknowledged)" % (s._gcount, s._runLines))
+    time.sleep(0.02)
 # bCNC purges the controller when the job ends: '!', 1 s, Ctrl-X, 1 s, $X
 # (which its queue drops on the banner), then $G. The position must stay.
 def after_reset():
