@@ -6,7 +6,8 @@ ask for it again with `Resend:` and run it once. Then the final position
 is read from a `?` status report.
 
 usage: python printcore_job.py PORT JOB X,Y,Z
-exit 0 on success; prints one line saying what failed otherwise."""
+exit 0 on success; prints one line saying what failed otherwise, and the
+exchange with the device (bytes both ways) on stderr."""
 import faulthandler
 import os
 import sys
@@ -17,11 +18,21 @@ from printrun import gcoder
 
 port, job, want = sys.argv[1], open(sys.argv[2]).read(), [float(v) for v in sys.argv[3].split(",")]
 lines, errors, resends = [], [], []
+t0 = time.time()
+log = []  # the exchange, for the failure report
+
+
+def note(way, data):
+    text = "".join(chr(b) if 0x20 <= b < 0x7F else "\\x%02x" % b for b in data)
+    log.append("%.3f %s %s" % (time.time() - t0, way, text))
 
 
 def fail(why):
     # printcore's threads would keep sys.exit waiting: leave at once.
     print("FAIL: " + why, flush=True)
+    for entry in log if len(log) <= 400 else log[:300] + ["..."] + log[-100:]:
+        print(entry, file=sys.stderr)
+    sys.stderr.flush()
     os._exit(1)
 
 
@@ -30,6 +41,7 @@ faulthandler.dump_traceback_later(200, exit=True)
 
 
 def on_recv(line):
+    note("<", line.encode())
     line = line.strip()
     lines.append(line)
     if line.lower().startswith("error"):
@@ -56,6 +68,7 @@ def noisy_write(data):
         damaged.append(data)
         head, _, _ = data.rpartition(b"*")
         data = head + b"*0\n" if not data.endswith(b"*0\n") else head + b"*1\n"
+    note(">", data)
     return write(data)
 
 

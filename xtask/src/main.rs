@@ -45,7 +45,7 @@ enum Cmd {
     BenchTarget,
     /// Motion benchmark: job time vs the time-optimal bound and the axis limits (simulated time).
     BenchMotion(bench_motion::BenchMotionArgs),
-    /// Real third-party senders (PyPI: grbl-streamer, printcore) against `sim --pty`.
+    /// Real third-party senders (grbl-streamer, printcore, bCNC, cncjs) against `sim --pty`.
     Senders,
     /// Coverage-guided fuzzing (cargo-fuzz, nightly): all targets or one.
     Fuzz(fuzz::FuzzArgs),

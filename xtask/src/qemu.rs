@@ -39,6 +39,7 @@ pub fn ensure_installed() -> Result<()> {
     if !root {
         bail!("{QEMU} is missing: install it with `sudo apt-get install -y qemu-system-arm`");
     }
+    let _lock = util::apt_lock();
     let install = || {
         util::run(
             Command::new("apt-get")

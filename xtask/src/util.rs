@@ -46,6 +46,14 @@ pub fn have(tool: &str) -> bool {
         .unwrap_or(false)
 }
 
+/// Held around every `apt-get install`: `cargo xtask ci` installs the
+/// senders on a thread while its QEMU step may install QEMU, and dpkg takes
+/// one at a time.
+pub fn apt_lock() -> std::sync::MutexGuard<'static, ()> {
+    static APT: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    APT.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 /// The embedded target every firmware build uses.
 pub const TARGET: &str = "thumbv7em-none-eabihf";
 /// Cargo profile of every firmware image (Cargo.toml: size-optimised, unlike
