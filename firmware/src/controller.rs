@@ -26,6 +26,7 @@ use crate::settings::table::SettingError;
 use crate::settings::Settings;
 use crate::stepper::prep::SegmentSink;
 use crate::stepper::Switches;
+use crate::suspend::Suspend;
 
 pub use crate::session::TX_HEADROOM;
 
@@ -41,6 +42,10 @@ pub struct Inputs {
     /// The port was closed or reopened since the last pass (the receive
     /// side already put its mode-reset marker into the ring).
     pub port_closed: bool,
+    /// A client opened the port since the last pass (after any close):
+    /// the session decides whether that is a reset with a banner
+    /// (`session::Device::port_opened`).
+    pub port_opened: bool,
 }
 
 /// Output pin levels after a pass, in hardware-free terms.
@@ -100,6 +105,7 @@ pub struct Controller<S: Storage> {
     pub session: Device<S>,
     asm: LineAssembler,
     outputs: Outputs,
+    suspend: Suspend,
     laser: LaserQueue,
     enable: Enable,
     resets: u32,
@@ -117,6 +123,7 @@ impl<S: Storage> Controller<S> {
             session,
             asm: LineAssembler::new(),
             outputs: Outputs::new(settings),
+            suspend: Suspend::new(),
             laser: LaserQueue::new(),
             enable: Enable::new(settings.idle_delay_ms, wake_ms),
             resets,
@@ -172,8 +179,10 @@ impl<S: Storage> Controller<S> {
             segments,
             rt,
             outputs: &mut self.outputs,
+            suspend: &mut self.suspend,
             laser: &mut self.laser,
             pins: input.pins,
+            now_ms: input.now_ms,
             obs,
         };
         if input.port_closed {
@@ -181,6 +190,9 @@ impl<S: Storage> Controller<S> {
             // What the departed client sent and the task did not read is
             // void (the splitter counted the port reset as a discard point).
             link.asm.flush_reset(link.rx, link.flags);
+        }
+        if input.port_opened {
+            self.session.port_opened(&mut link, &mut core, tx);
         }
         for _ in 0..2 {
             // Realtime commands act whatever the link does; only the
@@ -194,9 +206,13 @@ impl<S: Storage> Controller<S> {
             if self.session.stats.resets != self.resets {
                 self.resets = self.session.stats.resets;
                 core.outputs.all_off();
+                core.suspend.clear(core.outputs);
                 core.laser.clear();
             }
             core.poll(input.switches);
+            let delay_ms = (core.machine.settings().spindle_delay_s * 1000.0) as u32;
+            core.suspend
+                .update(rt, core.outputs, input.now_ms, delay_ms);
         }
         let queued = !core.segments.is_empty();
         let state = core.machine.state(rt);
@@ -217,6 +233,7 @@ impl<S: Storage> Controller<S> {
         let alarm = state == State::Alarm || self.session.sleeping();
         if alarm {
             core.outputs.all_off();
+            core.suspend.clear(core.outputs);
             core.laser.clear();
         }
         // Laser mode: spindle commands apply as their line starts to run,
@@ -242,8 +259,8 @@ impl<S: Storage> Controller<S> {
                 enable,
                 enable_invert,
                 spindle: self.outputs.spindle(motion),
-                flood: self.outputs.flood,
-                mist: self.outputs.mist,
+                flood: self.outputs.flood_on(),
+                mist: self.outputs.mist_on(),
             },
             kick: (queued && !stepping && self.enable.may_step())
                 || self.halting
@@ -288,8 +305,10 @@ struct Core<'a, Q, const N: usize> {
     segments: &'a mut Q,
     rt: &'a Realtime,
     outputs: &'a mut Outputs,
+    suspend: &'a mut Suspend,
     laser: &'a mut LaserQueue,
     pins: u16,
+    now_ms: u32,
     obs: &'a mut dyn FnMut(Event),
 }
 
@@ -382,6 +401,37 @@ impl<Q: SegmentSink, const N: usize> MotionPort for Core<'_, Q, N> {
     }
     fn pins(&self) -> u16 {
         self.pins
+    }
+    fn lock(&mut self, e: MachineError) {
+        self.machine.lock(e);
+    }
+    fn door(&mut self) {
+        self.suspend.door(self.rt);
+    }
+    fn spindle_stop(&mut self) -> bool {
+        self.suspend.spindle_stop(self.outputs, self.now_ms)
+    }
+    fn resume(&mut self) -> bool {
+        self.suspend.cycle_start(self.rt, self.outputs, self.now_ms)
+    }
+    /// As GRBL: the coolant changes at once, out of program order.
+    fn toggle_coolant(&mut self, flood: bool) -> (bool, bool) {
+        let o = &mut *self.outputs;
+        if flood {
+            o.flood = !o.flood;
+        } else {
+            o.mist = !o.mist;
+        }
+        (o.mist, o.flood)
+    }
+    fn door_substate(&self) -> Option<u8> {
+        self.suspend.door_substate(self.rt)
+    }
+    fn accessories(&self) -> u8 {
+        self.outputs.accessories()
+    }
+    fn set_spindle_override(&mut self, percent: u8) {
+        self.outputs.set_override(percent);
     }
     /// Rebuilds the executor with the new settings (only ever called while
     /// idle), keeping the position, and publishes the step interrupt's

@@ -66,6 +66,10 @@ pub enum MachineError {
     /// 427: a hardware path failed its check ([`crate::chip::HwFault`]):
     /// motion, homing and `$X` are refused until the chip is reset.
     HardwareFault { fault: crate::chip::HwFault },
+    /// 428: a reset woke the machine from `$SLP`: the drivers were off, so
+    /// the position is not trusted until `$X` or homing (GRBL's alarm
+    /// state after sleep).
+    Slept,
 }
 
 impl MachineError {
@@ -94,6 +98,7 @@ impl MachineError {
             ResetDuringMotion => 425,
             EStop => 426,
             HardwareFault { .. } => 427,
+            Slept => 428,
         }
     }
 
@@ -181,6 +186,7 @@ impl fmt::Display for MachineError {
                     fault.message()
                 )
             }
+            Slept => f.write_str("woke from sleep; $H or $X"),
         }
     }
 }

@@ -42,6 +42,7 @@ mod late;
 mod out;
 mod persist;
 mod ports;
+mod realtime;
 mod reprap;
 mod sys;
 
@@ -102,6 +103,8 @@ pub struct Device<S: Storage = NoStorage> {
     /// RepRap `N…*cs` numbering (`M110`, `Resend:`), text mode.
     numbers: reprap::LineNumbers,
     spindle_ov: u8,
+    /// `$C` turned check mode off: a soft reset follows its `ok` (GRBL's).
+    reset_due: bool,
     /// The port closed during a framed job; tell the next client.
     link_lost: LinkLost,
     /// Counters for tests and reports.
@@ -218,6 +221,11 @@ impl<S: Storage> Device<S> {
             // The splitter runs ahead: when it is framed, a switch to frames
             // is on its way and whatever text precedes it has no listener.
             if !(link.events_framed() || link.framed() || self.can_take()) {
+                break;
+            }
+            // GRBL asleep reads nothing: lines wait for the reset, which
+            // discards them.
+            if self.sleep && !(link.events_framed() || link.framed()) {
                 break;
             }
             let free = self.free_slots();
@@ -350,12 +358,15 @@ impl<S: Storage> Device<S> {
                     }
                 };
                 self.text_lines = self.text_lines.wrapping_add(1);
-                let n = self.text_lines;
+                // `Ln:` is the line's N word when it has one (GRBL's),
+                // else the count of lines.
+                let n = reprap::label(text).unwrap_or(self.text_lines);
                 self.line(text, n, m, o);
             }
             LinkEvent::System(cmd) => {
                 let r = self.system(cmd, m, o);
                 sys::reply(r, None, o);
+                self.reset_if_due(m, o);
             }
             LinkEvent::Error(code) => sys::reply(Err(code.code()), None, o),
             // Ends whatever text the host's decoder holds (the banner of a
@@ -431,7 +442,8 @@ impl<S: Storage> Device<S> {
         let seq = o.framed().then_some(n);
         if let Some(cmd) = crate::link::syscmd::parse(text) {
             let r = cmd.map_err(|c| c.code()).and_then(|c| self.system(c, m, o));
-            return self.reply_line(r, seq, o);
+            self.reply_line(r, seq, o);
+            return self.reset_if_due(m, o);
         }
         let blank = text.iter().all(u8::is_ascii_whitespace);
         if (self.sleep || self.seen_alarm.is_some() && !self.check) && !blank {
@@ -480,6 +492,13 @@ impl<S: Storage> Device<S> {
                     self.reply_line(Err(u16::from(e.grbl_code())), seq, o)
                 }
             }
+        }
+    }
+
+    /// The soft reset `$C` asked for, after its `ok`.
+    fn reset_if_due(&mut self, m: &mut impl MotionPort, o: &mut Out<'_, impl Tx>) {
+        if core::mem::take(&mut self.reset_due) {
+            self.soft_reset(m, o);
         }
     }
 
