@@ -60,7 +60,6 @@ pub struct Outputs {
 pub const HELD_SPINDLE: u8 = 1;
 pub const HELD_COOLANT: u8 = 2;
 
-
 impl Outputs {
     /// Everything off, the `$30`/`$31`/`$32` of `s`.
     pub fn new(s: &Settings) -> Self {

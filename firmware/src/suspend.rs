@@ -28,7 +28,10 @@ enum Phase {
     Stopped,
     /// The spindle is back on since `since` (ms); motion waits for the
     /// spin-up delay (`Door:3`), then resumes if `start`.
-    Restoring { since: u32, start: bool },
+    Restoring {
+        since: u32,
+        start: bool,
+    },
 }
 
 /// The suspend state (four words of RAM).
@@ -88,7 +91,13 @@ impl Suspend {
                 };
                 true
             }
-            _ => false,
+            // Stopped again before the spin-up ended (a pending `~` with it).
+            Phase::Restoring { .. } => {
+                outputs.hold(HELD_SPINDLE, true);
+                self.phase = Phase::Stopped;
+                false
+            }
+            Phase::Off => false,
         }
     }
 

@@ -42,7 +42,12 @@ impl<S: crate::seams::Storage> Device<S> {
     /// or held (a text job goes on when its sender leaves) the open resets
     /// nothing and sends no banner: `?` shows the state. A framed client
     /// has its own handshake.
-    pub fn port_opened(&mut self, link: &mut impl LinkPort, m: &mut impl MotionPort, tx: &mut impl Tx) {
+    pub fn port_opened(
+        &mut self,
+        link: &mut impl LinkPort,
+        m: &mut impl MotionPort,
+        tx: &mut impl Tx,
+    ) {
         if link.framed() || link.events_framed() {
             return;
         }

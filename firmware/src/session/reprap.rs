@@ -94,7 +94,9 @@ pub(super) fn label(text: &[u8]) -> Option<u32> {
         return None;
     }
     let digits = rest.iter().take_while(|b| b.is_ascii_digit()).count();
-    let num = rest.get(..digits).filter(|d| !d.is_empty() && d.len() <= 9)?;
+    let num = rest
+        .get(..digits)
+        .filter(|d| !d.is_empty() && d.len() <= 9)?;
     let n = num.iter().fold(0u32, |v, d| v * 10 + u32::from(d - b'0'));
     (n > 0).then_some(n)
 }
