@@ -30,9 +30,11 @@
 //!   framed mode as `DeviceMsg::Error` with the line's sequence number,
 //!   and they stop the job as an alarm (`late.rs`).
 //! * The machine line number (`Ln:`, traces) is the sequence number in
-//!   framed mode and the count of text lines received in text mode.
-//! * Soft reset during motion raises alarm 3 (as GRBL); `ALARM:3` comes
-//!   before the banner. Soft reset keeps the framed session's sequence.
+//!   framed mode; in text mode the line's N word when it has one (GRBL's
+//!   `Ln:`), else the count of text lines received.
+//! * Soft reset while something moves raises alarm 3 (as GRBL; a
+//!   finished hold or a dwell does not); `ALARM:3` comes before the
+//!   banner. A port open at rest is a soft reset (`realtime.rs`). Soft reset keeps the framed session's sequence.
 //! * Jog cancel is a feed hold followed, once stopped, by a flush; the
 //!   executor can flush only through a reset, so the device resets and
 //!   clears the resulting alarm itself (the position is kept exactly: the
