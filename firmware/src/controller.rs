@@ -411,7 +411,7 @@ impl<Q: SegmentSink, const N: usize> MotionPort for Core<'_, Q, N> {
     fn spindle_stop(&mut self) -> bool {
         self.suspend.spindle_stop(self.outputs, self.now_ms)
     }
-    fn resume(&mut self) -> bool {
+    fn resume(&mut self) -> crate::suspend::Resume {
         self.suspend.cycle_start(self.rt, self.outputs, self.now_ms)
     }
     /// As GRBL: the coolant changes at once, out of program order.

@@ -34,7 +34,19 @@ enum Phase {
     },
 }
 
-/// The suspend state (four words of RAM).
+/// What a cycle start did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Resume {
+    /// The door is open, or a door's hold is still stopping: nothing.
+    Refused,
+    /// The motion resumes now (or after a restore already under way).
+    Started,
+    /// A stopped spindle comes back first (a spindle stop's restore is
+    /// GRBL's `[MSG:Restoring spindle]`; `door` tells which).
+    Restoring { door: bool },
+}
+
+/// The suspend state (a few bytes of RAM).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Suspend {
     phase: Phase,
@@ -103,29 +115,30 @@ impl Suspend {
 
     /// Cycle start (`~`): resume now, or restore the outputs first. The
     /// door must read closed; before the hold has stopped a door's `~`
-    /// does nothing (GRBL's). Returns false when it was refused.
-    pub fn cycle_start(&mut self, rt: &Realtime, outputs: &mut Outputs, now_ms: u32) -> bool {
+    /// does nothing (GRBL's).
+    pub fn cycle_start(&mut self, rt: &Realtime, outputs: &mut Outputs, now_ms: u32) -> Resume {
         match self.phase {
             Phase::Off => rt.cycle_start(),
-            Phase::Stopping if self.door => return false,
+            Phase::Stopping if self.door => return Resume::Refused,
             // A spindle stop asked for before the hold completed: drop it.
             Phase::Stopping => {
                 self.phase = Phase::Off;
                 rt.cycle_start();
             }
-            Phase::Stopped if self.door && rt.door_open() => return false,
+            Phase::Stopped if self.door && rt.door_open() => return Resume::Refused,
             Phase::Stopped => {
                 outputs.hold(HELD_SPINDLE, false);
                 self.phase = Phase::Restoring {
                     since: now_ms,
                     start: true,
                 };
+                return Resume::Restoring { door: self.door };
             }
             Phase::Restoring { since, .. } => {
                 self.phase = Phase::Restoring { since, start: true };
             }
         }
-        true
+        Resume::Started
     }
 
     /// One pass: hold the outputs off once the motion has stopped, keep a
@@ -192,5 +205,68 @@ impl Suspend {
     /// Something is suspended (a door, or a spindle stop in a hold).
     pub fn active(&self) -> bool {
         self.phase != Phase::Off
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::command::Command;
+    use crate::settings::Settings;
+
+    fn spinning() -> Outputs {
+        let mut o = Outputs::new(&Settings::default());
+        o.apply(&Command::Spindle {
+            dir: SpindleDir::Cw,
+            speed: 1000.0,
+        });
+        o.apply(&Command::Coolant {
+            mist: false,
+            flood: true,
+        });
+        o
+    }
+
+    #[test]
+    fn a_door_reopened_while_restoring_stops_everything_again() {
+        let rt = Realtime::new();
+        let mut o = spinning();
+        let mut s = Suspend::new();
+        s.door(&rt);
+        assert_eq!(s.door_substate(&rt), Some(2));
+        s.update(&rt, &mut o, 0, 4000);
+        assert_eq!(s.door_substate(&rt), Some(0));
+        assert_eq!(o.accessories(), 0, "spindle and coolant off");
+        assert_eq!(
+            s.cycle_start(&rt, &mut o, 10),
+            Resume::Restoring { door: true }
+        );
+        assert_eq!(s.door_substate(&rt), Some(3));
+        s.update(&rt, &mut o, 3000, 4000);
+        assert!(o.spindle(crate::outputs::Motion::Stopped).enable);
+        assert!(!o.flood_on(), "coolant waits for the spin-up");
+        s.door(&rt);
+        s.update(&rt, &mut o, 3500, 4000);
+        assert_eq!(s.door_substate(&rt), Some(0));
+        assert_eq!(o.accessories(), 0);
+        assert!(rt.hold_requested(), "the door keeps its hold");
+    }
+
+    #[test]
+    fn a_spindle_stop_before_the_hold_completes_is_dropped_by_cycle_start() {
+        let rt = Realtime::new();
+        rt.set_running(600.0, 1, 0.0);
+        rt.set_stepper_idle(false);
+        let mut o = spinning();
+        let mut s = Suspend::new();
+        assert!(!s.spindle_stop(&mut o, 0));
+        s.update(&rt, &mut o, 0, 4000);
+        assert!(s.active(), "still moving: nothing held yet");
+        assert!(o.spindle(crate::outputs::Motion::Stopped).enable);
+        assert_eq!(s.cycle_start(&rt, &mut o, 5), Resume::Started);
+        assert!(!s.active());
+        rt.set_stepper_idle(true);
+        s.update(&rt, &mut o, 10, 4000);
+        assert!(o.spindle(crate::outputs::Motion::Stopped).enable);
     }
 }

@@ -144,9 +144,11 @@ fn spindle_stop_toggles_only_in_a_hold() {
     r.run(5);
     assert!(!spindle_on(&r));
     let held_at = x(&mut r);
+    r.lines();
     r.send(b"~");
     r.run(5);
     assert!(spindle_on(&r));
+    assert!(r.lines().iter().any(|l| l == "[MSG:Restoring spindle]"));
     r.run(150);
     assert_eq!(x(&mut r), held_at, "waits for the spindle");
     let st = r.until_idle();
@@ -402,4 +404,29 @@ fn reported_axes_default_to_the_machine() {
         let cfg = MachineConfig::load(format!("{dir}{file}")).expect("machine file");
         assert_eq!(cfg.settings.get(208), Some(axes), "{file}");
     }
+}
+
+/// Item 1: the door during homing ends the cycle with GRBL's `ALARM:7`.
+#[test]
+fn a_door_during_homing_is_alarm_7() {
+    let mut cfg = origin();
+    cfg.settings.homing_enable = true;
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    r.send(b"$H\n");
+    r.run(50);
+    assert_eq!(r.status().state, "Home");
+    r.send(&[0x84]);
+    let mut out = Vec::new();
+    for _ in 0..500 {
+        r.run(5);
+        out.extend(r.lines());
+        if out.iter().any(|l| l.starts_with("ALARM")) {
+            break;
+        }
+    }
+    assert!(out.iter().any(|l| l == "ALARM:7"), "{out:?}");
+    r.run(50);
+    r.alarm_holds(100);
 }

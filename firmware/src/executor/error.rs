@@ -70,6 +70,9 @@ pub enum MachineError {
     /// the position is not trusted until `$X` or homing (GRBL's alarm
     /// state after sleep).
     Slept,
+    /// 429: the safety door opened during homing (GRBL's alarm 7): the
+    /// cycle ramps down and stops unfinished.
+    HomingDoor,
 }
 
 impl MachineError {
@@ -99,6 +102,7 @@ impl MachineError {
             EStop => 426,
             HardwareFault { .. } => 427,
             Slept => 428,
+            HomingDoor => 429,
         }
     }
 
@@ -187,6 +191,7 @@ impl fmt::Display for MachineError {
                 )
             }
             Slept => f.write_str("woke from sleep; $H or $X"),
+            HomingDoor => f.write_str("safety door opened during homing"),
         }
     }
 }

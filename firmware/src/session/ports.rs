@@ -83,9 +83,8 @@ pub trait MotionPort {
     fn door(&mut self);
     /// 0x9E in a hold; true when it turns the spindle back on.
     fn spindle_stop(&mut self) -> bool;
-    /// Cycle start through the suspend rules; false when refused (the
-    /// door is open, or still stopping).
-    fn resume(&mut self) -> bool;
+    /// Cycle start through the suspend rules.
+    fn resume(&mut self) -> crate::suspend::Resume;
     /// 0xA0 (`flood`) or 0xA1: toggle the coolant now; returns the new
     /// (mist, flood).
     fn toggle_coolant(&mut self, flood: bool) -> (bool, bool);

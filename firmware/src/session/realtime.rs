@@ -191,7 +191,10 @@ impl<S: crate::seams::Storage> Device<S> {
                 if o.room() >= 32 {
                     let _ = reply::msg(o, "Check Door");
                 }
-                if !self.sleep {
+                if state == executor::State::Homing {
+                    // GRBL's alarm 7: the cycle stops unfinished.
+                    m.fault(MachineError::HomingDoor, 0);
+                } else if !self.sleep {
                     // A jog is cancelled first; the door then holds.
                     if self.jogging {
                         self.cancel_jog(m);
@@ -202,7 +205,9 @@ impl<S: crate::seams::Storage> Device<S> {
             // Asleep, nothing resumes (the drivers are off): reset first.
             Rt::CycleStart if self.sleep => {}
             Rt::CycleStart => {
-                let _ = m.resume();
+                if m.resume() == (crate::suspend::Resume::Restoring { door: false }) {
+                    let _ = reply::msg(o, "Restoring spindle");
+                }
             }
             Rt::JogCancel => {
                 if self.jogging {

@@ -42,6 +42,7 @@ pub fn alarm_code(e: MachineError) -> u16 {
         MachineError::EStop => alarm::ESTOP,
         MachineError::HardwareFault { .. } => alarm::HARDWARE_FAULT,
         MachineError::Slept => alarm::SLEPT,
+        MachineError::HomingDoor => alarm::HOMING_FAIL_DOOR,
         MachineError::ProbeInitialState => alarm::PROBE_FAIL_INITIAL,
         MachineError::ProbeNoContact => alarm::PROBE_FAIL_CONTACT,
         MachineError::HomingPullOff { .. } => alarm::HOMING_FAIL_PULLOFF,
