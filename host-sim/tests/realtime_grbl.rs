@@ -109,6 +109,11 @@ fn safety_door_resumes_only_with_the_door_closed() {
     // From idle: the door holds the next line until `~`.
     r.send(&[0x84]);
     until_state(&mut r, "Door:0", 100);
+    assert_eq!(
+        r.cmd("$J=G91 X-1 F100"),
+        ["error:8"],
+        "no jog behind a door"
+    );
     assert_eq!(r.cmd("G1 X-40 F600"), ["ok"]);
     r.run(200);
     assert_eq!(x(&mut r), -50.0, "nothing moves behind a door");

@@ -105,6 +105,11 @@ impl<S: crate::seams::Storage> Device<S> {
         if self.sleep && acts {
             return Err(Code::Locked.code());
         }
+        // Behind a door nothing starts until `~` (GRBL's door state is
+        // not idle).
+        if m.door_substate().is_some() && matches!(cmd, SysCmd::Home(_) | SysCmd::Jog(_)) {
+            return Err(Code::NotIdle.code());
+        }
         match cmd {
             SysCmd::Help => {
                 let _ = reply::help(o);
