@@ -13,19 +13,22 @@
 //!
 //! The session meets the rest of the core through two small ports
 //! (`session::LinkPort`, `session::MotionPort`), implemented here and only
-//! here.
+//! here (`controller_ports.rs`).
 
-use crate::command::{Command, Pos};
-use crate::executor::{self, Machine, MachineError, Note, State};
-use crate::link::{LineAssembler, LinkEvent, LinkMode, RtFlags, RtSet, TokenSource};
+use crate::executor::{Machine, Note, State};
+use crate::link::{LineAssembler, LinkMode, RtFlags, TokenSource};
 use crate::outputs::{Enable, LaserQueue, Motion, Outputs, Spindle};
 use crate::realtime::Realtime;
 use crate::seams::Storage;
-use crate::session::{Device, LinkPort, MotionPort, Tx};
-use crate::settings::table::SettingError;
+use crate::session::{Device, Tx};
 use crate::settings::Settings;
 use crate::stepper::prep::SegmentSink;
 use crate::stepper::Switches;
+use crate::suspend::Suspend;
+
+#[path = "controller_ports.rs"]
+mod ports;
+use ports::{Core, TaskLink};
 
 pub use crate::session::TX_HEADROOM;
 
@@ -41,6 +44,10 @@ pub struct Inputs {
     /// The port was closed or reopened since the last pass (the receive
     /// side already put its mode-reset marker into the ring).
     pub port_closed: bool,
+    /// A client opened the port since the last pass (after any close):
+    /// the session decides whether that is a reset with a banner
+    /// (`session::Device::port_opened`).
+    pub port_opened: bool,
 }
 
 /// Output pin levels after a pass, in hardware-free terms.
@@ -100,6 +107,7 @@ pub struct Controller<S: Storage> {
     pub session: Device<S>,
     asm: LineAssembler,
     outputs: Outputs,
+    suspend: Suspend,
     laser: LaserQueue,
     enable: Enable,
     resets: u32,
@@ -117,6 +125,7 @@ impl<S: Storage> Controller<S> {
             session,
             asm: LineAssembler::new(),
             outputs: Outputs::new(settings),
+            suspend: Suspend::new(),
             laser: LaserQueue::new(),
             enable: Enable::new(settings.idle_delay_ms, wake_ms),
             resets,
@@ -125,7 +134,7 @@ impl<S: Storage> Controller<S> {
         }
     }
 
-    /// The banner, as after power-up or a port open (text mode).
+    /// The banner, as after power-up (a port open is `Inputs::port_opened`).
     pub fn hello(&mut self, tx: &mut impl Tx) {
         self.session.hello(tx);
     }
@@ -172,8 +181,10 @@ impl<S: Storage> Controller<S> {
             segments,
             rt,
             outputs: &mut self.outputs,
+            suspend: &mut self.suspend,
             laser: &mut self.laser,
             pins: input.pins,
+            now_ms: input.now_ms,
             obs,
         };
         if input.port_closed {
@@ -181,6 +192,9 @@ impl<S: Storage> Controller<S> {
             // What the departed client sent and the task did not read is
             // void (the splitter counted the port reset as a discard point).
             link.asm.flush_reset(link.rx, link.flags);
+        }
+        if input.port_opened {
+            self.session.port_opened(&mut link, &mut core, tx);
         }
         for _ in 0..2 {
             // Realtime commands act whatever the link does; only the
@@ -194,9 +208,13 @@ impl<S: Storage> Controller<S> {
             if self.session.stats.resets != self.resets {
                 self.resets = self.session.stats.resets;
                 core.outputs.all_off();
+                core.suspend.clear(core.outputs);
                 core.laser.clear();
             }
             core.poll(input.switches);
+            let delay_ms = (core.machine.settings().spindle_delay_s * 1000.0) as u32;
+            core.suspend
+                .update(rt, core.outputs, input.now_ms, delay_ms);
         }
         let queued = !core.segments.is_empty();
         let state = core.machine.state(rt);
@@ -217,6 +235,7 @@ impl<S: Storage> Controller<S> {
         let alarm = state == State::Alarm || self.session.sleeping();
         if alarm {
             core.outputs.all_off();
+            core.suspend.clear(core.outputs);
             core.laser.clear();
         }
         // Laser mode: spindle commands apply as their line starts to run,
@@ -242,161 +261,12 @@ impl<S: Storage> Controller<S> {
                 enable,
                 enable_invert,
                 spindle: self.outputs.spindle(motion),
-                flood: self.outputs.flood,
-                mist: self.outputs.mist,
+                flood: self.outputs.flood_on(),
+                mist: self.outputs.mist_on(),
             },
             kick: (queued && !stepping && self.enable.may_step())
                 || self.halting
                 || rt.step_config().pending(),
         }
-    }
-}
-
-/// The link decoder's task half: the assembler on the ring's consumer end.
-struct TaskLink<'a, R> {
-    asm: &'a mut LineAssembler,
-    rx: &'a mut R,
-    flags: &'a RtFlags,
-}
-
-impl<R: TokenSource> LinkPort for TaskLink<'_, R> {
-    fn poll(&mut self) -> Option<LinkEvent<'_>> {
-        self.asm.poll(self.rx)
-    }
-    fn take_realtime(&mut self, mask: u32) -> RtSet {
-        let set = self.flags.take_masked(mask);
-        if set.contains(protocol::Rt::SoftReset) {
-            // Input from before the reset is void.
-            self.asm.flush_reset(self.rx, self.flags);
-        }
-        set
-    }
-    fn rx_pending(&self) -> usize {
-        self.rx.len() + self.asm.pending()
-    }
-    fn framed(&self) -> bool {
-        self.flags.is_framed()
-    }
-    fn events_framed(&self) -> bool {
-        self.asm.mode() == LinkMode::Framed
-    }
-}
-
-/// The executor, the producer end of the segment queue and the outputs.
-struct Core<'a, Q, const N: usize> {
-    machine: &'a mut Machine<N>,
-    segments: &'a mut Q,
-    rt: &'a Realtime,
-    outputs: &'a mut Outputs,
-    laser: &'a mut LaserQueue,
-    pins: u16,
-    obs: &'a mut dyn FnMut(Event),
-}
-
-/// Spindle and coolant commands reach the outputs as the executor runs
-/// them: in program order, synced with motion.
-fn note(outputs: &mut Outputs, laser: &mut LaserQueue, obs: &mut dyn FnMut(Event), n: Note) {
-    if let Note::Executed { command, line } = &n {
-        if outputs.laser() {
-            laser.push(outputs, *line, command);
-        } else {
-            outputs.apply(command);
-        }
-    }
-    obs(Event::Note(&n));
-}
-
-impl<Q: SegmentSink, const N: usize> Core<'_, Q, N> {
-    /// Background work of the executor: fill the segment queue.
-    fn poll(&mut self, sw: Switches) {
-        let (outputs, laser, obs) = (&mut *self.outputs, &mut *self.laser, &mut *self.obs);
-        self.machine.poll(self.rt, self.segments, sw, &mut |n| {
-            note(outputs, laser, obs, n)
-        });
-    }
-}
-
-impl<Q: SegmentSink, const N: usize> MotionPort for Core<'_, Q, N> {
-    fn rt(&self) -> &Realtime {
-        self.rt
-    }
-    fn ready(&self) -> bool {
-        self.machine.ready()
-    }
-    fn submit(&mut self, cmd: &Command, line: u32) -> Result<(), MachineError> {
-        let (outputs, laser, obs) = (&mut *self.outputs, &mut *self.laser, &mut *self.obs);
-        self.machine
-            .submit(self.rt, cmd, line, &mut |n| note(outputs, laser, obs, n))?;
-        (self.obs)(Event::Accepted {
-            line,
-            motion: cmd.end().is_some() || matches!(cmd, Command::Cycle(_)),
-        });
-        Ok(())
-    }
-    fn fault(&mut self, e: MachineError, line: u32) {
-        self.machine.fault(e, line);
-    }
-    fn take_fault(&mut self) -> Option<(MachineError, u32)> {
-        self.machine.take_fault()
-    }
-    fn check_soft(&self, end: &Pos) -> Result<(), MachineError> {
-        self.machine.check_soft(end, end)
-    }
-    fn state(&self) -> executor::State {
-        self.machine.state(self.rt)
-    }
-    fn alarm(&self) -> Option<MachineError> {
-        self.machine.alarm()
-    }
-    fn motion_idle(&self) -> bool {
-        self.machine.ready()
-            && self.machine.planner.is_empty()
-            && self.machine.prep.is_idle()
-            && self.segments.is_empty()
-            && self.rt.stepper_idle()
-    }
-    fn commanded_position(&self) -> Pos {
-        self.machine.commanded_position()
-    }
-    fn probe_result(&self) -> Option<(Pos, bool)> {
-        self.machine.probe_result
-    }
-    fn take_tool_event(&mut self) -> Option<executor::ToolEvent> {
-        self.machine.take_tool_event()
-    }
-    /// Published by the stepper once per segment.
-    fn feed_and_line(&self) -> (f32, u32) {
-        self.rt.running()
-    }
-    fn spindle_speed(&self) -> f32 {
-        self.outputs.speed()
-    }
-    fn planner_free(&self) -> u16 {
-        (N - self.machine.planner.len()) as u16
-    }
-    fn planner_blocks(&self) -> u16 {
-        N as u16
-    }
-    fn settings(&self) -> &Settings {
-        self.machine.settings()
-    }
-    fn pins(&self) -> u16 {
-        self.pins
-    }
-    /// Rebuilds the executor with the new settings (only ever called while
-    /// idle), keeping the position, and publishes the step interrupt's
-    /// share of them (pin timing, inverts, rate ceiling), which the stopped
-    /// step driver takes at this pass's kick: every setting applies at once.
-    fn set_setting(&mut self, n: u16, value: f32) -> Result<(), SettingError> {
-        let mut s = *self.machine.settings();
-        s.set(n, value)?;
-        let pos = self.machine.commanded_position();
-        let tick_hz = self.machine.step_config().tick_hz;
-        self.machine.rebuild(s, tick_hz);
-        self.rt.step_config().publish(&self.machine.step_config());
-        if self.machine.set_position(self.rt, &pos).is_err() {
-            let _ = self.machine.set_position(self.rt, &[0.0; crate::AXES]);
-        }
-        Ok(())
     }
 }

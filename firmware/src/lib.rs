@@ -38,6 +38,7 @@ pub mod inputs;
 pub mod link;
 pub mod outputs;
 pub mod persist;
+pub mod suspend;
 
 pub mod session;
 

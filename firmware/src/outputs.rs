@@ -9,6 +9,7 @@
 
 use crate::command::{Command, SpindleDir};
 use crate::settings::Settings;
+use protocol::msg::accessory;
 
 #[path = "outputs_laser.rs"]
 mod laser;
@@ -46,7 +47,18 @@ pub struct Outputs {
     rpm_max: f32,
     rpm_min: f32,
     laser: bool,
+    /// Spindle override, percent (0x99-0x9D): scales the programmed S
+    /// for the pins and the status report, as GRBL's does.
+    ov: u8,
+    /// [`HELD_SPINDLE`] / [`HELD_COOLANT`]: off at the pins for a safety
+    /// door or a spindle stop (0x9E) while the programmed state stays, so
+    /// cycle start can restore it (`suspend`).
+    held: u8,
 }
+
+/// [`Outputs::hold`] bits.
+pub const HELD_SPINDLE: u8 = 1;
+pub const HELD_COOLANT: u8 = 2;
 
 impl Outputs {
     /// Everything off, the `$30`/`$31`/`$32` of `s`.
@@ -59,6 +71,8 @@ impl Outputs {
             rpm_max: 0.0,
             rpm_min: 0.0,
             laser: false,
+            ov: 100,
+            held: 0,
         };
         o.configure(s);
         o
@@ -102,6 +116,50 @@ impl Outputs {
         self.speed = 0.0;
         self.flood = false;
         self.mist = false;
+        self.held = 0;
+    }
+
+    /// Spindle override in percent (10-200).
+    pub fn set_override(&mut self, percent: u8) {
+        self.ov = percent;
+    }
+
+    /// Turn the [`HELD_SPINDLE`] / [`HELD_COOLANT`] outputs off at the
+    /// pins (`on`) or back to their programmed state.
+    pub fn hold(&mut self, what: u8, on: bool) {
+        if on {
+            self.held |= what;
+        } else {
+            self.held &= !what;
+        }
+    }
+
+    /// The outputs held off now.
+    pub fn held(&self) -> u8 {
+        self.held
+    }
+
+    /// The flood pin.
+    pub fn flood_on(&self) -> bool {
+        self.flood && self.held & HELD_COOLANT == 0
+    }
+
+    /// The mist pin.
+    pub fn mist_on(&self) -> bool {
+        self.mist && self.held & HELD_COOLANT == 0
+    }
+
+    /// The status report's `A:` bits ([`accessory`]) as the pins are now.
+    pub fn accessories(&self) -> u8 {
+        let spindle = match self.dir {
+            _ if self.held & HELD_SPINDLE != 0 => 0,
+            SpindleDir::Off => 0,
+            SpindleDir::Cw => accessory::SPINDLE_CW,
+            SpindleDir::Ccw => accessory::SPINDLE_CCW,
+        };
+        let flood = if self.flood_on() { accessory::FLOOD } else { 0 };
+        let mist = if self.mist_on() { accessory::MIST } else { 0 };
+        spindle | flood | mist
     }
 
     /// Laser mode (`$32=1`): spindle commands flow with the motion
@@ -114,12 +172,14 @@ impl Outputs {
         self.dir
     }
 
-    /// The spindle speed running now, rpm (0 while stopped): the status
-    /// report's `FS:` second figure, which follows execution, not parsing.
+    /// The spindle speed running now, rpm (0 while stopped or held): the
+    /// status report's `FS:` second figure, which follows execution, not
+    /// parsing, and includes the spindle override.
     pub fn speed(&self) -> f32 {
         match self.dir {
             SpindleDir::Off => 0.0,
-            _ => self.speed,
+            _ if self.held & HELD_SPINDLE != 0 => 0.0,
+            _ => self.speed * f32::from(self.ov) / 100.0,
         }
     }
 
@@ -143,6 +203,9 @@ impl Outputs {
             ccw: false,
             duty: 0.0,
         };
+        if self.held & HELD_SPINDLE != 0 {
+            return off;
+        }
         let ccw = match self.dir {
             SpindleDir::Off => return off,
             SpindleDir::Cw => false,
@@ -168,11 +231,11 @@ impl Outputs {
         }
     }
 
-    /// Duty of the programmed S over the `$31`-`$30` range.
+    /// Duty of the programmed S, overridden, over the `$31`-`$30` range.
     fn duty(&self) -> f32 {
         /// Lowest duty that still turns a spindle on (GRBL's is 1/255).
         const MIN_DUTY: f32 = 1.0 / 256.0;
-        let s = self.speed;
+        let s = self.speed * f32::from(self.ov) / 100.0;
         if s <= 0.0 {
             return 0.0;
         }

@@ -34,6 +34,10 @@ pub struct Realtime {
     reset: AtomicBool,
     /// The e-stop input is active (set by the board from the pin).
     estop: AtomicBool,
+    /// The safety door input reads open (a board with a door switch sets
+    /// it; without one, GRBL's default, the door counts as closed and only
+    /// 0x84 opens it, for an instant).
+    door_open: AtomicBool,
     /// A failed hardware path ([`crate::chip::HwFault`] code, 0: none):
     /// latched until the chip resets.
     hw_fault: AtomicU8,
@@ -92,6 +96,7 @@ impl Realtime {
             cycle_start: AtomicBool::new(false),
             reset: AtomicBool::new(false),
             estop: AtomicBool::new(false),
+            door_open: AtomicBool::new(false),
             hw_fault: AtomicU8::new(0),
             feed_override: AtomicU8::new(100),
             rapid_override: AtomicU8::new(100),
@@ -134,6 +139,15 @@ impl Realtime {
     }
     pub fn estop(&self) -> bool {
         self.estop.load(Relaxed)
+    }
+    /// The door switch's level. Its opening edge is the shell's to turn
+    /// into [`protocol::Rt::SafetyDoor`], as 0x84; resuming waits for the
+    /// level to read closed (`suspend`).
+    pub fn set_door_open(&self, open: bool) {
+        self.door_open.store(open, Relaxed);
+    }
+    pub fn door_open(&self) -> bool {
+        self.door_open.load(Relaxed)
     }
     /// A hardware path failed (a boot self-check, or the step path's error
     /// flags). Like the e-stop it latches the alarm and refuses `$X` and
@@ -286,6 +300,12 @@ impl Realtime {
     }
     pub fn stepper_idle(&self) -> bool {
         self.stepper_idle.load(Relaxed)
+    }
+    /// Nothing moves: the stepper is stopped, or runs a segment that
+    /// steps nothing at speed 0 (a dwell). A hold is complete (`Hold:0`)
+    /// and a reset loses no position from here, as in GRBL.
+    pub fn at_rest(&self) -> bool {
+        self.stepper_idle() || self.running().0 == 0.0
     }
     pub(crate) fn set_stepper_idle(&self, idle: bool) {
         self.stepper_idle.store(idle, Relaxed);

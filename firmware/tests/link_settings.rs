@@ -11,7 +11,7 @@ fn numbers_are_ascending_unique_and_all_readable() {
     let s = Settings::default();
     let nums: Vec<u16> = table::numbers().collect();
     assert!(nums.windows(2).all(|w| w[0] < w[1]));
-    assert_eq!(nums.len(), 23 + 16 + 10 + 9);
+    assert_eq!(nums.len(), 23 + 16 + 10 + 9 + 1);
     for n in &nums {
         let v = s.get(*n).unwrap_or_else(|| panic!("${n} unreadable"));
         let mut t = s;
@@ -123,7 +123,8 @@ fn settings_listing() {
     );
     let mut all = String::new();
     reply::settings(&mut all, &Settings::default()).expect("string sink");
-    assert_eq!(all.lines().count(), 58);
+    assert_eq!(all.lines().count(), 59);
+    assert!(all.contains("$220=4.000\r\n"), "spin-up delay, GRBL's 4 s");
     assert!(
         all.contains("$210=0\r\n"),
         "G28 meaning listed, RS274NGC by default"
@@ -190,6 +191,22 @@ fn status_report_fields_in_grbl_order() {
             Extras::default()
         )),
         "<Hold:1|MPos:0.3937,0.8071,-0.0492|FS:59,12000>\r\n"
+    );
+    // Issue 29: `A:` follows `Ov:` when something is on, in GRBL's order.
+    use protocol::msg::accessory::{FLOOD, MIST, SPINDLE_CCW};
+    let mut door = status();
+    door.state = MachineState::Door;
+    door.substate = 3;
+    door.pins = 0;
+    door.line = None;
+    door.accessories = SPINDLE_CCW | FLOOD | MIST;
+    let ov = Extras {
+        wco: false,
+        ov: true,
+    };
+    assert_eq!(
+        text(|w| reply::status(w, &door, 1, f, ov)),
+        "<Door:3|MPos:10.000,20.500,-1.250|FS:1500,12000|Ov:100,100,100|A:CFM>\r\n"
     );
 }
 

@@ -146,12 +146,10 @@ pub fn run(cfg: &MachineConfig, speed: f64, announce: impl FnOnce(&str)) -> io::
                 // nobody: a USB host that reopens the port gets none either.
                 outbox.clear();
                 let _ = dev.take_output();
-                // The banner at once, before anything the client writes is
-                // read: its first `ok` then always follows the banner.
-                if !dev.framed() && dev.link_mode() == burin::link::LinkMode::Text {
-                    dev.hello();
-                    trace.note(format_args!("H"));
-                }
+                // The session hears of the open before anything the client
+                // writes is read: a banner (when it resets) comes first.
+                dev.port_opened();
+                trace.note(format_args!("H"));
             } else {
                 // What the client wrote before it left (a last soft reset,
                 // its `Bye`) still counts: the device takes what it has
@@ -296,7 +294,7 @@ pub fn replay<'r>(
     {
         let (op, arg) = line.split_once(' ').unwrap_or((line, ""));
         match op {
-            "H" => dev.hello(),
+            "H" => dev.port_opened(),
             "C" => dev.port_closed(),
             "A" => dev.advance_to(arg.parse().map_err(|_| bad(line))?),
             "R" => {

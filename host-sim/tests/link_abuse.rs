@@ -307,8 +307,9 @@ fn reset_in_motion_alarms_once() {
     );
 }
 
-/// Issue 15 item 3: `$SLP` sleeps (drivers off, state `Sleep`, motion and
-/// `~` refused) until a soft reset.
+/// Issue 15 item 3, issue 29 item 5: `$SLP` sleeps (drivers off, state
+/// `Sleep`, motion and `~` refused, lines unanswered as GRBL's) until a
+/// soft reset, which wakes it into alarm.
 #[test]
 fn sleep_until_reset() {
     let cfg = origin();
@@ -322,15 +323,21 @@ fn sleep_until_reset() {
     r.run(5);
     assert_eq!(r.status().state, "Sleep");
     assert_eq!(r.dev.pins().map(|p| p.enable), Some(false));
-    assert_eq!(r.cmd("G0 X-1"), ["error:9"]);
-    assert_eq!(r.cmd("$X"), ["error:9"]);
+    assert!(r.cmd("G0 X-1").is_empty());
+    assert!(r.cmd("$X").is_empty());
     r.send(b"~");
     r.run(5);
     assert_eq!(r.status().state, "Sleep");
     r.send(b"\x18");
     r.run(5);
-    assert!(r.lines().iter().any(|l| l.starts_with("Grbl 1.1h")));
-    assert_eq!(r.status().state, "Idle");
+    let woke = r.lines();
+    assert!(woke.iter().any(|l| l.starts_with("Grbl 1.1h")), "{woke:?}");
+    assert!(
+        woke.iter().any(|l| l == "[MSG:'$H'|'$X' to unlock]"),
+        "{woke:?}"
+    );
+    assert_eq!(r.status().state, "Alarm");
+    assert_eq!(r.cmd("$X"), ["[MSG:Caution: Unlocked]", "ok"]);
     assert_eq!(r.cmd("G0 X-1"), ["ok"]);
     assert_eq!(r.until_idle().mpos, Some(vec![-1.0, 0.0, 0.0, 0.0]));
     assert_eq!(r.dev.pins().map(|p| p.enable), Some(true));

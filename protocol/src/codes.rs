@@ -163,6 +163,9 @@ pub mod alarm {
     /// running (burin): pulses may not reach the drivers. Only a reset of
     /// the board clears it.
     pub const HARDWARE_FAULT: u16 = 22;
+    /// Woken from `$SLP` by a reset (burin's number for GRBL's alarm state
+    /// after sleep, which has none: text mode prints no `ALARM:` line).
+    pub const SLEPT: u16 = 23;
 }
 
 #[cfg(test)]

@@ -99,8 +99,9 @@ pub use msg::{
 pub use rt::Rt;
 pub use session::{LineVerdict, Session};
 
-/// Protocol version exchanged in the handshake.
-pub const PROTOCOL_VERSION: u16 = 1;
+/// Protocol version exchanged in the handshake. 2: `Status` carries the
+/// accessory bits (`A:`).
+pub const PROTOCOL_VERSION: u16 = 2;
 
 /// Axes carried in positions on the wire (X, Y, Z, A). Devices with fewer axes
 /// say so in [`DeviceInfo::axes`] and leave the rest zero.

@@ -212,6 +212,23 @@ pub struct Status {
     pub overrides: Overrides,
     /// [`pins`] bits that are active.
     pub pins: u16,
+    /// [`accessory`] bits: spindle and coolant as the pins are (`A:`).
+    pub accessories: u8,
+}
+
+/// GRBL 1.1's `A:` field letters as [`Status::accessories`] bits, in the
+/// order GRBL prints them.
+pub mod accessory {
+    pub const SPINDLE_CW: u8 = 1;
+    pub const SPINDLE_CCW: u8 = 2;
+    pub const FLOOD: u8 = 4;
+    pub const MIST: u8 = 8;
+    pub const LETTERS: [(u8, char); 4] = [
+        (SPINDLE_CW, 'S'),
+        (SPINDLE_CCW, 'C'),
+        (FLOOD, 'F'),
+        (MIST, 'M'),
+    ];
 }
 
 impl Default for Status {
@@ -228,6 +245,7 @@ impl Default for Status {
             line: None,
             overrides: Overrides::default(),
             pins: 0,
+            accessories: 0,
         }
     }
 }

@@ -548,17 +548,19 @@ mod app {
             let port_closed = crate::usb::PORT_CLOSED.swap(false, Ordering::AcqRel);
             #[cfg(feature = "board-qemu")]
             let port_closed = false;
-            // A port open prints the banner before this pass answers any
-            // line of the new client (unless it already switched to frames).
+            // A port open: the session decides (a reset with its banner
+            // when nothing runs, before this pass answers any line of the
+            // new client; nothing while a job runs).
             #[cfg(not(feature = "board-qemu"))]
-            if crate::usb::PORT_OPENED.swap(false, Ordering::AcqRel) && !crate::FLAGS.is_framed() {
-                controller.hello(&mut tx);
-            }
+            let port_opened = crate::usb::PORT_OPENED.swap(false, Ordering::AcqRel);
+            #[cfg(feature = "board-qemu")]
+            let port_opened = false;
             let input = Inputs {
                 now_ms: crate::inputs::now_ms(),
                 switches: board::switches(),
                 pins: crate::inputs::report_pins(),
                 port_closed,
+                port_opened,
             };
             let io_rings = burin::controller::Io {
                 rt: &crate::RT,

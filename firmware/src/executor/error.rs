@@ -66,6 +66,13 @@ pub enum MachineError {
     /// 427: a hardware path failed its check ([`crate::chip::HwFault`]):
     /// motion, homing and `$X` are refused until the chip is reset.
     HardwareFault { fault: crate::chip::HwFault },
+    /// 428: a reset woke the machine from `$SLP`: the drivers were off, so
+    /// the position is not trusted until `$X` or homing (GRBL's alarm
+    /// state after sleep).
+    Slept,
+    /// 429: the safety door opened during homing (GRBL's alarm 7): the
+    /// cycle ramps down and stops unfinished.
+    HomingDoor,
 }
 
 impl MachineError {
@@ -94,6 +101,8 @@ impl MachineError {
             ResetDuringMotion => 425,
             EStop => 426,
             HardwareFault { .. } => 427,
+            Slept => 428,
+            HomingDoor => 429,
         }
     }
 
@@ -181,6 +190,8 @@ impl fmt::Display for MachineError {
                     fault.message()
                 )
             }
+            Slept => f.write_str("woke from sleep; $H or $X"),
+            HomingDoor => f.write_str("safety door opened during homing"),
         }
     }
 }

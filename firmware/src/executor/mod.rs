@@ -304,6 +304,14 @@ impl<const N: usize> Machine<N> {
         }
     }
 
+    /// Alarm without motion to stop (a sleep's wake-up): the position is
+    /// not trusted until `$X` or homing.
+    pub fn lock(&mut self, e: MachineError) {
+        if self.alarm.is_none() {
+            self.alarm = Some(e);
+        }
+    }
+
     /// Set the position at power-up (or from a test), mm.
     pub fn set_position(&mut self, rt: &Realtime, mm: &Pos) -> Result<(), MachineError> {
         let steps = self.planner.to_steps(mm)?;
@@ -418,7 +426,9 @@ impl<const N: usize> Machine<N> {
         self.switches = sw;
         let estop = rt.estop();
         if rt.take_reset() {
-            let moving = !self.motion_idle(rt, sink);
+            // Position is lost only where the stepper moves: a finished
+            // hold, a dwell or motion not yet started stop exactly.
+            let moving = !self.motion_idle(rt, sink) && !rt.at_rest();
             self.flush(rt);
             self.pending = Pending::None;
             self.script = None;

@@ -157,6 +157,13 @@ impl Interpreter {
         self.state.spindle != crate::command::SpindleDir::Off || self.state.flood || self.state.mist
     }
 
+    /// A coolant toggle (0xA0, 0xA1) changed the outputs out of program
+    /// order: the modal state follows (`$G`), as GRBL's does.
+    pub fn set_coolant(&mut self, mist: bool, flood: bool) {
+        self.state.mist = mist;
+        self.state.flood = flood;
+    }
+
     fn run_block(
         &mut self,
         b: &Block,

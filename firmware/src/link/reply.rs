@@ -171,7 +171,7 @@ pub struct Extras {
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Cadence {
     count: u8,
-    last: Option<([f32; protocol::WIRE_AXES], protocol::Overrides)>,
+    last: Option<([f32; protocol::WIRE_AXES], protocol::Overrides, u8)>,
 }
 
 impl Cadence {
@@ -179,11 +179,12 @@ impl Cadence {
 
     /// Fields to include in the report about to be sent for `s`.
     pub fn next(&mut self, s: &Status) -> Extras {
+        // `A:` rides with `Ov:` (GRBL's): a change of either sends both.
         let (wco_changed, ov_changed) = match &self.last {
             None => (true, true),
-            Some((wco, ov)) => (*wco != s.wco, *ov != s.overrides),
+            Some((wco, ov, acc)) => (*wco != s.wco, *ov != s.overrides || *acc != s.accessories),
         };
-        self.last = Some((s.wco, s.overrides));
+        self.last = Some((s.wco, s.overrides, s.accessories));
         let c = self.count;
         self.count = (c + 1) % Self::EVERY;
         Extras {
@@ -239,6 +240,16 @@ pub fn status(
     if extras.ov {
         let o = s.overrides;
         write!(w, "|Ov:{},{},{}", o.feed, o.rapid, o.spindle)?;
+        // GRBL 1.1: the accessory state after the overrides, only when
+        // something is on.
+        if s.accessories != 0 {
+            w.write_str("|A:")?;
+            for (bit, letter) in protocol::msg::accessory::LETTERS {
+                if s.accessories & bit != 0 {
+                    w.write_char(letter)?;
+                }
+            }
+        }
     }
     w.write_str(">\r\n")
 }

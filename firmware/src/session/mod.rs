@@ -30,18 +30,22 @@
 //!   framed mode as `DeviceMsg::Error` with the line's sequence number,
 //!   and they stop the job as an alarm (`late.rs`).
 //! * The machine line number (`Ln:`, traces) is the sequence number in
-//!   framed mode and the count of text lines received in text mode.
-//! * Soft reset during motion raises alarm 3 (as GRBL); `ALARM:3` comes
-//!   before the banner. Soft reset keeps the framed session's sequence.
+//!   framed mode; in text mode the line's N word when it has one (GRBL's
+//!   `Ln:`), else the count of text lines received.
+//! * Soft reset while something moves raises alarm 3 (as GRBL; a
+//!   finished hold or a dwell does not); `ALARM:3` comes before the
+//!   banner. A port open at rest is a soft reset (`realtime.rs`). Soft reset keeps the framed session's sequence.
 //! * Jog cancel is a feed hold followed, once stopped, by a flush; the
 //!   executor can flush only through a reset, so the device resets and
 //!   clears the resulting alarm itself (the position is kept exactly: the
 //!   hold decelerated).
 
 mod late;
+mod lines;
 mod out;
 mod persist;
 mod ports;
+mod realtime;
 mod reprap;
 mod sys;
 
@@ -102,6 +106,8 @@ pub struct Device<S: Storage = NoStorage> {
     /// RepRap `N…*cs` numbering (`M110`, `Resend:`), text mode.
     numbers: reprap::LineNumbers,
     spindle_ov: u8,
+    /// `$C` turned check mode off: a soft reset follows its `ok` (GRBL's).
+    reset_due: bool,
     /// The port closed during a framed job; tell the next client.
     link_lost: LinkLost,
     /// Counters for tests and reports.
@@ -218,6 +224,11 @@ impl<S: Storage> Device<S> {
             // The splitter runs ahead: when it is framed, a switch to frames
             // is on its way and whatever text precedes it has no listener.
             if !(link.events_framed() || link.framed() || self.can_take()) {
+                break;
+            }
+            // GRBL asleep reads nothing: lines wait for the reset, which
+            // discards them.
+            if self.sleep && !(link.events_framed() || link.framed()) {
                 break;
             }
             let free = self.free_slots();
@@ -350,12 +361,15 @@ impl<S: Storage> Device<S> {
                     }
                 };
                 self.text_lines = self.text_lines.wrapping_add(1);
-                let n = self.text_lines;
+                // `Ln:` is the line's N word when it has one (GRBL's),
+                // else the count of lines.
+                let n = reprap::label(text).unwrap_or(self.text_lines);
                 self.line(text, n, m, o);
             }
             LinkEvent::System(cmd) => {
                 let r = self.system(cmd, m, o);
                 sys::reply(r, None, o);
+                self.reset_if_due(m, o);
             }
             LinkEvent::Error(code) => sys::reply(Err(code.code()), None, o),
             // Ends whatever text the host's decoder holds (the banner of a
@@ -423,71 +437,5 @@ impl<S: Storage> Device<S> {
         m.set_setting(n, value).map_err(|e| e.code().code())?;
         self.save_settings(m, o);
         Ok(())
-    }
-
-    /// One job line (text mode) or one framed line leaving its slot.
-    /// `n` is its machine line number (text count or sequence number).
-    fn line(&mut self, text: &[u8], n: u32, m: &mut impl MotionPort, o: &mut Out<'_, impl Tx>) {
-        let seq = o.framed().then_some(n);
-        if let Some(cmd) = crate::link::syscmd::parse(text) {
-            let r = cmd.map_err(|c| c.code()).and_then(|c| self.system(c, m, o));
-            return self.reply_line(r, seq, o);
-        }
-        let blank = text.iter().all(u8::is_ascii_whitespace);
-        if (self.sleep || self.seen_alarm.is_some() && !self.check) && !blank {
-            return self.reply_line(Err(protocol::Code::Locked.code()), seq, o);
-        }
-        if !self.check && !self.can_take() {
-            // Only text that precedes a switch to frames gets here.
-            return self.reply_line(Err(protocol::Code::RxOverflow.code()), seq, o);
-        }
-        let check = self.check;
-        self.interp.set_g28_homes(m.settings().g28_homes);
-        let cmds = &mut self.cmds;
-        let mut probe = false;
-        let mut store = persist::Pending::default();
-        let r = self.interp.execute_line(text, &mut |c| {
-            // Operator text shows when the line is read, as GRBL's
-            // `(MSG,…)` does: `[MSG:…]` (a frame in framed mode).
-            if let Command::Message(t) = &c {
-                let _ = crate::link::reply::msg(o, t);
-            }
-            if !check && !store.take_command(&c) {
-                probe |= matches!(c, Command::Probe { .. });
-                // Room for a whole line was checked before taking it.
-                let _ = cmds.push_back((n, c));
-            }
-        });
-        match r {
-            Ok(()) => {
-                if let Some(t) = self.interp.take_tool_warning() {
-                    sys::no_tool_entry(t, o);
-                }
-                if !check && self.interp.needs_sync() {
-                    self.sync = true;
-                    self.probe_sync = probe;
-                }
-                self.after_line(store, m, o);
-                self.reply_line(Ok(()), seq, o)
-            }
-            Err(e) => {
-                if o.framed() {
-                    let mut t = protocol::msg::MsgText::new();
-                    let _ = core::fmt::write(&mut t, format_args!("{e}"));
-                    o.frame(&DeviceMsg::Msg(t));
-                    self.reply_line(Err(e.code()), seq, o)
-                } else {
-                    self.reply_line(Err(u16::from(e.grbl_code())), seq, o)
-                }
-            }
-        }
-    }
-
-    fn reply_line(&mut self, r: Result<(), u16>, seq: Option<u32>, o: &mut Out<'_, impl Tx>) {
-        match r {
-            Ok(()) => self.stats.lines_ok += 1,
-            Err(_) => self.stats.lines_err += 1,
-        }
-        sys::reply(r, seq, o);
     }
 }

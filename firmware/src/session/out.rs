@@ -40,6 +40,11 @@ impl<'a, T: Tx> Out<'a, T> {
         self.framed
     }
 
+    /// Reply bytes the sink takes now.
+    pub fn room(&self) -> usize {
+        self.tx.room()
+    }
+
     /// Send one frame (framed mode only; text mode ignores it).
     pub fn frame(&mut self, msg: &DeviceMsg) {
         if self.framed {

@@ -104,6 +104,7 @@ impl<S: Storage> Device<S> {
             sleep: false,
             numbers: Default::default(),
             spindle_ov: 100,
+            reset_due: false,
             link_lost: LinkLost::No,
             stats: Stats::default(),
             persist,

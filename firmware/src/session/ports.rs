@@ -77,4 +77,21 @@ pub trait MotionPort {
     fn pins(&self) -> u16 {
         0
     }
+    /// Put the machine in alarm at rest (`$SLP` woken by a reset).
+    fn lock(&mut self, e: MachineError);
+    /// The safety door opened (`suspend::Suspend::door`).
+    fn door(&mut self);
+    /// 0x9E in a hold; true when it turns the spindle back on.
+    fn spindle_stop(&mut self) -> bool;
+    /// Cycle start through the suspend rules.
+    fn resume(&mut self) -> crate::suspend::Resume;
+    /// 0xA0 (`flood`) or 0xA1: toggle the coolant now; returns the new
+    /// (mist, flood).
+    fn toggle_coolant(&mut self, flood: bool) -> (bool, bool);
+    /// `Door:n` while a door is dealt with.
+    fn door_substate(&self) -> Option<u8>;
+    /// The `A:` bits (`outputs::accessory`).
+    fn accessories(&self) -> u8;
+    /// The spindle override, percent.
+    fn set_spindle_override(&mut self, percent: u8);
 }

@@ -85,6 +85,22 @@ fn m110(body: &[u8]) -> Option<Option<Result<i32, OutOfRange>>> {
     Some(n)
 }
 
+/// A leading `N` word's number (GRBL's line label, `Ln:`), when above 0
+/// and within `u32`.
+pub(super) fn label(text: &[u8]) -> Option<u32> {
+    let t = text.trim_ascii_start();
+    let (first, rest) = t.split_first()?;
+    if !first.eq_ignore_ascii_case(&b'N') {
+        return None;
+    }
+    let digits = rest.iter().take_while(|b| b.is_ascii_digit()).count();
+    let num = rest
+        .get(..digits)
+        .filter(|d| !d.is_empty() && d.len() <= 9)?;
+    let n = num.iter().fold(0u32, |v, d| v * 10 + u32::from(d - b'0'));
+    (n > 0).then_some(n)
+}
+
 impl LineNumbers {
     pub(super) fn check<'a>(&mut self, text: &'a [u8]) -> Numbered<'a> {
         let t = text.trim_ascii();

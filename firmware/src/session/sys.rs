@@ -1,14 +1,14 @@
 //! `$` commands, realtime commands, status reports, jogging and the error
 //! and alarm replies of the device session.
 
-use super::{Device, LinkPort, MotionPort, Out, Tx};
+use super::{Device, MotionPort, Out, Tx};
 use crate::command::{Command, Feed};
 use crate::executor::{self, MachineError};
-use crate::link::reply::{self, BuildInfo, Format};
+use crate::link::reply::{self, BuildInfo};
 use crate::link::SysCmd;
 use core::fmt::Write;
 use protocol::codes::alarm;
-use protocol::{Code, DeviceMsg, MachineState, Overrides, Rt, Status, WIRE_AXES};
+use protocol::{Code, DeviceMsg};
 
 /// Reply room a status query or a soft reset needs before it is acted on
 /// (a full text status report, or alarm + banner + unlock hint, with room
@@ -41,6 +41,8 @@ pub fn alarm_code(e: MachineError) -> u16 {
         MachineError::ResetDuringMotion => alarm::ABORT_CYCLE,
         MachineError::EStop => alarm::ESTOP,
         MachineError::HardwareFault { .. } => alarm::HARDWARE_FAULT,
+        MachineError::Slept => alarm::SLEPT,
+        MachineError::HomingDoor => alarm::HOMING_FAIL_DOOR,
         MachineError::ProbeInitialState => alarm::PROBE_FAIL_INITIAL,
         MachineError::ProbeNoContact => alarm::PROBE_FAIL_CONTACT,
         MachineError::HomingPullOff { .. } => alarm::HOMING_FAIL_PULLOFF,
@@ -71,30 +73,6 @@ pub(super) fn no_tool_entry(tool: u32, o: &mut Out<'_, impl Tx>) {
 }
 
 impl<S: crate::seams::Storage> Device<S> {
-    /// The realtime half of [`Device::poll`], which the shell runs on its
-    /// own while the reply ring is too full to read new input: hold, cycle
-    /// start, jog cancel and the overrides write nothing and act at once;
-    /// a status query or a soft reset waits until its reply fits
-    /// ([`RT_REPLY_ROOM`]), so no reply is ever cut.
-    pub fn poll_realtime(
-        &mut self,
-        link: &mut impl LinkPort,
-        m: &mut impl MotionPort,
-        tx: &mut impl Tx,
-    ) {
-        let replying = protocol::Rt::SoftReset.bit() | protocol::Rt::StatusQuery.bit();
-        let mask = if tx.room() >= RT_REPLY_ROOM {
-            u32::MAX
-        } else {
-            !replying
-        };
-        for r in link.take_realtime(mask).iter() {
-            let framed = link.framed();
-            let rx_free = protocol::RX_WINDOW.saturating_sub(link.rx_pending()) as u16;
-            self.realtime(r, rx_free, m, &mut Out::new(tx, framed));
-        }
-    }
-
     /// M6 is held at the tool-change position, or the setter measured
     /// the new tool (its offset goes to the interpreter, which is waiting
     /// for the change to end before it reads the next line).
@@ -112,140 +90,6 @@ impl<S: crate::seams::Storage> Device<S> {
         }
     }
 
-    pub(super) fn status(&mut self, rx_free: u16, m: &impl MotionPort) -> Status {
-        let s = m.settings();
-        let pos = m.rt().position();
-        let mut mpos = [0.0; WIRE_AXES];
-        for (i, p) in mpos.iter_mut().enumerate().take(crate::AXES) {
-            *p = pos[i] as f32 / s.axes[i].steps_per_mm;
-        }
-        let mut wco = [0.0; WIRE_AXES];
-        for (w, v) in wco.iter_mut().zip(self.interp.wco()) {
-            *w = v;
-        }
-        let ms = m.state();
-        let state = match ms {
-            _ if self.sleep => MachineState::Sleep,
-            _ if self.check => MachineState::Check,
-            executor::State::Alarm => MachineState::Alarm,
-            executor::State::Homing => MachineState::Home,
-            executor::State::Hold => MachineState::Hold,
-            _ if self.jogging => MachineState::Jog,
-            executor::State::Idle if self.cmds.is_empty() && self.slots.is_empty() => {
-                MachineState::Idle
-            }
-            _ => MachineState::Run,
-        };
-        let (feed, line) = m.feed_and_line();
-        Status {
-            state,
-            // GRBL 1.1: `Hold:0` complete, ready to resume; `Hold:1` still
-            // decelerating (a reset then alarms).
-            substate: u8::from(!m.rt().stepper_idle()),
-            mpos,
-            wco,
-            feed,
-            spindle: m.spindle_speed(),
-            planner_free: m.planner_free(),
-            rx_free,
-            line: (line != 0 && state != MachineState::Idle).then_some(line),
-            overrides: Overrides {
-                feed: m.rt().feed_override(),
-                rapid: m.rt().rapid_override(),
-                spindle: self.spindle_ov,
-            },
-            pins: m.pins(),
-        }
-    }
-
-    pub(super) fn realtime(
-        &mut self,
-        r: Rt,
-        rx_free: u16,
-        m: &mut impl MotionPort,
-        o: &mut Out<'_, impl Tx>,
-    ) {
-        let rt = m.rt();
-        let feed = u16::from(rt.feed_override());
-        match r {
-            Rt::SoftReset => {
-                // Stopped in a hold, the position is exact: GRBL raises no
-                // alarm then. The executor alarms whenever anything was
-                // queued, so that alarm is cleared again quietly.
-                let queued = !m.motion_idle();
-                let held = m.state() == executor::State::Hold && m.rt().stepper_idle();
-                let moving = queued && !held;
-                m.rt().request_reset();
-                self.cmds.clear();
-                self.slots.clear();
-                self.interp.reset();
-                self.check = false;
-                self.sleep = false;
-                self.jogging = false;
-                self.jog_cancel = false;
-                self.sync = true;
-                self.pending.cancel_queued();
-                self.stats.resets += 1;
-                if held && queued && m.alarm().is_none() {
-                    self.quiet_alarm = true;
-                }
-                // The e-stop's reset: its own alarm (the executor latches it).
-                let estop = m.rt().estop();
-                if (moving || estop) && m.alarm().is_none() {
-                    // Reported now so that it comes before the banner.
-                    let e = if estop {
-                        MachineError::EStop
-                    } else {
-                        MachineError::ResetDuringMotion
-                    };
-                    self.seen_alarm = Some(e);
-                    report_alarm(e, o);
-                }
-                if !o.framed() {
-                    let _ = reply::banner(o);
-                    if moving || estop || m.alarm().is_some() {
-                        let _ = reply::msg(o, "'$H'|'$X' to unlock");
-                    }
-                }
-            }
-            Rt::StatusQuery => {
-                let st = self.status(rx_free, m);
-                if o.framed() {
-                    o.frame(&DeviceMsg::Status(st));
-                } else {
-                    let mask = m.settings().status_mask;
-                    let f = Format::from_settings(m.settings());
-                    let extras = self.cadence.next(&st);
-                    let _ = reply::status(o, &st, mask, f, extras);
-                }
-            }
-            Rt::FeedHold | Rt::SafetyDoor => rt.feed_hold(),
-            // Asleep, nothing resumes (the drivers are off): reset first.
-            Rt::CycleStart if self.sleep => {}
-            Rt::CycleStart => rt.cycle_start(),
-            Rt::JogCancel => {
-                if self.jogging {
-                    self.jog_cancel = true;
-                    rt.feed_hold();
-                }
-            }
-            Rt::FeedOv100 => rt.set_feed_override(100),
-            Rt::FeedOvPlus10 => rt.set_feed_override(feed + 10),
-            Rt::FeedOvMinus10 => rt.set_feed_override(feed.saturating_sub(10)),
-            Rt::FeedOvPlus1 => rt.set_feed_override(feed + 1),
-            Rt::FeedOvMinus1 => rt.set_feed_override(feed.saturating_sub(1)),
-            Rt::RapidOv100 => rt.set_rapid_override(100),
-            Rt::RapidOv50 => rt.set_rapid_override(50),
-            Rt::RapidOv25 => rt.set_rapid_override(25),
-            Rt::SpindleOv100 => self.spindle_ov = 100,
-            Rt::SpindleOvPlus10 => self.spindle_ov = self.spindle_ov.saturating_add(10).min(200),
-            Rt::SpindleOvMinus10 => self.spindle_ov = self.spindle_ov.saturating_sub(10).max(10),
-            Rt::SpindleOvPlus1 => self.spindle_ov = self.spindle_ov.saturating_add(1).min(200),
-            Rt::SpindleOvMinus1 => self.spindle_ov = self.spindle_ov.saturating_sub(1).max(10),
-            Rt::SpindleStopToggle | Rt::FloodToggle | Rt::MistToggle => {}
-        }
-    }
-
     /// A `$` command; text output goes to `o`, the result becomes `ok`/`error`.
     pub(super) fn system(
         &mut self,
@@ -260,6 +104,11 @@ impl<S: crate::seams::Storage> Device<S> {
         );
         if self.sleep && acts {
             return Err(Code::Locked.code());
+        }
+        // Behind a door nothing starts until `~` (GRBL's door state is
+        // not idle).
+        if m.door_substate().is_some() && matches!(cmd, SysCmd::Home(_) | SysCmd::Jog(_)) {
+            return Err(Code::NotIdle.code());
         }
         match cmd {
             SysCmd::Help => {
@@ -327,9 +176,10 @@ impl<S: crate::seams::Storage> Device<S> {
             }
             SysCmd::CheckMode => {
                 if self.check {
+                    // GRBL soft-resets here: modal state to defaults and
+                    // the banner, after this `ok`.
                     self.check = false;
-                    self.interp.reset();
-                    self.sync = true;
+                    self.reset_due = true;
                     let _ = reply::msg(o, "Disabled");
                 } else {
                     if !m.motion_idle() || !self.cmds.is_empty() || m.alarm().is_some() {

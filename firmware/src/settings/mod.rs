@@ -126,6 +126,11 @@ pub struct Settings {
     pub g28_homes: bool,
     /// `$211`-`$219`: the manual tool change (M6).
     pub tool_change: ToolChange,
+    /// `$220` spindle spin-up delay, s: after a safety door or a spindle
+    /// stop (0x9E), cycle start turns the spindle back on and waits this
+    /// long before the coolant and the motion resume (GRBL's compiled-in
+    /// 4 s; grblHAL's `$392`). 0 resumes at once.
+    pub spindle_delay_s: f32,
 }
 
 /// What M6 does (`$211`-`$219`). Positions are machine mm.
@@ -219,5 +224,6 @@ impl Settings {
         report_axes: AXES as u8,
         g28_homes: false,
         tool_change: ToolChange::DEFAULT,
+        spindle_delay_s: 4.0,
     };
 }

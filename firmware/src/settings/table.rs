@@ -214,6 +214,14 @@ const TOOL: [(u16, Kind); 9] = [
     (218, Kind::Real { min: 1.0, max: BIG }),
     (219, Kind::Real { min: 0.1, max: BIG }),
 ];
+/// `$220`: the spindle's spin-up delay after a door or spindle stop.
+const SPINDLE: [(u16, Kind); 1] = [(
+    220,
+    Kind::Real {
+        min: 0.0,
+        max: 20.0,
+    },
+)];
 const POSITION: Kind = Kind::Real {
     min: -BIG,
     max: BIG,
@@ -221,7 +229,11 @@ const POSITION: Kind = Kind::Real {
 
 /// The kind of setting `n`, or `None` if there is no such setting.
 pub fn kind(n: u16) -> Option<Kind> {
-    let mut own = GLOBAL.iter().chain(BURIN.iter()).chain(TOOL.iter());
+    let mut own = GLOBAL
+        .iter()
+        .chain(BURIN.iter())
+        .chain(TOOL.iter())
+        .chain(SPINDLE.iter());
     if let Some(&(_, k)) = own.find(|(m, _)| *m == n) {
         return Some(k);
     }
@@ -247,6 +259,7 @@ pub fn numbers() -> impl Iterator<Item = u16> {
         .chain(axes)
         .chain(BURIN.iter().map(|(n, _)| *n))
         .chain(TOOL.iter().map(|(n, _)| *n))
+        .chain(SPINDLE.iter().map(|(n, _)| *n))
 }
 
 fn check(k: Kind, v: f32) -> Result<(), SettingError> {
@@ -344,6 +357,7 @@ impl Settings {
             216 | 217 => *self.tool_change.setter.get(usize::from(n - 216))?,
             218 => self.tool_change.feed,
             219 => self.tool_change.travel,
+            220 => self.spindle_delay_s,
             _ => return None,
         })
     }
@@ -437,6 +451,7 @@ impl Settings {
             }
             218 => self.tool_change.feed = v,
             219 => self.tool_change.travel = v,
+            220 => self.spindle_delay_s = v,
             _ => return Err(SettingError::Unknown),
         }
         Ok(())

@@ -377,6 +377,12 @@ impl Preparer {
             }
             let b = self.block?;
             if let BlockKind::Dwell { .. } = b.kind {
+                // A hold pauses a dwell where it is (nothing to ramp down):
+                // cycle start goes on with the time left.
+                if self.hold != Hold::Running {
+                    self.hold = Hold::Held;
+                    return None;
+                }
                 if let Some(seg) = self.dwell_segment(rt, &b) {
                     return Some(seg);
                 }

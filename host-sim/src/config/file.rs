@@ -278,6 +278,13 @@ pub(super) fn apply(text: &str, cfg: &mut MachineConfig) -> Result<(), ConfigErr
     apply_interrupts(cfg, f.interrupts)?;
     let s = &mut cfg.settings;
 
+    // `$208` follows the axes the file describes (issue 29): X/Y/Z tables
+    // and no A are an XYZ machine, which GRBL senders must not show an A
+    // for. `report.axes` still says otherwise when given.
+    let ax = &f.axes;
+    if ax.a.is_none() && (ax.x.is_some() || ax.y.is_some() || ax.z.is_some()) {
+        s.report_axes = 3;
+    }
     let axes = [f.axes.x, f.axes.y, f.axes.z, f.axes.a];
     for (dst, src) in s.axes.iter_mut().zip(axes) {
         let src = src.unwrap_or_default();

@@ -75,6 +75,7 @@ pub struct VirtualDevice<'r> {
     pins: Option<Pins>,
     pub pin_log: Vec<(u64, Pins)>,
     port_closed: bool,
+    port_opened: bool,
 }
 
 impl<'r> VirtualDevice<'r> {
@@ -123,6 +124,7 @@ impl<'r> VirtualDevice<'r> {
             pins: None,
             pin_log: Vec::new(),
             port_closed: false,
+            port_opened: false,
         }
     }
 
@@ -164,6 +166,13 @@ impl<'r> VirtualDevice<'r> {
         self.port_closed = true;
     }
 
+    /// A client opened the port: the next pass tells the session, which
+    /// resets (banner) when nothing runs (`burin::session::Device::port_opened`),
+    /// before it reads any of the client's input.
+    pub fn port_opened(&mut self) {
+        self.port_opened = true;
+    }
+
     /// Run the parse/plan task, then virtual time up to `tick` (the task
     /// runs again whenever the engine says it is due, as the step
     /// interrupt wakes it on the board), then the task again.
@@ -189,6 +198,7 @@ impl<'r> VirtualDevice<'r> {
             tx,
             log,
             port_closed,
+            port_opened,
             ..
         } = self;
         let task = DeviceTask {
@@ -198,10 +208,12 @@ impl<'r> VirtualDevice<'r> {
             tx,
             pins: 0,
             port_closed: *port_closed,
+            port_opened: *port_opened,
             log: log.as_mut(),
         };
         if let Some(pass) = sim.controller_pass(task) {
             self.port_closed = false;
+            self.port_opened = false;
             if self.pins != Some(pass.pins) {
                 self.pins = Some(pass.pins);
                 self.pin_log.push((self.sim.now(), pass.pins));
@@ -219,7 +231,7 @@ impl<'r> VirtualDevice<'r> {
         std::mem::take(&mut self.tx.0)
     }
 
-    /// Print the banner (a client opened the port in text mode).
+    /// Print the banner as at power-up (a port open is [`Self::port_opened`]).
     pub fn hello(&mut self) {
         self.controller.hello(&mut self.tx);
     }

@@ -146,6 +146,7 @@ pub struct DeviceTask<'a, S: Storage, R, T> {
     /// Inputs for the status report.
     pub pins: u16,
     pub port_closed: bool,
+    pub port_opened: bool,
     /// Line numbers of the commands the executor accepted, in order.
     pub log: Option<&'a mut Vec<u32>>,
 }
@@ -182,6 +183,7 @@ impl Sim<'_> {
             switches: self.world.switches(),
             pins: t.pins,
             port_closed: t.port_closed,
+            port_opened: t.port_opened,
         };
         let stats0 = t.controller.session.stats;
         let blocks0 = self.stats.blocks;

@@ -50,6 +50,8 @@ pub struct TextStatus {
     pub spindle: Option<f32>,
     pub pins: Option<String>,
     pub ov: Option<(u32, u32, u32)>,
+    /// `A:` letters (spindle `S`/`C`, flood `F`, mist `M`).
+    pub accessories: Option<String>,
 }
 
 fn floats(s: &str) -> Option<Vec<f32>> {
@@ -79,6 +81,7 @@ pub fn parse_status(line: &str) -> Option<TextStatus> {
                 st.spindle = v.get(1).copied();
             }
             "Pn" => st.pins = Some(val.to_string()),
+            "A" => st.accessories = Some(val.to_string()),
             "Ov" => st.ov = nums().and_then(|n| Some((*n.first()?, *n.get(1)?, *n.get(2)?))),
             _ => {}
         }

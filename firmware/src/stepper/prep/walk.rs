@@ -146,16 +146,21 @@ impl Preparer {
         }
     }
 
-    /// The next piece of a G4 dwell: events that step nothing, at most
-    /// [`DWELL_CHUNK_S`] apart.
+    /// The next piece of a G4 dwell: one event that steps nothing, at
+    /// most [`DWELL_CHUNK_S`] long. One chunk per segment, so the queue
+    /// holds only the horizon's worth of a dwell: a feed hold pauses it
+    /// within that (the rest waits in `dwell_left`), and a move behind it
+    /// is not queued until the dwell is nearly over (one segment of 3 s
+    /// let the move's first segment in behind it, which then ran in the
+    /// hold).
     pub(super) fn dwell_segment(&mut self, rt: &Realtime, b: &Block) -> Option<Segment> {
         if self.dwell_left == 0 {
             return None;
         }
         let chunk = (DWELL_CHUNK_S * self.cfg.tick_hz as f32) as u64;
         let period = self.dwell_left.min(chunk.max(1)) as u32;
-        let events = (self.dwell_left / period as u64).min(u32::MAX as u64) as u32;
-        self.dwell_left -= period as u64 * events as u64;
+        let events = 1;
+        self.dwell_left -= u64::from(period);
         let first = core::mem::replace(&mut self.new_block, false);
         Some(Segment {
             events,

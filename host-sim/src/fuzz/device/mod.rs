@@ -297,7 +297,7 @@ impl Harness<'_, '_> {
                 self.dev.port_closed();
                 self.new_session();
                 if b.u8() & 1 == 0 {
-                    self.dev.hello();
+                    self.dev.port_opened();
                 }
             }
             9 => self.status_check(),

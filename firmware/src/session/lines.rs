@@ -1,0 +1,93 @@
+//! One job line: a `$` command or G-code through the interpreter into the
+//! command queue, and its `ok` / `error`.
+
+use super::{persist, sys, Device, MotionPort, Out, Tx};
+use crate::command::Command;
+use protocol::DeviceMsg;
+
+impl<S: crate::seams::Storage> Device<S> {
+    /// One job line (text mode) or one framed line leaving its slot.
+    /// `n` is its machine line number (text count or sequence number).
+    pub(super) fn line(
+        &mut self,
+        text: &[u8],
+        n: u32,
+        m: &mut impl MotionPort,
+        o: &mut Out<'_, impl Tx>,
+    ) {
+        let seq = o.framed().then_some(n);
+        if let Some(cmd) = crate::link::syscmd::parse(text) {
+            let r = cmd.map_err(|c| c.code()).and_then(|c| self.system(c, m, o));
+            self.reply_line(r, seq, o);
+            return self.reset_if_due(m, o);
+        }
+        let blank = text.iter().all(u8::is_ascii_whitespace);
+        if (self.sleep || self.seen_alarm.is_some() && !self.check) && !blank {
+            return self.reply_line(Err(protocol::Code::Locked.code()), seq, o);
+        }
+        if !self.check && !self.can_take() {
+            // Only text that precedes a switch to frames gets here.
+            return self.reply_line(Err(protocol::Code::RxOverflow.code()), seq, o);
+        }
+        let check = self.check;
+        self.interp.set_g28_homes(m.settings().g28_homes);
+        let cmds = &mut self.cmds;
+        let mut probe = false;
+        let mut store = persist::Pending::default();
+        let r = self.interp.execute_line(text, &mut |c| {
+            // Operator text shows when the line is read, as GRBL's
+            // `(MSG,…)` does: `[MSG:…]` (a frame in framed mode).
+            if let Command::Message(t) = &c {
+                let _ = crate::link::reply::msg(o, t);
+            }
+            if !check && !store.take_command(&c) {
+                probe |= matches!(c, Command::Probe { .. });
+                // Room for a whole line was checked before taking it.
+                let _ = cmds.push_back((n, c));
+            }
+        });
+        match r {
+            Ok(()) => {
+                if let Some(t) = self.interp.take_tool_warning() {
+                    sys::no_tool_entry(t, o);
+                }
+                if !check && self.interp.needs_sync() {
+                    self.sync = true;
+                    self.probe_sync = probe;
+                }
+                self.after_line(store, m, o);
+                self.reply_line(Ok(()), seq, o)
+            }
+            Err(e) => {
+                if o.framed() {
+                    let mut t = protocol::msg::MsgText::new();
+                    let _ = core::fmt::write(&mut t, format_args!("{e}"));
+                    o.frame(&DeviceMsg::Msg(t));
+                    self.reply_line(Err(e.code()), seq, o)
+                } else {
+                    self.reply_line(Err(u16::from(e.grbl_code())), seq, o)
+                }
+            }
+        }
+    }
+
+    /// The soft reset `$C` asked for, after its `ok`.
+    pub(super) fn reset_if_due(&mut self, m: &mut impl MotionPort, o: &mut Out<'_, impl Tx>) {
+        if core::mem::take(&mut self.reset_due) {
+            self.soft_reset(m, o);
+        }
+    }
+
+    pub(super) fn reply_line(
+        &mut self,
+        r: Result<(), u16>,
+        seq: Option<u32>,
+        o: &mut Out<'_, impl Tx>,
+    ) {
+        match r {
+            Ok(()) => self.stats.lines_ok += 1,
+            Err(_) => self.stats.lines_err += 1,
+        }
+        sys::reply(r, seq, o);
+    }
+}
