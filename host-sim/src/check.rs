@@ -171,6 +171,13 @@ pub fn check_file(
         let mut at = interp.state().pos;
         match interp.execute_line(line.as_bytes(), &mut |c| cmds.push(c)) {
             Ok(()) => {
+                if let Some(l) = interp.take_arc_warning() {
+                    writeln!(
+                        out,
+                        "{path_label}:{n}: warning: arc offset {}0 is off the plane: ignored",
+                        char::from(l)
+                    )?;
+                }
                 if dump {
                     // A canned cycle is dumped as the moves it expands to.
                     for c in &cmds {

@@ -179,7 +179,7 @@ impl Interpreter {
                 || non_finite(&o.g30) != 0
                 || o.tools
                     .iter()
-                    .any(|t| non_finite(&[t.length, t.diameter]) != 0));
+                    .any(|t| non_finite(&t.offset) != 0 || !t.diameter.is_finite()));
         let pos_bad = non_finite(&self.state.pos) | non_finite(&self.state.tlo) != 0;
         if bad || tables_bad || pos_bad {
             return Err(GcodeError::new(ErrorKind::NotFinite, b.first_col));

@@ -105,8 +105,11 @@ pub struct State {
     /// Tool length offset (G43, G43.1, G43.2; 0 after G49), machine mm per
     /// axis; part of the work offset ([`State::wco`]).
     pub tlo: Pos,
-    /// A G43/M6 named a tool without a table entry: the device says so.
+    /// An M6 named a tool without a table entry: the device says so.
     pub tool_warning: Option<u32>,
+    /// An arc carried a zero offset off its plane (`I0` in G19): ignored,
+    /// and the device says so.
+    pub off_plane_zero: Option<u8>,
     /// G99 (true): canned cycles retract to R; G98: to where they began.
     pub retract_r: bool,
     /// Canned-cycle words that carry over to the next cycle block.
@@ -160,6 +163,7 @@ impl State {
             loaded: 0,
             tlo: [0.0; AXES],
             tool_warning: None,
+            off_plane_zero: None,
             retract_r: false,
             cycle: Sticky::NONE,
             probe: [0.0; AXES],
@@ -254,13 +258,24 @@ impl State {
 /// What survives a power cycle (GRBL's EEPROM coordinate data): the nine
 /// work offsets G54..G59.3 and the G28/G30 positions, machine mm, and the
 /// tool table. G92 and the modal state do not.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Offsets {
     pub wcs: [Pos; WCS_COUNT],
     pub g28: Pos,
     pub g30: Pos,
     /// The tool table (G10 L1/L10/L11), keyed by tool number.
     pub tools: [ToolEntry; TOOLS],
+}
+
+impl Default for Offsets {
+    fn default() -> Self {
+        Offsets {
+            wcs: [[0.0; AXES]; WCS_COUNT],
+            g28: [0.0; AXES],
+            g30: [0.0; AXES],
+            tools: [ToolEntry::EMPTY; TOOLS],
+        }
+    }
 }
 
 /// The offset tables as one line sees them. They are most of the

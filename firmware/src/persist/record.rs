@@ -22,14 +22,16 @@ pub const OFFSETS_KEY: u16 = 1000;
 /// How many offset vectors are stored.
 pub const OFFSET_RECORDS: usize = crate::interp::WCS_COUNT + 2;
 
-/// Tool table entries: `TOOLS_KEY + 0..TOOLS`, each `[number, length,
-/// diameter]` (the number is exact in `f32` up to `TOOL_MAX`).
+/// Tool table entries: `TOOLS_KEY + 0..TOOLS`, each `[number / 65536,
+/// number % 65536, offset X Y Z A, diameter]` (the halves are exact in
+/// `f32`). The 16-tool firmware's `[number, length, diameter]` records
+/// are read once and rewritten in this form.
 pub const TOOLS_KEY: u16 = 1100;
 /// Values in one tool record.
-pub const TOOL_VALUES: usize = 3;
+pub const TOOL_VALUES: usize = 3 + AXES;
 
-/// Bytes of the longest record (an offset vector).
-pub const MAX_RECORD: usize = 1 + 4 * AXES;
+/// Bytes of the longest record (a tool entry).
+pub const MAX_RECORD: usize = 1 + 4 * TOOL_VALUES;
 
 /// Encodes `values` into `buf`, returning the record.
 pub fn encode<'b>(values: &[f32], buf: &'b mut [u8; MAX_RECORD]) -> &'b [u8] {
@@ -66,7 +68,7 @@ mod tests {
     fn round_trip_and_rejects() {
         let mut buf = [0; MAX_RECORD];
         let rec = encode(&[1.5, -2.0, 0.25, 1e6], &mut buf).to_vec();
-        assert_eq!(rec.len(), MAX_RECORD);
+        assert_eq!(rec.len(), 1 + 4 * 4);
         let mut out = [0.0; AXES];
         assert_eq!(decode(&rec, &mut out), Some(()));
         assert_eq!(out, [1.5, -2.0, 0.25, 1e6]);

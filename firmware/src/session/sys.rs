@@ -70,6 +70,14 @@ pub(super) fn no_tool_entry(tool: u32, o: &mut Out<'_, impl Tx>) {
     );
 }
 
+pub(super) fn off_plane_zero(letter: u8, o: &mut Out<'_, impl Tx>) {
+    let _ = write!(
+        o,
+        "[MSG:{}0 is off the arc plane: ignored]\r\n",
+        char::from(letter)
+    );
+}
+
 impl<S: crate::seams::Storage> Device<S> {
     /// The realtime half of [`Device::poll`], which the shell runs on its
     /// own while the reply ring is too full to read new input: hold, cycle
