@@ -182,13 +182,13 @@ fn large_tool_numbers_and_a_64_tool_table() {
 }
 
 /// G10 L1 with X (lathe-style tables; was error 319) and every other axis
-/// the table holds; G43 applies them all.
+/// the table holds (X Y Z); G43 applies them all.
 #[test]
 fn g10_l1_writes_every_axis() {
     let mut it = mm();
-    run(&mut it, "G10 L1 P5 X1 Y2 Z3 A4 R2");
+    run(&mut it, "G10 L1 P5 X1 Y2 Z3 R2");
     run(&mut it, "G43 H5");
-    assert_eq!(it.state().tlo, [1.0, 2.0, 3.0, 4.0]);
+    assert_eq!(it.state().tlo, [1.0, 2.0, 3.0, 0.0]);
     // rs274: G0 X5 with this tool ends at machine X 6, Y/Z/A where they were.
     assert_eq!(end(&run(&mut it, "G0 X5")), [6.0, 0.0, 0.0, 0.0]);
 }

@@ -5,8 +5,8 @@
 //! `AND OR XOR`; all left-associative). No recursion per bracket: a line
 //! may nest as deep as its length allows (LinuxCNC's own bound: about 125
 //! brackets in its 256-byte line; here [`MAX_DEPTH`] pending brackets,
-//! operators and prefixes, more than a [`super::MAX_LINE`]-byte line can
-//! hold), in a fixed 1.5 KiB of stack. Every result is checked to be
+//! operators and prefixes), in 1 KiB of stack taken only when a value is
+//! more than a number. Every result is checked to be
 //! finite: NaN and infinity become errors here, never motion.
 //!
 //! Whitespace may stand anywhere, even inside numbers (`X1 0` is X10), as in
@@ -20,9 +20,10 @@ use crate::num::Decimal;
 use libm::{atan2f, ceilf, expf, floorf, fmodf, logf, powf, roundf, sqrtf};
 
 /// Pending brackets, binary operators and prefixes (`-`, `#`) one value
-/// may have open at once. Each takes at least one byte of the line, so a
-/// line of [`super::MAX_LINE`] bytes never reaches it; it bounds the stack.
-pub const MAX_DEPTH: usize = 192;
+/// may have open at once (8 bytes each on the stack): 127 brackets, as
+/// many as a [`super::MAX_LINE`]-byte line can close, and LinuxCNC's
+/// 256-byte line holds about 125.
+pub const MAX_DEPTH: usize = 128;
 
 const DEG: f32 = core::f32::consts::PI / 180.0;
 
@@ -146,6 +147,16 @@ impl Cursor<'_> {
     /// Any real value: `[+-]* (number | [expr] | #param | FUNC[..])`.
     /// `_depth` is kept for callers; nesting lives on the explicit stack.
     pub(crate) fn real(&mut self, p: &mut dyn ParamStore, _depth: u8) -> LexResult<f32> {
+        match self.peek() {
+            Some(b) if b.is_ascii_digit() || b == b'.' => self.number(),
+            _ => self.expression(p),
+        }
+    }
+
+    /// A value that is more than a number. Out of line: its stack (1 KiB)
+    /// is only taken when a line has an expression.
+    #[inline(never)]
+    fn expression(&mut self, p: &mut dyn ParamStore) -> LexResult<f32> {
         let mut stack: heapless::Vec<Frame, MAX_DEPTH> = heapless::Vec::new();
         loop {
             // An operand, after any prefixes.
@@ -162,7 +173,7 @@ impl Cursor<'_> {
                     }
                     Some(b'[') => {
                         self.bump();
-                        Frame::Open(Open::Plain)
+                        Frame::Plain
                     }
                     Some(b'#') => {
                         self.bump();
@@ -188,7 +199,7 @@ impl Cursor<'_> {
                         }
                         let f =
                             Func::of(&w).ok_or(self.err_at(ErrorKind::UnknownOperation, col))?;
-                        Frame::Open(Open::Func(f, col as u16))
+                        Frame::Func(f, col as u16)
                     }
                     Some(b']') => return Err(self.err(ErrorKind::UnbalancedBrackets)),
                     _ => return Err(self.err(ErrorKind::BadNumber)),
@@ -221,20 +232,18 @@ impl Cursor<'_> {
                     break;
                 }
                 v = self.reduce(&mut stack, v, 0)?;
-                let Some(Frame::Open(open)) = stack.pop() else {
-                    return Err(self.err(ErrorKind::UnbalancedBrackets));
-                };
+                let open = stack.pop();
                 match self.peek() {
                     Some(b']') => self.bump(),
                     None => return Err(self.err(ErrorKind::UnbalancedBrackets)),
                     Some(_) => return Err(self.err(ErrorKind::UnknownOperation)),
                 }
                 v = match open {
-                    Open::Plain => v,
-                    Open::Atan(a, col) => {
+                    Some(Frame::Plain) => v,
+                    Some(Frame::Atan(a, col)) => {
                         finite(atan2f(a, v) / DEG).map_err(|k| self.err_at(k, usize::from(col)))?
                     }
-                    Open::Func(Func::Atan, col) => {
+                    Some(Frame::Func(Func::Atan, col)) => {
                         // `ATAN[a]/[b]`: the second bracket follows.
                         if self.peek() != Some(b'/') {
                             return Err(self.err(ErrorKind::UnknownOperation));
@@ -245,13 +254,14 @@ impl Cursor<'_> {
                         }
                         self.bump();
                         stack
-                            .push(Frame::Open(Open::Atan(v, col)))
+                            .push(Frame::Atan(v, col))
                             .map_err(|_| self.err(ErrorKind::ExpressionTooDeep))?;
                         break;
                     }
-                    Open::Func(f, col) => {
+                    Some(Frame::Func(f, col)) => {
                         f.apply(v).map_err(|k| self.err_at(k, usize::from(col)))?
                     }
+                    _ => return Err(self.err(ErrorKind::UnbalancedBrackets)),
                 };
             }
         }
@@ -445,26 +455,21 @@ impl Cursor<'_> {
     }
 }
 
-/// Work pending on [`Cursor::real`]'s stack.
+/// Work pending on [`Cursor::real`]'s stack: 8 bytes each.
 #[derive(Clone, Copy, Debug)]
 enum Frame {
     /// An open `[`.
-    Open(Open),
+    Plain,
+    /// A function's argument `[`; its name's column.
+    Func(Func, u16),
+    /// `ATAN[a]/[`: the second argument's `[`, with `a`.
+    Atan(f32, u16),
     /// A binary operator with its left operand and column.
     Bin(Op, f32, u16),
     /// A unary minus.
     Neg,
     /// A `#` whose parameter number is the next value (where it starts).
     Param(u16),
-}
-
-#[derive(Clone, Copy, Debug)]
-enum Open {
-    Plain,
-    /// A function's argument; its name's column.
-    Func(Func, u16),
-    /// `ATAN[a]/[`: the second argument, with `a`.
-    Atan(f32, u16),
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]

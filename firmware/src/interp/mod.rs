@@ -36,7 +36,7 @@ use crate::gcode::{ErrorKind, GcodeError, Lexer, Name, ParamStore, Params, Token
 use block::Block;
 use core::fmt::{self, Write};
 use finite::{cmd_finite, non_finite};
-use state::Tables;
+use state::{Saved, Tables};
 
 /// The interpreter: modal state, offset tables and parameters. About 2.3 KiB.
 #[derive(Clone, Debug)]
@@ -116,7 +116,7 @@ impl Interpreter {
         out: &mut dyn FnMut(Command),
     ) -> Result<(), GcodeError> {
         let snapshot = self.state;
-        let mut saved = None;
+        let mut saved = Saved::default();
         self.params.begin_line();
         let mut buf = exec::Out::new();
         let r = self.run(line, &mut buf, &mut saved).and_then(|()| {
@@ -139,9 +139,7 @@ impl Interpreter {
             }
             Err(e) => {
                 self.state = snapshot;
-                if let Some(o) = saved {
-                    self.offsets = o;
-                }
+                saved.restore(&mut self.offsets);
                 self.params.rollback();
                 Err(e)
             }
@@ -161,7 +159,7 @@ impl Interpreter {
         &mut self,
         b: &Block,
         buf: &mut exec::Out,
-        saved: &mut Option<Offsets>,
+        saved: &mut Saved,
     ) -> Result<(), GcodeError> {
         let before = buf.len();
         let mut tables = Tables::new(&mut self.offsets, saved);
@@ -173,7 +171,7 @@ impl Interpreter {
         // leave them finite too: `G10 L20 X4e38` overflowed to inf
         // (found by the gcode_program fuzz target).
         let o = &self.offsets;
-        let tables_bad = saved.is_some()
+        let tables_bad = saved.any()
             && (o.wcs.iter().any(|w| non_finite(w) != 0)
                 || non_finite(&o.g28) != 0
                 || non_finite(&o.g30) != 0
@@ -191,7 +189,7 @@ impl Interpreter {
         &mut self,
         line: &[u8],
         buf: &mut exec::Out,
-        saved: &mut Option<Offsets>,
+        saved: &mut Saved,
     ) -> Result<(), GcodeError> {
         let mut lx = Lexer::new(line)?;
         if lx.percent {

@@ -278,27 +278,72 @@ impl Default for Offsets {
     }
 }
 
+/// What a line backs up of the offset tables before it first writes them,
+/// so a refused line leaves no trace: the work offsets and G28/G30 whole,
+/// and of the tool table (most of the tables by size: a whole copy on the
+/// stack cost 1.5 KB) only the slots written, each once. A line writes one
+/// slot per G10; a split line (`G10 … G10 …`) a few.
+#[derive(Default)]
+pub(crate) struct Saved {
+    axes: Option<([Pos; WCS_COUNT], Pos, Pos)>,
+    tools: heapless::Vec<(u8, ToolEntry), SAVED_TOOLS>,
+}
+
+/// Tool slots one line may write.
+pub(crate) const SAVED_TOOLS: usize = 4;
+
+impl Saved {
+    /// The line wrote the tables.
+    pub(crate) fn any(&self) -> bool {
+        self.axes.is_some() || !self.tools.is_empty()
+    }
+    /// Puts back what the line changed.
+    pub(crate) fn restore(self, o: &mut Offsets) {
+        if let Some((wcs, g28, g30)) = self.axes {
+            o.wcs = wcs;
+            o.g28 = g28;
+            o.g30 = g30;
+        }
+        for (k, e) in self.tools {
+            if let Some(t) = o.tools.get_mut(usize::from(k)) {
+                *t = e;
+            }
+        }
+    }
+}
+
 /// The offset tables as one line sees them. They are most of the
 /// interpreter's state by size but rarely written, so instead of copying
-/// them before every line (as [`State`] is), a line backs them up the first
-/// time it writes them, and only then.
+/// them before every line (as [`State`] is), a line backs up what it
+/// writes the first time it writes it, and only then ([`Saved`]).
 pub(crate) struct Tables<'t> {
     cur: &'t mut Offsets,
-    saved: &'t mut Option<Offsets>,
+    saved: &'t mut Saved,
 }
 
 impl<'t> Tables<'t> {
-    pub(crate) fn new(cur: &'t mut Offsets, saved: &'t mut Option<Offsets>) -> Self {
+    pub(crate) fn new(cur: &'t mut Offsets, saved: &'t mut Saved) -> Self {
         Tables { cur, saved }
     }
     pub(crate) fn get(&self) -> &Offsets {
         self.cur
     }
+    /// The work offsets and G28/G30 for writing (tools: [`Tables::tool`]).
     pub(crate) fn edit(&mut self) -> &mut Offsets {
-        if self.saved.is_none() {
-            *self.saved = Some(*self.cur);
+        if self.saved.axes.is_none() {
+            self.saved.axes = Some((self.cur.wcs, self.cur.g28, self.cur.g30));
         }
         self.cur
+    }
+    /// Tool slot `k` for writing; `None` when the line has written more
+    /// slots than it can back up.
+    pub(crate) fn tool(&mut self, k: usize) -> Option<&mut ToolEntry> {
+        let old = *self.cur.tools.get(k)?;
+        let slot = u8::try_from(k).ok()?;
+        if !self.saved.tools.iter().any(|(s, _)| *s == slot) {
+            self.saved.tools.push((slot, old)).ok()?;
+        }
+        self.cur.tools.get_mut(k)
     }
 }
 

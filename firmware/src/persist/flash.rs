@@ -28,7 +28,7 @@ use embedded_storage::nor_flash::NorFlash;
 use protocol::frame::crc16;
 
 /// Longest record value ([`super::record`]).
-pub const MAX_VALUE: usize = 32;
+pub const MAX_VALUE: usize = 28;
 
 const MAGIC: [u8; 2] = *b"bS";
 /// Page header: magic, sequence number (u32 LE), CRC-16 of those six.

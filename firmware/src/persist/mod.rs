@@ -27,6 +27,7 @@ pub mod ram;
 pub use flash::FlashMap;
 pub use ram::RamFlash;
 
+use crate::interp::tools::TOOL_AXES;
 use crate::interp::{Offsets, ToolEntry, TOOLS};
 use crate::seams::Storage;
 use crate::settings::{table, Settings};
@@ -97,12 +98,12 @@ pub struct Persist<S: Storage> {
 }
 
 /// The tool number in two exact halves (an `f32` holds 24 bits), then the
-/// offsets per axis and the diameter.
+/// X, Y, Z offsets and the diameter.
 fn tool_record(e: &ToolEntry) -> [f32; TOOL_VALUES] {
     let mut v = [0.0; TOOL_VALUES];
     v[0] = (e.number >> 16) as f32;
     v[1] = (e.number & 0xFFFF) as f32;
-    v[2..2 + AXES].copy_from_slice(&e.offset);
+    v[2..2 + TOOL_AXES].copy_from_slice(&e.offset);
     v[TOOL_VALUES - 1] = e.diameter;
     v
 }
@@ -126,8 +127,8 @@ fn tool_entry(v: &[f32; TOOL_VALUES]) -> Option<ToolEntry> {
     let half = |x: f32| (0.0..=65535.0).contains(&x) && libm::truncf(x) == x;
     let n = (v[0] as u32) << 16 | v[1] as u32;
     let valid = half(v[0]) && half(v[1]) && n <= crate::interp::tools::TOOL_MAX;
-    let mut offset = [0.0; AXES];
-    offset.copy_from_slice(v.get(2..2 + AXES)?);
+    let mut offset = [0.0; TOOL_AXES];
+    offset.copy_from_slice(v.get(2..2 + TOOL_AXES)?);
     valid.then_some(ToolEntry {
         number: n,
         offset,

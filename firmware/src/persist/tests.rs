@@ -68,13 +68,13 @@ fn tool_table_round_trips_and_rejects_a_bad_number() {
     let mut o = p.load().offsets;
     o.tools[0] = ToolEntry {
         number: 102,
-        offset: [0.5, -1.0, 31.25, 3.0],
+        offset: [0.5, -1.0, 31.25],
         diameter: 6.35,
     };
     // The last slot, and the largest number (above 2^16: both halves).
     o.tools[TOOLS - 1] = ToolEntry {
         number: crate::interp::tools::TOOL_MAX,
-        offset: [0.0, 0.0, -2.5, 0.0],
+        offset: [0.0, 0.0, -2.5],
         diameter: 0.0,
     };
     assert_eq!(p.save_offsets(&o).ok(), Some(2));
@@ -93,7 +93,7 @@ fn tool_table_round_trips_and_rejects_a_bad_number() {
         .storage()
         .store(
             record::TOOLS_KEY,
-            record::encode(&[0.0, 1.5, 0.0, 0.0, 1.0, 0.0, 1.0], &mut buf),
+            record::encode(&[0.0, 1.5, 0.0, 0.0, 1.0, 1.0], &mut buf),
         )
         .expect("store");
     let mut again = persist(flash_of(&mut rebooted));
@@ -120,10 +120,7 @@ fn old_three_value_tool_records_are_migrated() {
     let mut q = persist(flash_of(&mut p));
     let back = q.load();
     let t = back.offsets.tools[3];
-    assert_eq!(
-        (t.number, t.offset, t.diameter),
-        (7, [0.0, 0.0, 12.5, 0.0], 3.0)
-    );
+    assert_eq!((t.number, t.offset, t.diameter), (7, [0.0, 0.0, 12.5], 3.0));
     assert!(back.report.is_clean(), "{:?}", back.report);
     // Rewritten: the next boot reads it in today's format.
     let mut r = persist(flash_of(&mut q));

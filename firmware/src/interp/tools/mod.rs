@@ -8,8 +8,10 @@
 //!   numbers 1..=[`TOOL_MAX`] (words are `f32`: every number up to 2^24 − 1
 //!   is exact, so no tool is ever read as its neighbour; LinuxCNC goes to
 //!   2^31 − 1);
-//! - an entry holds an offset for every axis (G10 L1 X Y Z A; a mill's
-//!   length is Z) and the diameter (G10 L1 R is the radius, as LinuxCNC);
+//! - an entry holds offsets along X, Y and Z (G10 L1 X Y Z; a mill's
+//!   length is Z, a lathe's tools use X too; LinuxCNC also holds the
+//!   rotary and UVW axes, which burin refuses in G10 L1) and the diameter
+//!   (G10 L1 R is the radius, as LinuxCNC);
 //! - G43 H*n*, G43 with tool *n* in the spindle and G43.2 H*n* refuse a
 //!   tool without an entry, as LinuxCNC does: an unknown length must not
 //!   become 0. T, M6 and M61 still accept one (LinuxCNC refuses them too):
@@ -38,28 +40,32 @@ use crate::command::Command;
 use crate::gcode::{ErrorKind, GcodeError};
 use crate::AXES;
 
-/// Entries in the tool table: 24 bytes each in RAM (and a 4-byte
+/// Entries in the tool table: 20 bytes each in RAM (and a 4-byte
 /// fingerprint in the persist mirror).
 pub const TOOLS: usize = 64;
+/// Axes a table entry holds offsets for: X, Y and Z (a rotary axis has
+/// no tool offset on a mill; each copy of the table the stack holds at
+/// boot costs 256 B more per axis, and the F401's stack is tight).
+pub const TOOL_AXES: usize = 3;
 /// Highest tool number a table entry may have: every integer up to it is
 /// exact in the `f32` a word carries.
 pub const TOOL_MAX: u32 = (1 << 24) - 1;
 /// Highest T word (GRBL accepts any 8-digit T).
 const T_MAX: f32 = 99_999_999.0;
 
-/// One tool: `number` 0 is an empty entry. Offsets (per axis, X Y Z in
-/// mm, A in degrees) and the diameter in mm.
+/// One tool: `number` 0 is an empty entry. Offsets along X, Y, Z and the
+/// diameter, mm.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ToolEntry {
     pub number: u32,
-    pub offset: crate::command::Pos,
+    pub offset: [f32; TOOL_AXES],
     pub diameter: f32,
 }
 
 impl ToolEntry {
     pub const EMPTY: ToolEntry = ToolEntry {
         number: 0,
-        offset: [0.0; AXES],
+        offset: [0.0; TOOL_AXES],
         diameter: 0.0,
     };
     /// The length along Z (a mill's tool length).
@@ -95,9 +101,10 @@ fn offset_of(tb: &Tables, n: u32) -> Result<crate::command::Pos, ErrorKind> {
     if n == 0 {
         return Ok([0.0; AXES]);
     }
-    find(&tb.get().tools, n)
-        .map(|e| e.offset)
-        .ok_or(ErrorKind::ToolNotInTable)
+    let e = find(&tb.get().tools, n).ok_or(ErrorKind::ToolNotInTable)?;
+    let mut v = [0.0; AXES];
+    v[..TOOL_AXES].copy_from_slice(&e.offset);
+    Ok(v)
 }
 
 fn axis_words(cx: &mut Ctx, st: &State) -> Option<crate::command::Pos> {
@@ -207,9 +214,9 @@ pub(super) fn g10_tool(
 ) -> Result<(), GcodeError> {
     let n = cx.int(b'P', 1.0, TOOL_MAX as f32)?;
     let u = st.unit();
-    let mut words = [None; AXES];
-    for (i, (l, w)) in AXIS_LETTERS.iter().zip(words.iter_mut()).enumerate() {
-        *w = cx.take(*l).map(|v| if i < 3 { v * u } else { v });
+    let mut words = [None; TOOL_AXES];
+    for (l, w) in AXIS_LETTERS.iter().zip(words.iter_mut()) {
+        *w = cx.take(*l).map(|v| v * u);
     }
     // LinuxCNC stores 2R as the diameter, whatever its sign.
     let r = cx.take(b'R').map(|r| r * u);
@@ -225,7 +232,7 @@ pub(super) fn g10_tool(
         .copied()
         .unwrap_or([0.0; AXES]);
     let base = st.wco_no_tool(tb.get());
-    let mut offset = [None; AXES];
+    let mut offset = [None; TOOL_AXES];
     for (i, (o, w)) in offset.iter_mut().zip(words).enumerate() {
         let here = st.pos.get(i).copied().unwrap_or(0.0);
         *o = w.map(|v| match l {
@@ -234,7 +241,7 @@ pub(super) fn g10_tool(
             _ => here - g593.get(i).copied().unwrap_or(0.0) - v,
         });
     }
-    let tools = &mut tb.edit().tools;
+    let tools = &tb.get().tools;
     let slot = match tools.iter().position(|e| e.number == n) {
         Some(i) => i,
         None => tools
@@ -242,9 +249,9 @@ pub(super) fn g10_tool(
             .position(|e| e.number == 0)
             .ok_or(GcodeError::new(ErrorKind::ValueOutOfRange(b'P'), col))?,
     };
-    let Some(e) = tools.get_mut(slot) else {
-        return Ok(());
-    };
+    let e = tb
+        .tool(slot)
+        .ok_or(GcodeError::new(ErrorKind::TooManyCommands, col))?;
     if e.number != n {
         *e = ToolEntry {
             number: n,
@@ -286,7 +293,7 @@ impl super::Interpreter {
     }
 }
 
-/// The table for `$#`: one `[T:n|x,y,z,a|diameter]` line per entry, in
+/// The table for `$#`: one `[T:n|x,y,z|diameter]` line per entry, in
 /// grblHAL's bracketed shape (offsets per axis, as grblHAL prints them)
 /// so GRBL senders skip what they do not know.
 pub(super) fn write_table(

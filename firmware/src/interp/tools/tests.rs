@@ -119,7 +119,7 @@ fn g10_l10_and_l11_compute_the_length_from_the_current_point() {
     let mut s = String::new();
     it.write_offsets(&mut s, "\n", 3).unwrap();
     assert!(
-        s.contains("[TLO:25.000]\n[T:4|0.000,0.000,25.000,0.000|0.000]\n"),
+        s.contains("[TLO:25.000]\n[T:4|0.000,0.000,25.000|0.000]\n"),
         "{s}"
     );
     // L11: as if in G59.3 (Z-30) without G92: 20 - 5 = 15.
@@ -176,14 +176,16 @@ fn g10_l1_every_axis_and_radius() {
     run(&mut it, "G10 L1 P3 Z1 R-1");
     let e = crate::interp::tools::find(&it.offsets().tools, 3).copied();
     assert_eq!(e.map(|e| (e.length(), e.diameter)), Some((1.0, -2.0)));
-    run(&mut it, "G20 G10 L1 P5 X1 Y2 Z3 A4 R0.5");
+    run(&mut it, "G20 G10 L1 P5 X1 Y2 Z3 R0.5");
     let e = crate::interp::tools::find(&it.offsets().tools, 5).copied();
     assert_eq!(
         e.map(|e| (e.offset, e.diameter)),
-        Some(([25.4, 50.8, 76.2, 4.0], 25.4))
+        Some(([25.4, 50.8, 76.2], 25.4))
     );
     run(&mut it, "G21 G43 H5");
-    assert_eq!(it.wco(), [25.4, 50.8, 76.2, 4.0]);
+    assert_eq!(it.wco(), [25.4, 50.8, 76.2, 0.0]);
+    // The table holds no rotary offset.
+    assert_eq!(err(&mut it, "G10 L1 P5 Z1 A1"), ErrorKind::AxisWordsUnused);
 }
 
 #[test]
