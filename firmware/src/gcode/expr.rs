@@ -625,3 +625,53 @@ pub(crate) enum ParamRef {
     Num(u16),
     Named(Name),
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::lexer::Cursor;
+    use super::super::params::Params;
+    use super::*;
+
+    fn eval(text: &str) -> Result<f32, ErrorKind> {
+        let mut p = Params::new();
+        let mut a = Name::empty();
+        let _ = a.push(b'a');
+        let _ = p.set_name(&a, 2.0);
+        let _ = p.set_num(1, 3.0);
+        let mut c = Cursor {
+            line: text.as_bytes(),
+            pos: 0,
+        };
+        c.real(&mut p, 0).map_err(|e| e.kind)
+    }
+
+    /// Precedence and the prefixes on the explicit stack (LinuxCNC's order).
+    #[test]
+    fn precedence_prefixes_and_functions() {
+        assert_eq!(eval("[1+2*3**2]"), Ok(19.0));
+        assert_eq!(eval("[2**3 MOD 5]"), Ok(3.0));
+        assert_eq!(eval("[1 LT 2 AND 3 GT 2]"), Ok(1.0));
+        assert_eq!(eval("[10-4-3]"), Ok(3.0), "left-associative");
+        assert_eq!(eval("-#1"), Ok(-3.0));
+        assert_eq!(eval("#[0+1]"), Ok(3.0));
+        assert_eq!(eval("[#1+1]"), Ok(4.0), "# binds tighter than +");
+        assert_eq!(eval("ATAN[1]/[1]"), Ok(45.0));
+        assert_eq!(eval("[SQRT[16]+ABS[-2]]"), Ok(6.0));
+        assert_eq!(eval("[EXISTS[#<a>]+EXISTS[#<b>]]"), Ok(1.0));
+        assert_eq!(eval("[1/0]"), Err(ErrorKind::DivisionByZero));
+        assert_eq!(eval("[1+2"), Err(ErrorKind::UnbalancedBrackets));
+        assert_eq!(eval("[1 FOO 2]"), Err(ErrorKind::UnknownOperation));
+    }
+
+    /// Nesting is bounded by the frames, not by recursion: 127 brackets
+    /// (more than a 256-byte line can hold) evaluate, 129 are refused.
+    #[test]
+    fn nesting_is_bounded_by_the_stack_of_frames() {
+        let deep = |n: usize| format!("{}1{}", "[".repeat(n), "]".repeat(n));
+        assert_eq!(eval(&deep(127)), Ok(1.0));
+        assert_eq!(
+            eval(&deep(MAX_DEPTH + 1)),
+            Err(ErrorKind::ExpressionTooDeep)
+        );
+    }
+}
