@@ -36,9 +36,19 @@ const KNOWN_FAULTS: &[(&str, u16, &str)] = &[
         "`G53 G90 G40` without G0/G1 or axis words: LinuxCNC refuses it too (issue 14)",
     ),
     (
-        "beagleg/spiral-cut.gcode",
-        342,
-        "`I0` in a G19 arc: an offset off the plane, which LinuxCNC refuses (issue 14)",
+        "linuxcnc/cds.ngc",
+        330,
+        "`G43 H1` with an empty tool table: LinuxCNC refuses an unknown tool too (issue 30)",
+    ),
+    (
+        "linuxcnc-tp/Cereal.ngc",
+        330,
+        "`G43 H1` with an empty tool table: LinuxCNC refuses an unknown tool too (issue 30)",
+    ),
+    (
+        "linuxcnc-tp/rgh.ngc",
+        330,
+        "`G43 H15` with an empty tool table: LinuxCNC refuses an unknown tool too (issue 30)",
     ),
 ];
 

@@ -171,6 +171,13 @@ pub fn check_file(
         let mut at = interp.state().pos;
         match interp.execute_line(line.as_bytes(), &mut |c| cmds.push(c)) {
             Ok(()) => {
+                if let Some(l) = interp.take_arc_warning() {
+                    writeln!(
+                        out,
+                        "{path_label}:{n}: warning: arc offset {}0 is off the plane: ignored",
+                        char::from(l)
+                    )?;
+                }
                 if dump {
                     // A canned cycle is dumped as the moves it expands to.
                     for c in &cmds {
@@ -239,4 +246,109 @@ pub fn motion_ends(
         }
     }
     Ok(ends)
+}
+
+/// What a move is, as LinuxCNC's canonical calls name it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MoveKind {
+    /// `STRAIGHT_TRAVERSE`
+    Traverse,
+    /// `STRAIGHT_FEED`
+    Feed,
+    /// `ARC_FEED`
+    Arc,
+    /// `NURBS_FEED` (G5, G5.1)
+    Spline,
+    /// `STRAIGHT_PROBE`
+    Probe,
+}
+
+/// One motion for the whole-path comparison with rs274 (machine mm, A in
+/// degrees): a canned cycle is its moves, as check mode dumps them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CanonMove {
+    pub kind: MoveKind,
+    pub end: Pos,
+    /// Arcs: the plane, the centre on the plane's two axes
+    /// ([`Plane::axes`] order) and the rotation as LinuxCNC counts it
+    /// (turns including the partial one; positive counter-clockwise).
+    pub arc: Option<(Plane, [f32; 2], i32)>,
+    /// Feed moves.
+    pub feed: Option<Feed>,
+    /// The tool length offset in force (machine mm per axis).
+    pub tlo: Pos,
+}
+
+/// Every motion of `source` up to the first M2/M30, after `prelude` (lines
+/// run first and not reported: the comparison's tool table), or the first
+/// error as `(line, "CODE message")` (lines of `source`, 1-based).
+pub fn canon_moves(
+    source: &str,
+    prelude: &str,
+    settings: &burin::settings::Settings,
+) -> Result<Vec<CanonMove>, (usize, String)> {
+    let mut interp = Interpreter::new();
+    interp.set_g28_homes(settings.g28_homes);
+    for line in prelude.lines() {
+        interp
+            .execute_line(line.as_bytes(), &mut |_| {})
+            .map_err(|e| (0, format!("prelude `{line}`: error[{}]: {e}", e.code())))?;
+    }
+    let mut moves = Vec::new();
+    for (i, line) in source.split('\n').enumerate() {
+        let mut cmds: Vec<Command> = Vec::new();
+        let mut at = interp.state().pos;
+        interp
+            .execute_line(line.as_bytes(), &mut |c| cmds.push(c))
+            .map_err(|e| (i + 1, format!("error[{}]: {e}", e.code())))?;
+        let tlo = interp.state().tlo;
+        for c in &cmds {
+            if matches!(c, Command::ProgramEnd) {
+                return Ok(moves);
+            }
+            let steps: Vec<Command> = match c {
+                Command::Cycle(cy) => cy.steps(&at).collect(),
+                c => vec![c.clone()],
+            };
+            for s in &steps {
+                let m = |kind, end: &Pos, feed: Option<Feed>| CanonMove {
+                    kind,
+                    end: *end,
+                    arc: None,
+                    feed,
+                    tlo,
+                };
+                let mv = match s {
+                    Command::Rapid { end } => Some(m(MoveKind::Traverse, end, None)),
+                    Command::Line { end, feed } => Some(m(MoveKind::Feed, end, Some(*feed))),
+                    Command::Probe { end, feed, .. } => Some(m(MoveKind::Probe, end, Some(*feed))),
+                    Command::Spline(sp) => Some(m(MoveKind::Spline, &sp.end, Some(sp.feed))),
+                    Command::Arc(a) => {
+                        let turns = i32::from(a.turns) + 1;
+                        let rot = if a.dir == ArcDir::Cw { -turns } else { turns };
+                        Some(CanonMove {
+                            arc: Some((a.plane, a.center, rot)),
+                            ..m(MoveKind::Arc, &a.end, Some(a.feed))
+                        })
+                    }
+                    _ => None,
+                };
+                moves.extend(mv);
+                if let Some(e) = s.end() {
+                    at = *e;
+                }
+            }
+        }
+        if interp.needs_sync() {
+            match cmds
+                .iter()
+                .rev()
+                .find(|c| matches!(c, Command::Probe { .. }))
+            {
+                Some(Command::Probe { end, .. }) => interp.probe_finished(*end, true),
+                _ => interp.set_machine_position(interp.state().pos),
+            }
+        }
+    }
+    Ok(moves)
 }

@@ -102,7 +102,7 @@ fn m6_stops_the_spindle_moves_holds_announces_and_resumes_on_cycle_start() {
     assert_eq!(end.wpos, Some(vec![20.0, 40.0, -10.0, 0.0]), "{end:?}");
     let mut params = r.cmd("$#");
     params.retain(|l| l.starts_with("[TLO") || l.starts_with("[T:"));
-    assert_eq!(params, ["[TLO:-3.500]", "[T:2|-3.500|0.000]"]);
+    assert_eq!(params, ["[TLO:-3.500]", "[T:2|0.000,0.000,-3.500|0.000]"]);
     assert_eq!(
         r.dev.sim.machine.commanded_position(),
         [20.0, 40.0, -13.5, 0.0]

@@ -12,7 +12,7 @@
 //! | 100–119 | lexing: line length, characters, numbers, comments, checksum, N |
 //! | 200–219 | parameters and expressions |
 //! | 300–309 | words that are recognised but not supported (named) |
-//! | 310–339 | block semantics: modal groups, missing/unused words, arcs |
+//! | 310–339 | block semantics: modal groups, missing/unused words, arcs, tools |
 //! | 340–359 | dialect rules: several commands on a line, BeagleG's M list |
 
 use core::fmt;
@@ -132,6 +132,16 @@ pub enum ErrorKind {
     ArcWordOffPlane(u8),
     /// G86/G88 with the spindle stopped (LinuxCNC refuses them too).
     SpindleStopped,
+    // --- tools and arcs, issue 30 (329..) ---
+    /// G2/G3 with both R and I/J/K (LinuxCNC: "mixed radius ijk format").
+    MixedArcFormat,
+    /// T, M6, M61, G43 H or G43.2 H names a tool the table does not hold
+    /// (LinuxCNC refuses the line: an unknown tool has no known length).
+    ToolNotInTable,
+    /// G10 L1 with no value to write (LinuxCNC: "has no effect").
+    NoToolValues,
+    /// G43.2 with both H and axis words.
+    MixedToolOffset,
 }
 
 impl ErrorKind {
@@ -189,6 +199,10 @@ impl ErrorKind {
             NoHeaters => 341,
             ArcWordOffPlane(_) => 342,
             SpindleStopped => 343,
+            MixedArcFormat => 329,
+            ToolNotInTable => 330,
+            NoToolValues => 331,
+            MixedToolOffset => 332,
         }
     }
 
@@ -221,6 +235,9 @@ impl ErrorKind {
             ArcRadius => 34,
             NoOffsetsInPlane => 35,
             SpindleStopped => 20,
+            MixedArcFormat => 34,
+            ToolNotInTable | NoToolValues => 4,
+            MixedToolOffset => 24,
             UnusedWord(_) | SplinePlane => 36,
             ValueOutOfRange(_) => 4,
             TooManyCommands => 11,
@@ -363,6 +380,10 @@ impl fmt::Display for ErrorKind {
             NoHeaters => f.write_str("this controller has no heaters (M104/M105/M109/M116)"),
             ArcWordOffPlane(c) => write!(f, "arc offset {} is not in the active plane", letter(c)),
             SpindleStopped => f.write_str("G86/G88 need the spindle turning"),
+            MixedArcFormat => f.write_str("arc with both R and I/J/K"),
+            ToolNotInTable => f.write_str("tool not in the tool table (G10 L1 P<tool> first)"),
+            NoToolValues => f.write_str("G10 L1 without offsets has no effect"),
+            MixedToolOffset => f.write_str("G43.2 with both H and axis words"),
         }
     }
 }

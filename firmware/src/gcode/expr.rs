@@ -1,10 +1,13 @@
 //! Real values: numbers, `#` parameters, `[expressions]` and unary functions.
 //!
-//! Recursive descent, one function per precedence level (LinuxCNC's order:
-//! `**` binds tightest, then `* / MOD`, then `+ -`, then the comparisons, then
-//! `AND OR XOR`; all left-associative). Nesting is bounded by [`MAX_DEPTH`]
-//! so a hostile line cannot overflow the MCU's stack. Every result is checked
-//! to be finite: NaN and infinity become errors here, never motion.
+//! Operator precedence over an explicit stack (LinuxCNC's order: `**`
+//! binds tightest, then `* / MOD`, then `+ -`, then the comparisons, then
+//! `AND OR XOR`; all left-associative). No recursion per bracket: a line
+//! may nest as deep as its length allows (LinuxCNC's own bound: about 125
+//! brackets in its 256-byte line; here [`MAX_DEPTH`] pending brackets,
+//! operators and prefixes), in 1 KiB of stack taken only when a value is
+//! more than a number. Every result is checked to be
+//! finite: NaN and infinity become errors here, never motion.
 //!
 //! Whitespace may stand anywhere, even inside numbers (`X1 0` is X10), as in
 //! LinuxCNC, which strips spaces before parsing.
@@ -16,8 +19,11 @@ use crate::num::trig::{asin, sin_cos_deg};
 use crate::num::Decimal;
 use libm::{atan2f, ceilf, expf, floorf, fmodf, logf, powf, roundf, sqrtf};
 
-/// Deepest bracket/parameter nesting accepted.
-pub const MAX_DEPTH: u8 = 10;
+/// Pending brackets, binary operators and prefixes (`-`, `#`) one value
+/// may have open at once (8 bytes each on the stack): 127 brackets, as
+/// many as a [`super::MAX_LINE`]-byte line can close, and LinuxCNC's
+/// 256-byte line holds about 125.
+pub const MAX_DEPTH: usize = 128;
 
 const DEG: f32 = core::f32::consts::PI / 180.0;
 
@@ -139,41 +145,207 @@ impl Cursor<'_> {
     }
 
     /// Any real value: `[+-]* (number | [expr] | #param | FUNC[..])`.
-    pub(crate) fn real(&mut self, p: &mut dyn ParamStore, depth: u8) -> LexResult<f32> {
-        if depth > MAX_DEPTH {
-            return Err(self.err(ErrorKind::ExpressionTooDeep));
+    /// `_depth` is kept for callers; nesting lives on the explicit stack.
+    pub(crate) fn real(&mut self, p: &mut dyn ParamStore, _depth: u8) -> LexResult<f32> {
+        match self.peek() {
+            Some(b) if b.is_ascii_digit() || b == b'.' => self.number(),
+            _ => self.expression(p),
         }
-        let mut neg = false;
-        while let Some(b @ (b'+' | b'-')) = self.peek() {
-            neg ^= b == b'-';
-            self.bump();
-        }
-        let v = match self.peek() {
-            Some(b'[') => {
-                self.bump();
-                self.bracket(p, depth + 1)?
-            }
-            Some(b'#') => {
+    }
+
+    /// A value that is more than a number. Out of line: its stack (1 KiB)
+    /// is only taken when a line has an expression.
+    #[inline(never)]
+    fn expression(&mut self, p: &mut dyn ParamStore) -> LexResult<f32> {
+        let mut stack: heapless::Vec<Frame, MAX_DEPTH> = heapless::Vec::new();
+        loop {
+            // An operand, after any prefixes.
+            let mut v = loop {
                 let col = self.pos;
-                self.bump();
-                let v = match self.param_ref(p, depth + 1)? {
-                    ParamRef::Num(n) => p.get(n),
-                    ParamRef::Named(name) => p.get_named(&name),
+                let frame = match self.peek() {
+                    Some(b'+') => {
+                        self.bump();
+                        continue;
+                    }
+                    Some(b'-') => {
+                        self.bump();
+                        Frame::Neg
+                    }
+                    Some(b'[') => {
+                        self.bump();
+                        Frame::Plain
+                    }
+                    Some(b'#') => {
+                        self.bump();
+                        let at = self.pos;
+                        match self.peek() {
+                            Some(b) if b == b'<' || b.is_ascii_alphabetic() => {
+                                let name = self.param_name()?;
+                                break p.get_named(&name).map_err(|k| self.err_at(k, col))?;
+                            }
+                            _ => Frame::Param(at as u16),
+                        }
+                    }
+                    Some(b) if b.is_ascii_digit() || b == b'.' => break self.number()?,
+                    Some(b) if b.is_ascii_alphabetic() => {
+                        let (w, end) = self.peek_word();
+                        self.pos = end;
+                        if self.peek() != Some(b'[') {
+                            return Err(self.err_at(ErrorKind::BadNumber, col));
+                        }
+                        self.bump();
+                        if w == *b"EXISTS" {
+                            break self.exists(p)?;
+                        }
+                        let f =
+                            Func::of(&w).ok_or(self.err_at(ErrorKind::UnknownOperation, col))?;
+                        Frame::Func(f, col as u16)
+                    }
+                    Some(b']') => return Err(self.err(ErrorKind::UnbalancedBrackets)),
+                    _ => return Err(self.err(ErrorKind::BadNumber)),
                 };
-                v.map_err(|k| self.err_at(k, col))?
+                stack
+                    .push(frame)
+                    .map_err(|_| self.err(ErrorKind::ExpressionTooDeep))?;
+            };
+            // Fold the value into what waits for it, until an operator
+            // asks for another operand or the value is complete.
+            loop {
+                while let Some(&top) = stack.last() {
+                    match top {
+                        Frame::Neg => v = -v,
+                        Frame::Param(col) => v = self.param_value(p, v, usize::from(col))?,
+                        _ => break,
+                    }
+                    stack.pop();
+                }
+                if stack.is_empty() {
+                    return Ok(v);
+                }
+                if let Some((op, end)) = self.peek_op() {
+                    let col = self.pos;
+                    v = self.reduce(&mut stack, v, op.prec())?;
+                    self.pos = end;
+                    stack
+                        .push(Frame::Bin(op, v, col as u16))
+                        .map_err(|_| self.err(ErrorKind::ExpressionTooDeep))?;
+                    break;
+                }
+                v = self.reduce(&mut stack, v, 0)?;
+                let open = stack.pop();
+                match self.peek() {
+                    Some(b']') => self.bump(),
+                    None => return Err(self.err(ErrorKind::UnbalancedBrackets)),
+                    Some(_) => return Err(self.err(ErrorKind::UnknownOperation)),
+                }
+                v = match open {
+                    Some(Frame::Plain) => v,
+                    Some(Frame::Atan(a, col)) => {
+                        finite(atan2f(a, v) / DEG).map_err(|k| self.err_at(k, usize::from(col)))?
+                    }
+                    Some(Frame::Func(Func::Atan, col)) => {
+                        // `ATAN[a]/[b]`: the second bracket follows.
+                        if self.peek() != Some(b'/') {
+                            return Err(self.err(ErrorKind::UnknownOperation));
+                        }
+                        self.bump();
+                        if self.peek() != Some(b'[') {
+                            return Err(self.err(ErrorKind::UnknownOperation));
+                        }
+                        self.bump();
+                        stack
+                            .push(Frame::Atan(v, col))
+                            .map_err(|_| self.err(ErrorKind::ExpressionTooDeep))?;
+                        break;
+                    }
+                    Some(Frame::Func(f, col)) => {
+                        f.apply(v).map_err(|k| self.err_at(k, usize::from(col)))?
+                    }
+                    _ => return Err(self.err(ErrorKind::UnbalancedBrackets)),
+                };
             }
-            Some(b) if b.is_ascii_digit() || b == b'.' => self.number()?,
-            Some(b) if b.is_ascii_alphabetic() => self.function(p, depth)?,
-            Some(b']') => return Err(self.err(ErrorKind::UnbalancedBrackets)),
-            _ => return Err(self.err(ErrorKind::BadNumber)),
-        };
-        Ok(if neg { -v } else { v })
+        }
+    }
+
+    /// Applies the pending binary operators on top of `stack` that bind
+    /// at least as tightly as `prec` (left-associative), with `v` as the
+    /// rightmost operand.
+    fn reduce(
+        &self,
+        stack: &mut heapless::Vec<Frame, MAX_DEPTH>,
+        mut v: f32,
+        prec: u8,
+    ) -> LexResult<f32> {
+        while let Some(&Frame::Bin(op, a, col)) = stack.last() {
+            if op.prec() < prec {
+                break;
+            }
+            stack.pop();
+            v = op
+                .apply(a, v)
+                .map_err(|k| self.err_at(k, usize::from(col)))?;
+        }
+        Ok(v)
+    }
+
+    /// `#n`: the value of parameter `v`, which must be an integer in range;
+    /// `col` is where its number starts, one after the `#`.
+    fn param_value(&self, p: &mut dyn ParamStore, v: f32, col: usize) -> LexResult<f32> {
+        let n = roundf(v);
+        if (v - n).abs() > 1e-4 {
+            return Err(self.err_at(ErrorKind::NotInteger(b'#'), col));
+        }
+        if !(0.0..=PARAM_READ_MAX as f32).contains(&n) {
+            return Err(self.err_at(ErrorKind::ParamOutOfRange, col));
+        }
+        p.get(n as u16)
+            .map_err(|k| self.err_at(k, col.saturating_sub(1)))
+    }
+
+    /// After `EXISTS[`: `#<name>]`; 1 when the parameter is set, else 0
+    /// (LinuxCNC's function; it takes a named parameter only).
+    fn exists(&mut self, p: &mut dyn ParamStore) -> LexResult<f32> {
+        if self.peek() != Some(b'#') {
+            return Err(self.err(ErrorKind::BadNumber));
+        }
+        self.bump();
+        let name = self.param_name()?;
+        if self.peek() != Some(b']') {
+            return Err(self.err(ErrorKind::UnbalancedBrackets));
+        }
+        self.bump();
+        Ok(f32::from(u8::from(p.get_named(&name).is_ok())))
+    }
+
+    /// A named parameter after its `#`: `<name>` or BeagleG's bare `name`.
+    fn param_name(&mut self) -> LexResult<Name> {
+        match self.param_ref_named()? {
+            Some(n) => Ok(n),
+            None => Err(self.err(ErrorKind::BadNumber)),
+        }
     }
 
     /// After `#`: which parameter. `#<name>` and BeagleG's bare `#name`
     /// (letters, digits, `_`; ends at a space or any other byte) are names,
     /// anything else is a real value that must be an integer 0..=5410.
     pub(crate) fn param_ref(&mut self, p: &mut dyn ParamStore, depth: u8) -> LexResult<ParamRef> {
+        let col = self.pos;
+        if let Some(name) = self.param_ref_named()? {
+            return Ok(ParamRef::Named(name));
+        }
+        let v = self.real(p, depth)?;
+        let n = roundf(v);
+        if (v - n).abs() > 1e-4 {
+            return Err(self.err_at(ErrorKind::NotInteger(b'#'), col));
+        }
+        if !(0.0..=PARAM_READ_MAX as f32).contains(&n) {
+            return Err(self.err_at(ErrorKind::ParamOutOfRange, col));
+        }
+        Ok(ParamRef::Num(n as u16))
+    }
+
+    /// The named forms of [`Cursor::param_ref`]; `None` when a number follows.
+    fn param_ref_named(&mut self) -> LexResult<Option<Name>> {
         let col = self.pos;
         match self.peek() {
             Some(b'<') => {
@@ -202,7 +374,7 @@ impl Cursor<'_> {
                 if name.as_bytes().is_empty() {
                     return Err(self.err_at(ErrorKind::BadNumber, col));
                 }
-                Ok(ParamRef::Named(name))
+                Ok(Some(name))
             }
             Some(b) if b.is_ascii_alphabetic() => {
                 let mut name = Name::empty();
@@ -213,38 +385,16 @@ impl Cursor<'_> {
                     name.push(b).map_err(|k| self.err(k))?;
                     self.pos += 1;
                 }
-                Ok(ParamRef::Named(name))
+                Ok(Some(name))
             }
-            _ => {
-                let v = self.real(p, depth)?;
-                let n = roundf(v);
-                if (v - n).abs() > 1e-4 {
-                    return Err(self.err_at(ErrorKind::NotInteger(b'#'), col));
-                }
-                if !(0.0..=PARAM_READ_MAX as f32).contains(&n) {
-                    return Err(self.err_at(ErrorKind::ParamOutOfRange, col));
-                }
-                Ok(ParamRef::Num(n as u16))
-            }
+            _ => Ok(None),
         }
     }
 
-    /// Inside `[`: a whole expression up to and including the matching `]`.
-    fn bracket(&mut self, p: &mut dyn ParamStore, depth: u8) -> LexResult<f32> {
-        let v = self.logical(p, depth)?;
-        match self.peek() {
-            Some(b']') => {
-                self.bump();
-                Ok(v)
-            }
-            None => Err(self.err(ErrorKind::UnbalancedBrackets)),
-            Some(_) => Err(self.err(ErrorKind::UnknownOperation)),
-        }
-    }
-
-    /// Reads an alphabetic operator name (up to 5 letters) without consuming it.
-    fn peek_word(&self) -> ([u8; 5], usize) {
-        let mut w = [0u8; 5];
+    /// Reads an alphabetic name (up to 6 letters, blanks skipped) without
+    /// consuming it.
+    fn peek_word(&self) -> ([u8; 6], usize) {
+        let mut w = [0u8; 6];
         let mut n = 0;
         let mut i = self.pos;
         while let Some(&b) = self.line.get(i) {
@@ -264,181 +414,208 @@ impl Cursor<'_> {
         (w, i)
     }
 
-    fn logical(&mut self, p: &mut dyn ParamStore, d: u8) -> LexResult<f32> {
-        let mut a = self.relational(p, d)?;
-        loop {
-            let (w, end) = self.peek_word();
-            let op = match &w {
-                [b'A', b'N', b'D', 0, 0] => 0,
-                [b'O', b'R', 0, 0, 0] => 1,
-                [b'X', b'O', b'R', 0, 0] => 2,
-                _ => return Ok(a),
-            };
-            self.pos = end;
-            let b = self.relational(p, d)?;
-            let (x, y) = (a != 0.0, b != 0.0);
-            a = f32::from(u8::from(match op {
-                0 => x && y,
-                1 => x || y,
-                _ => x ^ y,
-            }));
-        }
-    }
-
-    fn relational(&mut self, p: &mut dyn ParamStore, d: u8) -> LexResult<f32> {
-        let mut a = self.additive(p, d)?;
-        loop {
-            let (w, end) = self.peek_word();
-            let op = match &w {
-                [b'E', b'Q', 0, 0, 0] => 0,
-                [b'N', b'E', 0, 0, 0] => 1,
-                [b'G', b'T', 0, 0, 0] => 2,
-                [b'G', b'E', 0, 0, 0] => 3,
-                [b'L', b'T', 0, 0, 0] => 4,
-                [b'L', b'E', 0, 0, 0] => 5,
-                _ => return Ok(a),
-            };
-            self.pos = end;
-            let b = self.additive(p, d)?;
-            let r = match op {
-                0 => a == b,
-                1 => a != b,
-                2 => a > b,
-                3 => a >= b,
-                4 => a < b,
-                _ => a <= b,
-            };
-            a = f32::from(u8::from(r));
-        }
-    }
-
-    fn additive(&mut self, p: &mut dyn ParamStore, d: u8) -> LexResult<f32> {
-        let mut a = self.multiplicative(p, d)?;
-        loop {
-            let op = match self.peek() {
-                Some(b @ (b'+' | b'-')) => b,
-                _ => return Ok(a),
-            };
-            self.bump();
-            let col = self.pos;
-            let b = self.multiplicative(p, d)?;
-            a = finite(if op == b'+' { a + b } else { a - b }).map_err(|k| self.err_at(k, col))?;
-        }
-    }
-
-    fn multiplicative(&mut self, p: &mut dyn ParamStore, d: u8) -> LexResult<f32> {
-        let mut a = self.power(p, d)?;
-        loop {
-            let col = self.pos;
-            let op = match self.peek() {
-                Some(b'/') => b'/',
-                Some(b'*') if self.peek2() != Some(b'*') => b'*',
-                _ => {
-                    let (w, end) = self.peek_word();
-                    if w != [b'M', b'O', b'D', 0, 0] {
-                        return Ok(a);
-                    }
-                    self.pos = end;
-                    b'M'
-                }
-            };
-            if op != b'M' {
-                self.bump();
+    /// The binary operator at the cursor, and where it ends.
+    fn peek_op(&mut self) -> Option<(Op, usize)> {
+        let at = self.pos;
+        Some(match self.peek()? {
+            b'*' if self.peek2() == Some(b'*') => {
+                let first = self.pos;
+                let second = self
+                    .line
+                    .get(first + 1..)?
+                    .iter()
+                    .position(|&b| !blank(b))?;
+                (Op::Pow, first + 1 + second + 1)
             }
-            let b = self.power(p, d)?;
-            let r = match op {
-                b'*' => a * b,
-                _ if b == 0.0 => return Err(self.err_at(ErrorKind::DivisionByZero, col)),
-                b'/' => a / b,
-                _ => {
-                    // LinuxCNC's MOD: the result takes the divisor's magnitude, never negative.
-                    let m = fmodf(a, b);
-                    if m < 0.0 {
-                        m + b.abs()
-                    } else {
-                        m
+            b'*' => (Op::Mul, self.pos + 1),
+            b'/' => (Op::Div, self.pos + 1),
+            b'+' => (Op::Add, self.pos + 1),
+            b'-' => (Op::Sub, self.pos + 1),
+            _ => {
+                let (w, end) = self.peek_word();
+                let op = match &w[..3] {
+                    b"MOD" if w[3] == 0 => Op::Mod,
+                    b"AND" if w[3] == 0 => Op::And,
+                    b"XOR" if w[3] == 0 => Op::Xor,
+                    [b'O', b'R', 0] => Op::Or,
+                    [b'E', b'Q', 0] => Op::Eq,
+                    [b'N', b'E', 0] => Op::Ne,
+                    [b'G', b'T', 0] => Op::Gt,
+                    [b'G', b'E', 0] => Op::Ge,
+                    [b'L', b'T', 0] => Op::Lt,
+                    [b'L', b'E', 0] => Op::Le,
+                    _ => {
+                        self.pos = at;
+                        return None;
                     }
-                }
-            };
-            a = finite(r).map_err(|k| self.err_at(k, col))?;
-        }
-    }
-
-    fn power(&mut self, p: &mut dyn ParamStore, d: u8) -> LexResult<f32> {
-        let mut a = self.real(p, d)?;
-        while self.peek() == Some(b'*') && self.peek2() == Some(b'*') {
-            let col = self.pos;
-            self.bump();
-            self.bump();
-            let b = self.real(p, d)?;
-            if a < 0.0 && floorf(b) != b {
-                return Err(self.err_at(ErrorKind::DomainError, col));
+                };
+                (op, end)
             }
-            a = finite(powf(a, b)).map_err(|k| self.err_at(k, col))?;
+        })
+    }
+}
+
+/// Work pending on [`Cursor::real`]'s stack: 8 bytes each.
+#[derive(Clone, Copy, Debug)]
+enum Frame {
+    /// An open `[`.
+    Plain,
+    /// A function's argument `[`; its name's column.
+    Func(Func, u16),
+    /// `ATAN[a]/[`: the second argument's `[`, with `a`.
+    Atan(f32, u16),
+    /// A binary operator with its left operand and column.
+    Bin(Op, f32, u16),
+    /// A unary minus.
+    Neg,
+    /// A `#` whose parameter number is the next value (where it starts).
+    Param(u16),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Op {
+    Pow,
+    Mul,
+    Div,
+    Mod,
+    Add,
+    Sub,
+    Eq,
+    Ne,
+    Gt,
+    Ge,
+    Lt,
+    Le,
+    And,
+    Or,
+    Xor,
+}
+
+impl Op {
+    const fn prec(self) -> u8 {
+        match self {
+            Op::Pow => 5,
+            Op::Mul | Op::Div | Op::Mod => 4,
+            Op::Add | Op::Sub => 3,
+            Op::Eq | Op::Ne | Op::Gt | Op::Ge | Op::Lt | Op::Le => 2,
+            Op::And | Op::Or | Op::Xor => 1,
         }
-        Ok(a)
     }
 
-    /// `NAME[expr]`, or `ATAN[a]/[b]`.
-    fn function(&mut self, p: &mut dyn ParamStore, depth: u8) -> LexResult<f32> {
-        let col = self.pos;
-        let (w, end) = self.peek_word();
-        self.pos = end;
-        if self.peek() != Some(b'[') {
-            return Err(self.err_at(ErrorKind::BadNumber, col));
-        }
-        self.bump();
-        let a = self.bracket(p, depth + 1)?;
+    fn apply(self, a: f32, b: f32) -> Result<f32, ErrorKind> {
+        let bool = |x: bool| f32::from(u8::from(x));
+        let r = match self {
+            Op::Pow => {
+                if a < 0.0 && floorf(b) != b {
+                    return Err(ErrorKind::DomainError);
+                }
+                powf(a, b)
+            }
+            Op::Mul => a * b,
+            Op::Div | Op::Mod if b == 0.0 => return Err(ErrorKind::DivisionByZero),
+            Op::Div => a / b,
+            Op::Mod => {
+                // LinuxCNC's MOD: the result takes the divisor's magnitude, never negative.
+                let m = fmodf(a, b);
+                if m < 0.0 {
+                    m + b.abs()
+                } else {
+                    m
+                }
+            }
+            Op::Add => a + b,
+            Op::Sub => a - b,
+            Op::Eq => bool(a == b),
+            Op::Ne => bool(a != b),
+            Op::Gt => bool(a > b),
+            Op::Ge => bool(a >= b),
+            Op::Lt => bool(a < b),
+            Op::Le => bool(a <= b),
+            Op::And => bool(a != 0.0 && b != 0.0),
+            Op::Or => bool(a != 0.0 || b != 0.0),
+            Op::Xor => bool((a != 0.0) ^ (b != 0.0)),
+        };
+        finite(r)
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Func {
+    Abs,
+    Acos,
+    Asin,
+    Cos,
+    Sin,
+    Tan,
+    Exp,
+    Fix,
+    Fup,
+    Round,
+    Ln,
+    Sqrt,
+    Atan,
+}
+
+impl Func {
+    fn of(w: &[u8; 6]) -> Option<Func> {
+        Some(match w {
+            b"ABS\0\0\0" => Func::Abs,
+            b"ACOS\0\0" => Func::Acos,
+            b"ASIN\0\0" => Func::Asin,
+            b"COS\0\0\0" => Func::Cos,
+            b"SIN\0\0\0" => Func::Sin,
+            b"TAN\0\0\0" => Func::Tan,
+            b"EXP\0\0\0" => Func::Exp,
+            b"FIX\0\0\0" => Func::Fix,
+            b"FUP\0\0\0" => Func::Fup,
+            b"ROUND\0" => Func::Round,
+            b"LN\0\0\0\0" => Func::Ln,
+            b"SQRT\0\0" => Func::Sqrt,
+            b"ATAN\0\0" => Func::Atan,
+            _ => return None,
+        })
+    }
+
+    fn apply(self, a: f32) -> Result<f32, ErrorKind> {
         let dom = |ok: bool| {
             if ok {
                 Ok(())
             } else {
-                Err(self.err_at(ErrorKind::DomainError, col))
+                Err(ErrorKind::DomainError)
             }
         };
-        let v = match &w {
-            b"ABS\0\0" => a.abs(),
-            b"ACOS\0" => {
+        let v = match self {
+            Func::Abs => a.abs(),
+            Func::Acos => {
                 dom((-1.0..=1.0).contains(&a))?;
                 libm::acosf(a) / DEG
             }
-            b"ASIN\0" => {
+            Func::Asin => {
                 dom((-1.0..=1.0).contains(&a))?;
                 asin(a) / DEG
             }
-            b"COS\0\0" => sin_cos_deg(a).1,
-            b"SIN\0\0" => sin_cos_deg(a).0,
-            b"TAN\0\0" => {
+            Func::Cos => sin_cos_deg(a).1,
+            Func::Sin => sin_cos_deg(a).0,
+            Func::Tan => {
                 let (s, c) = sin_cos_deg(a);
                 s / c
             }
-            b"EXP\0\0" => expf(a),
-            b"FIX\0\0" => floorf(a),
-            b"FUP\0\0" => ceilf(a),
-            b"ROUND" => roundf(a),
-            b"LN\0\0\0" => {
+            Func::Exp => expf(a),
+            Func::Fix => floorf(a),
+            Func::Fup => ceilf(a),
+            Func::Round => roundf(a),
+            Func::Ln => {
                 dom(a > 0.0)?;
                 logf(a)
             }
-            b"SQRT\0" => {
+            Func::Sqrt => {
                 dom(a >= 0.0)?;
                 sqrtf(a)
             }
-            b"ATAN\0" => {
-                if self.peek() != Some(b'/') {
-                    return Err(self.err(ErrorKind::UnknownOperation));
-                }
-                self.bump();
-                if self.peek() != Some(b'[') {
-                    return Err(self.err(ErrorKind::UnknownOperation));
-                }
-                self.bump();
-                let b = self.bracket(p, depth + 1)?;
-                atan2f(a, b) / DEG
-            }
-            _ => return Err(self.err_at(ErrorKind::UnknownOperation, col)),
+            // Handled by the caller: it takes a second bracket.
+            Func::Atan => a,
         };
-        finite(v).map_err(|k| self.err_at(k, col))
+        finite(v)
     }
 }
 
@@ -447,4 +624,54 @@ impl Cursor<'_> {
 pub(crate) enum ParamRef {
     Num(u16),
     Named(Name),
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::lexer::Cursor;
+    use super::super::params::Params;
+    use super::*;
+
+    fn eval(text: &str) -> Result<f32, ErrorKind> {
+        let mut p = Params::new();
+        let mut a = Name::empty();
+        let _ = a.push(b'a');
+        let _ = p.set_name(&a, 2.0);
+        let _ = p.set_num(1, 3.0);
+        let mut c = Cursor {
+            line: text.as_bytes(),
+            pos: 0,
+        };
+        c.real(&mut p, 0).map_err(|e| e.kind)
+    }
+
+    /// Precedence and the prefixes on the explicit stack (LinuxCNC's order).
+    #[test]
+    fn precedence_prefixes_and_functions() {
+        assert_eq!(eval("[1+2*3**2]"), Ok(19.0));
+        assert_eq!(eval("[2**3 MOD 5]"), Ok(3.0));
+        assert_eq!(eval("[1 LT 2 AND 3 GT 2]"), Ok(1.0));
+        assert_eq!(eval("[10-4-3]"), Ok(3.0), "left-associative");
+        assert_eq!(eval("-#1"), Ok(-3.0));
+        assert_eq!(eval("#[0+1]"), Ok(3.0));
+        assert_eq!(eval("[#1+1]"), Ok(4.0), "# binds tighter than +");
+        assert_eq!(eval("ATAN[1]/[1]"), Ok(45.0));
+        assert_eq!(eval("[SQRT[16]+ABS[-2]]"), Ok(6.0));
+        assert_eq!(eval("[EXISTS[#<a>]+EXISTS[#<b>]]"), Ok(1.0));
+        assert_eq!(eval("[1/0]"), Err(ErrorKind::DivisionByZero));
+        assert_eq!(eval("[1+2"), Err(ErrorKind::UnbalancedBrackets));
+        assert_eq!(eval("[1 FOO 2]"), Err(ErrorKind::UnknownOperation));
+    }
+
+    /// Nesting is bounded by the frames, not by recursion: 127 brackets
+    /// (more than a 256-byte line can hold) evaluate, 129 are refused.
+    #[test]
+    fn nesting_is_bounded_by_the_stack_of_frames() {
+        let deep = |n: usize| format!("{}1{}", "[".repeat(n), "]".repeat(n));
+        assert_eq!(eval(&deep(127)), Ok(1.0));
+        assert_eq!(
+            eval(&deep(MAX_DEPTH + 1)),
+            Err(ErrorKind::ExpressionTooDeep)
+        );
+    }
 }

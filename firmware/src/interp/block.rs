@@ -217,7 +217,10 @@ impl<'a> Block<'a> {
             return false;
         }
         let grp = w.tenths().and_then(g_group);
-        grp.is_some() && self.axis_mask() != 0
+        // `G0 X1 G80`: LinuxCNC lets G80 share the block with the motion
+        // it follows, which wins; no second command.
+        let g80_beside_motion = w.tenths() == Some(800) && self.g_of(GGroup::Motion).is_some();
+        grp.is_some() && self.axis_mask() != 0 && !g80_beside_motion
             || grp == Some(GGroup::Motion)
                 && w.tenths() != Some(800)
                 && matches!(self.g_of(GGroup::NonModal), Some((270 | 280 | 300, _)))

@@ -32,9 +32,12 @@ pub(crate) fn radius_mismatch(rs: f32, re: f32, inch: bool) -> bool {
 /// arc is then the semicircle on the chord (LinuxCNC 2.9, measured).
 pub(crate) const R_SHORTFALL: f32 = 0.001;
 
-/// Centre format (IJK): checks the radii, then moves the centre onto the
-/// chord's perpendicular bisector so both radii agree exactly and the
-/// segmenter never sees an inconsistent arc.
+/// Centre format (IJK): checks the radii and keeps the centre where the
+/// program put it, as LinuxCNC does (its canonical arc carries the given
+/// centre): when the end radius differs from the start radius (within
+/// [`radius_mismatch`]) the path is a spiral whose radius blends from one
+/// to the other (`arc::ArcChords`), not an arc about a moved centre, which
+/// ran up to 1.4 mm off LinuxCNC's path at r = 3000 (issue 30).
 ///
 /// The end radius is the start radius plus what the chord adds
 /// ([`crate::arc::growth`]): two f32 radii near 1e8 mm are 8 mm apart per
@@ -47,14 +50,7 @@ pub(crate) fn centre_ijk(s: P2, e: P2, c: P2, inch: bool) -> Result<P2, ErrorKin
     if rs < SAME_POINT || radius_mismatch(rs, re, inch) {
         return Err(ErrorKind::ArcRadius);
     }
-    let d = len(chord);
-    if d < SAME_POINT {
-        return Ok(c);
-    }
-    let u = [chord[0] / d, chord[1] / d];
-    let m = [(s[0] + e[0]) * 0.5, (s[1] + e[1]) * 0.5];
-    let along = (c[0] - m[0]) * u[0] + (c[1] - m[1]) * u[1];
-    Ok([c[0] - along * u[0], c[1] - along * u[1]])
+    Ok(c)
 }
 
 /// Radius format: the centre on the side that gives the short arc for a
@@ -121,9 +117,10 @@ mod tests {
             centre_ijk([0.0, 0.0], [10.0, 0.0], [4.0, 0.0], false),
             Err(ErrorKind::ArcRadius)
         );
-        // 0.004 mm off on a 5 mm radius: fine, and the centre is made exact.
+        // 0.004 mm off on a 5 mm radius: fine, and the centre stays where
+        // it was given (LinuxCNC's spiral, not a moved centre).
         let c = centre_ijk([0.0, 0.0], [10.0, 0.0], [5.002, 0.0], false).unwrap();
-        assert!((c[0] - 5.0).abs() < 1e-5);
+        assert_eq!(c, [5.002, 0.0]);
     }
 
     /// Issue 14's figures: |dr| 0.02 on r=10 and 0.9 on r=1000 pass;

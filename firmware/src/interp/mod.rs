@@ -36,9 +36,10 @@ use crate::gcode::{ErrorKind, GcodeError, Lexer, Name, ParamStore, Params, Token
 use block::Block;
 use core::fmt::{self, Write};
 use finite::{cmd_finite, non_finite};
-use state::Tables;
+use state::{Saved, Tables};
 
-/// The interpreter: modal state, offset tables and parameters. About 2.3 KiB.
+/// The interpreter: modal state, offset tables and parameters. About 3.4 KiB
+/// (the 64-tool table is 1.25 KiB of it).
 #[derive(Clone, Debug)]
 pub struct Interpreter {
     state: State,
@@ -116,7 +117,7 @@ impl Interpreter {
         out: &mut dyn FnMut(Command),
     ) -> Result<(), GcodeError> {
         let snapshot = self.state;
-        let mut saved = None;
+        let mut saved = Saved::default();
         self.params.begin_line();
         let mut buf = exec::Out::new();
         let r = self.run(line, &mut buf, &mut saved).and_then(|()| {
@@ -139,9 +140,7 @@ impl Interpreter {
             }
             Err(e) => {
                 self.state = snapshot;
-                if let Some(o) = saved {
-                    self.offsets = o;
-                }
+                saved.restore(&mut self.offsets);
                 self.params.rollback();
                 Err(e)
             }
@@ -168,7 +167,7 @@ impl Interpreter {
         &mut self,
         b: &Block,
         buf: &mut exec::Out,
-        saved: &mut Option<Offsets>,
+        saved: &mut Saved,
     ) -> Result<(), GcodeError> {
         let before = buf.len();
         let mut tables = Tables::new(&mut self.offsets, saved);
@@ -180,13 +179,13 @@ impl Interpreter {
         // leave them finite too: `G10 L20 X4e38` overflowed to inf
         // (found by the gcode_program fuzz target).
         let o = &self.offsets;
-        let tables_bad = saved.is_some()
+        let tables_bad = saved.any()
             && (o.wcs.iter().any(|w| non_finite(w) != 0)
                 || non_finite(&o.g28) != 0
                 || non_finite(&o.g30) != 0
                 || o.tools
                     .iter()
-                    .any(|t| non_finite(&[t.length, t.diameter]) != 0));
+                    .any(|t| non_finite(&t.offset) != 0 || !t.diameter.is_finite()));
         let pos_bad = non_finite(&self.state.pos) | non_finite(&self.state.tlo) != 0;
         if bad || tables_bad || pos_bad {
             return Err(GcodeError::new(ErrorKind::NotFinite, b.first_col));
@@ -198,7 +197,7 @@ impl Interpreter {
         &mut self,
         line: &[u8],
         buf: &mut exec::Out,
-        saved: &mut Option<Offsets>,
+        saved: &mut Saved,
     ) -> Result<(), GcodeError> {
         let mut lx = Lexer::new(line)?;
         if lx.percent {

@@ -120,7 +120,7 @@ fn finish(
     push(out, cmd, col)
 }
 
-fn arc(cx: &mut Ctx, st: &State, feed: Feed, col: u16) -> Result<Arc, GcodeError> {
+fn arc(cx: &mut Ctx, st: &mut State, feed: Feed, col: u16) -> Result<Arc, GcodeError> {
     let (a0, a1, _) = st.plane.axes();
     let letters = [b'I', b'J', b'K'];
     let axis_l = |i: usize| AXIS_LETTERS.get(i).copied().unwrap_or(b'X');
@@ -143,11 +143,18 @@ fn arc(cx: &mut Ctx, st: &State, feed: Feed, col: u16) -> Result<Arc, GcodeError
     };
     // An offset off the plane (`K` in G17, `J` in G18, `I` in G19) is an
     // error, as in LinuxCNC: it would be ignored, and is usually a
-    // forgotten plane select.
+    // forgotten plane select. A zero one changes nothing, so it passes
+    // with a warning (BeagleG's spiral-cut.gcode writes `I0` in G19).
     let li = |i: usize| letters.get(i).copied().unwrap_or(b'I');
     let (_, _, off) = st.plane.axes();
     if cx.b.has(li(off)) {
-        return Err(cx.err(ErrorKind::ArcWordOffPlane(li(off)), li(off)));
+        if cx.b.get(li(off)) != Some(0.0) {
+            return Err(cx.err(ErrorKind::ArcWordOffPlane(li(off)), li(off)));
+        }
+        st.off_plane_zero = Some(li(off));
+    }
+    if cx.b.has(b'R') && (cx.b.has(li(a0)) || cx.b.has(li(a1))) {
+        return Err(cx.err(ErrorKind::MixedArcFormat, b'R'));
     }
     let center = if let Some(r) = cx.take(b'R') {
         for l in letters {

@@ -105,8 +105,11 @@ pub struct State {
     /// Tool length offset (G43, G43.1, G43.2; 0 after G49), machine mm per
     /// axis; part of the work offset ([`State::wco`]).
     pub tlo: Pos,
-    /// A G43/M6 named a tool without a table entry: the device says so.
+    /// An M6 named a tool without a table entry: the device says so.
     pub tool_warning: Option<u32>,
+    /// An arc carried a zero offset off its plane (`I0` in G19): ignored,
+    /// and the device says so.
+    pub off_plane_zero: Option<u8>,
     /// G99 (true): canned cycles retract to R; G98: to where they began.
     pub retract_r: bool,
     /// Canned-cycle words that carry over to the next cycle block.
@@ -160,6 +163,7 @@ impl State {
             loaded: 0,
             tlo: [0.0; AXES],
             tool_warning: None,
+            off_plane_zero: None,
             retract_r: false,
             cycle: Sticky::NONE,
             probe: [0.0; AXES],
@@ -254,7 +258,7 @@ impl State {
 /// What survives a power cycle (GRBL's EEPROM coordinate data): the nine
 /// work offsets G54..G59.3 and the G28/G30 positions, machine mm, and the
 /// tool table. G92 and the modal state do not.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Offsets {
     pub wcs: [Pos; WCS_COUNT],
     pub g28: Pos,
@@ -263,27 +267,83 @@ pub struct Offsets {
     pub tools: [ToolEntry; TOOLS],
 }
 
+impl Default for Offsets {
+    fn default() -> Self {
+        Offsets {
+            wcs: [[0.0; AXES]; WCS_COUNT],
+            g28: [0.0; AXES],
+            g30: [0.0; AXES],
+            tools: [ToolEntry::EMPTY; TOOLS],
+        }
+    }
+}
+
+/// What a line backs up of the offset tables before it first writes them,
+/// so a refused line leaves no trace: the work offsets and G28/G30 whole,
+/// and of the tool table (most of the tables by size: a whole copy on the
+/// stack cost 1.5 KB) only the slots written, each once. A line writes one
+/// slot per G10; a split line (`G10 … G10 …`) a few.
+#[derive(Default)]
+pub(crate) struct Saved {
+    axes: Option<([Pos; WCS_COUNT], Pos, Pos)>,
+    tools: heapless::Vec<(u8, ToolEntry), SAVED_TOOLS>,
+}
+
+/// Tool slots one line may write.
+pub(crate) const SAVED_TOOLS: usize = 4;
+
+impl Saved {
+    /// The line wrote the tables.
+    pub(crate) fn any(&self) -> bool {
+        self.axes.is_some() || !self.tools.is_empty()
+    }
+    /// Puts back what the line changed.
+    pub(crate) fn restore(self, o: &mut Offsets) {
+        if let Some((wcs, g28, g30)) = self.axes {
+            o.wcs = wcs;
+            o.g28 = g28;
+            o.g30 = g30;
+        }
+        for (k, e) in self.tools {
+            if let Some(t) = o.tools.get_mut(usize::from(k)) {
+                *t = e;
+            }
+        }
+    }
+}
+
 /// The offset tables as one line sees them. They are most of the
 /// interpreter's state by size but rarely written, so instead of copying
-/// them before every line (as [`State`] is), a line backs them up the first
-/// time it writes them, and only then.
+/// them before every line (as [`State`] is), a line backs up what it
+/// writes the first time it writes it, and only then ([`Saved`]).
 pub(crate) struct Tables<'t> {
     cur: &'t mut Offsets,
-    saved: &'t mut Option<Offsets>,
+    saved: &'t mut Saved,
 }
 
 impl<'t> Tables<'t> {
-    pub(crate) fn new(cur: &'t mut Offsets, saved: &'t mut Option<Offsets>) -> Self {
+    pub(crate) fn new(cur: &'t mut Offsets, saved: &'t mut Saved) -> Self {
         Tables { cur, saved }
     }
     pub(crate) fn get(&self) -> &Offsets {
         self.cur
     }
+    /// The work offsets and G28/G30 for writing (tools: [`Tables::tool`]).
     pub(crate) fn edit(&mut self) -> &mut Offsets {
-        if self.saved.is_none() {
-            *self.saved = Some(*self.cur);
+        if self.saved.axes.is_none() {
+            self.saved.axes = Some((self.cur.wcs, self.cur.g28, self.cur.g30));
         }
         self.cur
+    }
+    /// Tool slot `k` for writing; `None` when the line has written more
+    /// slots than it can back up.
+    pub(crate) fn tool(&mut self, k: usize) -> Option<&mut ToolEntry> {
+        let old = *self.cur.tools.get(k)?;
+        let slot = u8::try_from(k).ok()?;
+        if !self.saved.tools.iter().any(|(s, _)| *s == slot) {
+            self.saved.tools.push((slot, old)).ok()?;
+        }
+        self.cur.tools.get_mut(k)
     }
 }
 

@@ -28,7 +28,7 @@ use embedded_storage::nor_flash::NorFlash;
 use protocol::frame::crc16;
 
 /// Longest record value ([`super::record`]).
-pub const MAX_VALUE: usize = 24;
+pub const MAX_VALUE: usize = 28;
 
 const MAGIC: [u8; 2] = *b"bS";
 /// Page header: magic, sequence number (u32 LE), CRC-16 of those six.
@@ -63,7 +63,7 @@ struct Found {
 
 /// Keys the index holds: every setting, offset and tool record with room
 /// to spare.
-const INDEX: usize = 112;
+const INDEX: usize = 160;
 
 /// An index entry: key, and where its value starts and how long it is
 /// (page-relative, so two bytes suffice for pages up to 64 KiB).

@@ -27,6 +27,7 @@ pub mod ram;
 pub use flash::FlashMap;
 pub use ram::RamFlash;
 
+use crate::interp::tools::TOOL_AXES;
 use crate::interp::{Offsets, ToolEntry, TOOLS};
 use crate::seams::Storage;
 use crate::settings::{table, Settings};
@@ -90,24 +91,65 @@ pub struct Persist<S: Storage> {
     saved: [f32; SETTINGS],
     /// Offset vectors as stored (G54..G59.3, G28, G30); NaN: unknown.
     saved_offsets: [[f32; AXES]; OFFSET_RECORDS],
-    /// Tool records as stored; NaN: unknown.
-    saved_tools: [[f32; TOOL_VALUES]; TOOLS],
+    /// Tool records as stored, as fingerprints ([`tool_print`]); 0:
+    /// unknown. 4 bytes a tool instead of a 28-byte copy: the table is
+    /// most of the mirror, and the F401's RAM is short.
+    saved_tools: [u32; TOOLS],
 }
 
+/// The tool number in two exact halves (an `f32` holds 24 bits), then the
+/// X, Y, Z offsets and the diameter.
 fn tool_record(e: &ToolEntry) -> [f32; TOOL_VALUES] {
-    [e.number as f32, e.length, e.diameter]
+    let mut v = [0.0; TOOL_VALUES];
+    v[0] = (e.number >> 16) as f32;
+    v[1] = (e.number & 0xFFFF) as f32;
+    v[2..2 + TOOL_AXES].copy_from_slice(&e.offset);
+    v[TOOL_VALUES - 1] = e.diameter;
+    v
+}
+
+/// FNV-1a over a record's bits, never 0 (the mirror's "unknown"). A
+/// changed entry that kept its fingerprint (odds 2^-32) would go unsaved
+/// until its next change.
+fn tool_print(v: &[f32; TOOL_VALUES]) -> u32 {
+    let mut h: u32 = 0x811C_9DC5;
+    for x in v {
+        for b in x.to_bits().to_le_bytes() {
+            h = (h ^ u32::from(b)).wrapping_mul(0x0100_0193);
+        }
+    }
+    h.max(1)
 }
 
 /// A stored tool record back to an entry; `None` if its number is not a
 /// valid tool number (a damaged record).
 fn tool_entry(v: &[f32; TOOL_VALUES]) -> Option<ToolEntry> {
-    let n = v[0];
-    let valid = n >= 0.0 && n <= crate::interp::tools::TOOL_MAX as f32 && libm::truncf(n) == n;
+    let half = |x: f32| (0.0..=65535.0).contains(&x) && libm::truncf(x) == x;
+    let n = (v[0] as u32) << 16 | v[1] as u32;
+    let valid = half(v[0]) && half(v[1]) && n <= crate::interp::tools::TOOL_MAX;
+    let mut offset = [0.0; TOOL_AXES];
+    offset.copy_from_slice(v.get(2..2 + TOOL_AXES)?);
     valid.then_some(ToolEntry {
-        number: n as u32,
-        length: v[1],
-        diameter: v[2],
+        number: n,
+        offset,
+        diameter: v[TOOL_VALUES - 1],
     })
+}
+
+/// A record of the 16-tool firmware (`[number, length, diameter]`) as
+/// today's record, so an update keeps the table.
+fn old_tool(v: &[f32; 3]) -> [f32; TOOL_VALUES] {
+    let n = if v[0] >= 0.0 && v[0] < 16_777_216.0 && libm::truncf(v[0]) == v[0] {
+        v[0] as u32
+    } else {
+        u32::MAX
+    };
+    let mut r = [0.0; TOOL_VALUES];
+    r[0] = (n >> 16) as f32;
+    r[1] = (n & 0xFFFF) as f32;
+    r[4] = v[1];
+    r[TOOL_VALUES - 1] = v[2];
+    r
 }
 
 fn vectors(o: &Offsets) -> impl Iterator<Item = &[f32; AXES]> {
@@ -130,7 +172,7 @@ impl<S: Storage> Persist<S> {
             defaults,
             saved: [f32::NAN; SETTINGS],
             saved_offsets: [[f32::NAN; AXES]; OFFSET_RECORDS],
-            saved_tools: [[f32::NAN; TOOL_VALUES]; TOOLS],
+            saved_tools: [0; TOOLS],
         }
     }
 
@@ -231,26 +273,42 @@ impl<S: Storage> Persist<S> {
         }
         for (k, e) in offsets.tools.iter_mut().enumerate() {
             let mut v = [0.0; TOOL_VALUES];
-            // k < TOOLS (16): the key stays below 1116.
-            let entry = match self.read(TOOLS_KEY + k as u16, &mut v) {
-                Ok(true) => tool_entry(&v),
-                Ok(false) => None,
+            // k < TOOLS (64): the key stays below 1164.
+            let key = TOOLS_KEY + k as u16;
+            let mut old = [0.0; 3];
+            let (entry, migrated) = match self.read(key, &mut v) {
+                Ok(true) => (tool_entry(&v), false),
+                Ok(false) => match self.read(key, &mut old) {
+                    Ok(true) => {
+                        v = old_tool(&old);
+                        (tool_entry(&v), true)
+                    }
+                    Ok(false) => (None, false),
+                    Err(_) => {
+                        report.failed = true;
+                        (None, false)
+                    }
+                },
                 Err(_) => {
                     report.failed = true;
-                    None
+                    (None, false)
                 }
             };
             if let Some(t) = entry {
                 *e = t;
             }
             if let Some(s) = self.saved_tools.get_mut(k) {
-                *s = if entry.is_some() {
-                    v
+                // A migrated record is rewritten in today's format.
+                *s = if entry.is_some() && !migrated {
+                    tool_print(&v)
                 } else {
-                    [f32::NAN; TOOL_VALUES]
+                    0
                 };
             }
             report.defaulted += u16::from(entry.is_none());
+            if migrated && entry.is_some() {
+                report.failed |= self.save_tool(k, e).is_err();
+            }
         }
         if report.defaulted > 0 {
             let wrote = self
@@ -290,17 +348,8 @@ impl<S: Storage> Persist<S> {
     /// stored ones.
     pub fn save_offsets(&mut self, o: &Offsets) -> Result<u16, S::Error> {
         let mut written = 0;
-        for (k, (e, saved)) in o.tools.iter().zip(self.saved_tools.iter_mut()).enumerate() {
-            let v = tool_record(e);
-            if v.iter().zip(saved.iter()).all(|(a, b)| same(*a, *b)) {
-                continue;
-            }
-            let mut buf = [0u8; MAX_RECORD];
-            let rec = record::encode(&v, &mut buf);
-            *saved = [f32::NAN; TOOL_VALUES];
-            self.store.store(TOOLS_KEY + k as u16, rec)?;
-            *saved = v;
-            written += 1;
+        for (k, e) in o.tools.iter().enumerate() {
+            written += u16::from(self.save_tool(k, e)?);
         }
         for (k, (v, saved)) in vectors(o).zip(self.saved_offsets.iter_mut()).enumerate() {
             if v.iter().zip(saved.iter()).all(|(a, b)| same(*a, *b)) {
@@ -314,6 +363,26 @@ impl<S: Storage> Persist<S> {
             written += 1;
         }
         Ok(written)
+    }
+
+    /// Writes tool slot `k` if it differs from the stored record.
+    fn save_tool(&mut self, k: usize, e: &ToolEntry) -> Result<bool, S::Error> {
+        let v = tool_record(e);
+        let print = tool_print(&v);
+        let Some(saved) = self.saved_tools.get_mut(k) else {
+            return Ok(false);
+        };
+        if *saved == print {
+            return Ok(false);
+        }
+        *saved = 0;
+        let mut buf = [0u8; MAX_RECORD];
+        let rec = record::encode(&v, &mut buf);
+        self.store.store(TOOLS_KEY + k as u16, rec)?;
+        if let Some(s) = self.saved_tools.get_mut(k) {
+            *s = print;
+        }
+        Ok(true)
     }
 }
 

@@ -7,8 +7,6 @@
 //! firmware's) or length is treated as missing: that item falls back to
 //! its default.
 
-use crate::AXES;
-
 /// Layout version of every record. Bump it when a record's meaning changes.
 pub const FORMAT: u8 = 1;
 
@@ -22,14 +20,17 @@ pub const OFFSETS_KEY: u16 = 1000;
 /// How many offset vectors are stored.
 pub const OFFSET_RECORDS: usize = crate::interp::WCS_COUNT + 2;
 
-/// Tool table entries: `TOOLS_KEY + 0..TOOLS`, each `[number, length,
-/// diameter]` (the number is exact in `f32` up to `TOOL_MAX`).
+/// Tool table entries: `TOOLS_KEY + 0..TOOLS`, each `[number / 65536,
+/// number % 65536, offset X Y Z, diameter]` (the halves are exact in
+/// `f32`). The 16-tool firmware's `[number, length, diameter]` records
+/// are read once and rewritten in this form.
 pub const TOOLS_KEY: u16 = 1100;
 /// Values in one tool record.
-pub const TOOL_VALUES: usize = 3;
+pub const TOOL_VALUES: usize = 3 + crate::interp::tools::TOOL_AXES;
 
-/// Bytes of the longest record (an offset vector).
-pub const MAX_RECORD: usize = 1 + 4 * AXES;
+/// Bytes of the longest record (a tool entry).
+pub const MAX_RECORD: usize = 1 + 4 * TOOL_VALUES;
+const _: () = assert!(MAX_RECORD <= super::flash::MAX_VALUE);
 
 /// Encodes `values` into `buf`, returning the record.
 pub fn encode<'b>(values: &[f32], buf: &'b mut [u8; MAX_RECORD]) -> &'b [u8] {
@@ -61,12 +62,13 @@ pub fn decode(rec: &[u8], out: &mut [f32]) -> Option<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::AXES;
 
     #[test]
     fn round_trip_and_rejects() {
         let mut buf = [0; MAX_RECORD];
         let rec = encode(&[1.5, -2.0, 0.25, 1e6], &mut buf).to_vec();
-        assert_eq!(rec.len(), MAX_RECORD);
+        assert_eq!(rec.len(), 1 + 4 * 4);
         let mut out = [0.0; AXES];
         assert_eq!(decode(&rec, &mut out), Some(()));
         assert_eq!(out, [1.5, -2.0, 0.25, 1e6]);

@@ -7,7 +7,7 @@ use crate::seams::Storage;
 /// The boards' geometry: two 16 KiB sectors.
 type Board = RamFlash<{ 2 * 16384 }, 16384>;
 /// Small pages so that a few hundred writes wrap the map many times.
-type Small = RamFlash<4096, 2048>;
+type Small = RamFlash<8192, 4096>;
 
 const ITEMS: u16 = (SETTINGS + OFFSET_RECORDS + TOOLS) as u16;
 
@@ -68,12 +68,13 @@ fn tool_table_round_trips_and_rejects_a_bad_number() {
     let mut o = p.load().offsets;
     o.tools[0] = ToolEntry {
         number: 102,
-        length: 31.25,
+        offset: [0.5, -1.0, 31.25],
         diameter: 6.35,
     };
-    o.tools[15] = ToolEntry {
+    // The last slot, and the largest number (above 2^16: both halves).
+    o.tools[TOOLS - 1] = ToolEntry {
         number: crate::interp::tools::TOOL_MAX,
-        length: -2.5,
+        offset: [0.0, 0.0, -2.5],
         diameter: 0.0,
     };
     assert_eq!(p.save_offsets(&o).ok(), Some(2));
@@ -92,14 +93,39 @@ fn tool_table_round_trips_and_rejects_a_bad_number() {
         .storage()
         .store(
             record::TOOLS_KEY,
-            record::encode(&[1.5, 1.0, 1.0], &mut buf),
+            record::encode(&[0.0, 1.5, 0.0, 0.0, 1.0, 1.0], &mut buf),
         )
         .expect("store");
     let mut again = persist(flash_of(&mut rebooted));
     let third = again.load();
     assert_eq!(third.report.defaulted, 1);
     assert_eq!(third.offsets.tools[0], ToolEntry::EMPTY);
-    assert_eq!(third.offsets.tools[15], o.tools[15]);
+    assert_eq!(third.offsets.tools[TOOLS - 1], o.tools[TOOLS - 1]);
+}
+
+/// The 16-tool firmware stored `[number, length, diameter]`: an update
+/// keeps those tools (length as the Z offset) and rewrites them in the
+/// new form once.
+#[test]
+fn old_three_value_tool_records_are_migrated() {
+    let mut p = persist(Board::new());
+    p.load();
+    let mut buf = [0u8; MAX_RECORD];
+    p.storage()
+        .store(
+            record::TOOLS_KEY + 3,
+            record::encode(&[7.0, 12.5, 3.0], &mut buf),
+        )
+        .expect("store");
+    let mut q = persist(flash_of(&mut p));
+    let back = q.load();
+    let t = back.offsets.tools[3];
+    assert_eq!((t.number, t.offset, t.diameter), (7, [0.0, 0.0, 12.5], 3.0));
+    assert!(back.report.is_clean(), "{:?}", back.report);
+    // Rewritten: the next boot reads it in today's format.
+    let mut r = persist(flash_of(&mut q));
+    assert_eq!(r.load().offsets.tools[3], t);
+    assert_eq!(r.save_offsets(&back.offsets).ok(), Some(0));
 }
 
 #[test]

@@ -51,6 +51,9 @@ impl<S: crate::seams::Storage> Device<S> {
                 if let Some(t) = self.interp.take_tool_warning() {
                     sys::no_tool_entry(t, o);
                 }
+                if let Some(l) = self.interp.take_arc_warning() {
+                    sys::off_plane_zero(l, o);
+                }
                 if !check && self.interp.needs_sync() {
                     self.sync = true;
                     self.probe_sync = probe;

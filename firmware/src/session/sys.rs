@@ -72,6 +72,14 @@ pub(super) fn no_tool_entry(tool: u32, o: &mut Out<'_, impl Tx>) {
     );
 }
 
+pub(super) fn off_plane_zero(letter: u8, o: &mut Out<'_, impl Tx>) {
+    let _ = write!(
+        o,
+        "[MSG:{}0 is off the arc plane: ignored]\r\n",
+        char::from(letter)
+    );
+}
+
 impl<S: crate::seams::Storage> Device<S> {
     /// M6 is held at the tool-change position, or the setter measured
     /// the new tool (its offset goes to the interpreter, which is waiting

@@ -60,7 +60,9 @@ fn offsets_finite(it: &Interpreter) -> bool {
     o.wcs.iter().all(|w| finite(w))
         && finite(&o.g28)
         && finite(&o.g30)
-        && o.tools.iter().all(|t| finite(&[t.length, t.diameter]))
+        && o.tools
+            .iter()
+            .all(|t| finite(&t.offset) && t.diameter.is_finite())
 }
 
 /// One line; panics on a broken invariant. `n` is the line's index.

@@ -105,13 +105,21 @@ pub(super) fn cycle(
         None if same => old,
         None => None,
     };
-    let p = sticky(b'P', prev.p, cx);
-    let q = sticky(b'Q', prev.q, cx);
     let needs_p = matches!(
         kind,
         CycleKind::G82 | CycleKind::G86 | CycleKind::G88 | CycleKind::G89
     );
     let needs_q = matches!(kind, CycleKind::G73 | CycleKind::G83);
+    // A P or Q the cycle has no use for is an error, as in LinuxCNC (which
+    // lets P pass only with a dwelling cycle, Q only with a pecking one);
+    // one carried over from the previous cycle is simply not used.
+    for (l, used) in [(b'P', needs_p), (b'Q', needs_q)] {
+        if !used && cx.b.has(l) {
+            return Err(cx.err(ErrorKind::UnusedWord(l), l));
+        }
+    }
+    let p = sticky(b'P', prev.p, cx);
+    let q = sticky(b'Q', prev.q, cx);
     let p = match p {
         Some(p) if p < 0.0 => return Err(cx.err(ErrorKind::ValueOutOfRange(b'P'), b'P')),
         None if needs_p => return Err(e(ErrorKind::ValueWordMissing(b'P'))),

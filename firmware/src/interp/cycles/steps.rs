@@ -11,8 +11,8 @@
 //! reference): with `n` the axis normal to the plane,
 //! 1. once per block, if the run of cycles began below R, rapid along `n`
 //!    to R;
-//! 2. per hole: rapid to the hole at the current level or R, whichever
-//!    is higher, rapid along `n` down to R (unless there already), then the cycle's
+//! 2. per hole: rapid to the hole at the current level, or at the clear
+//!    level when the current one is below R, rapid along `n` down to R (unless there already), then the cycle's
 //!    own moves, ending at the clear level (R under G99; under G98 the
 //!    higher of R and the level the run of cycles began at).
 
@@ -216,8 +216,12 @@ impl Iterator for CycleSteps {
                     self.pos[a0] = c.hole[0] + k * c.step[0];
                     self.pos[a1] = c.hole[1] + k * c.step[1];
                     // Never in the plane below R: from below it is one
-                    // rapid to the hole at R (rs274 does the same).
-                    self.pos[n] = self.pos[n].max(c.r);
+                    // rapid to the hole at the clear level (rs274 does the
+                    // same; under G98 after a G99 block with a lower R that
+                    // is the level the run began at, issue 30).
+                    if self.pos[n] < c.r {
+                        self.pos[n] = c.clear;
+                    }
                     return Some(Command::Rapid { end: self.pos });
                 }
                 2 => {

@@ -383,3 +383,28 @@ const T5: &[(char, [f32; 3])] = &[
     ('F', [2.0, 0.0, 0.0]),
     ('R', [2.0, 4.0, 0.0]),
 ];
+
+/// Issue 30: G99 G82 left the tool at R 1; a G98 G83 with R 2 starts below
+/// its R, and rs274 goes to the hole at the level the run began at (10),
+/// in one rapid, not at R.
+#[test]
+fn a_g98_block_below_its_r_goes_to_the_clear_level() {
+    same(
+        "G21 G17 G90\nG0 X0 Y0 Z10\nG99 G82 X15 Y5 Z-3 R1 P0.5 F300\n\
+         G98 G83 X20 Y5 Z-1 R2 Q1.5",
+        &[
+            ('R', [0.0, 0.0, 10.0]),
+            ('R', [15.0, 5.0, 10.0]),
+            ('R', [15.0, 5.0, 1.0]),
+            ('F', [15.0, 5.0, -3.0]),
+            ('R', [15.0, 5.0, 1.0]),
+            ('R', [20.0, 5.0, 10.0]),
+            ('R', [20.0, 5.0, 2.0]),
+            ('F', [20.0, 5.0, 0.5]),
+            ('R', [20.0, 5.0, 2.0]),
+            ('R', [20.0, 5.0, 0.754]),
+            ('F', [20.0, 5.0, -1.0]),
+            ('R', [20.0, 5.0, 10.0]),
+        ],
+    );
+}

@@ -2,21 +2,31 @@
 //! length offset (G43 H, G43.1, G43.2, G49) and the tool table that G10 L1,
 //! L10 and L11 write.
 //!
-//! Choices (LinuxCNC's semantics unless said):
+//! Choices (LinuxCNC 2.9's semantics, measured with its `rs274`, unless said):
 //! - the table is keyed by tool number, not pocket: CAM output numbers
 //!   tools freely (Carbide Create's `M6 T102`); it holds [`TOOLS`] entries,
-//!   numbers 1..=[`TOOL_MAX`] (a stored number must be exact in `f32`);
-//! - a tool without an entry has no offset: G43 H*n* then applies 0 and
-//!   the device says so in a `[MSG:]` (LinuxCNC refuses the line);
-//! - G43 without H uses the tool in the spindle (M6/M61); H0 is no offset;
-//! - the offset is a work offset along the axes it names (Z for table
-//!   lengths), in machine mm: the status report's `WCO:` includes it, as
-//!   in GRBL; G43.1 sets it from axis words (GRBL 1.1's dynamic offset),
-//!   G43.2 adds a table length and/or axis words to it;
-//! - G10 L1 P*n* Z R writes length and radius (stored as the diameter);
-//!   L10 computes the length so that the current Z becomes the given value
-//!   with the current G5x and G92 offsets, L11 as if in G59.3 without G92;
-//!   the table persists like the work offsets (`session::persist`);
+//!   numbers 1..=[`TOOL_MAX`] (words are `f32`: every number up to 2^24 − 1
+//!   is exact, so no tool is ever read as its neighbour; LinuxCNC goes to
+//!   2^31 − 1);
+//! - an entry holds offsets along X, Y and Z (G10 L1 X Y Z; a mill's
+//!   length is Z, a lathe's tools use X too; LinuxCNC also holds the
+//!   rotary and UVW axes, which burin refuses in G10 L1) and the diameter
+//!   (G10 L1 R is the radius, as LinuxCNC);
+//! - G43 H*n*, G43 with tool *n* in the spindle and G43.2 H*n* refuse a
+//!   tool without an entry, as LinuxCNC does: an unknown length must not
+//!   become 0. T, M6 and M61 still accept one (LinuxCNC refuses them too):
+//!   a tool setter measures tools no table lists, and T alone applies
+//!   nothing; M6 says so in a `[MSG:]`;
+//! - G43 without H and G43 H0 use the tool in the spindle (M6/M61);
+//! - the offset is a work offset along the axes it names, in machine mm:
+//!   the status report's `WCO:` includes it, as in GRBL; G43.1 replaces
+//!   the named axes only (`G43 H3` then `G43.1 X2` keeps tool 3's Z), a
+//!   bare G43.1 changes nothing; G43.2 adds a table entry (H) or axis
+//!   words, not both;
+//! - G10 L1 P*n* needs a value; L10 computes the length so that the
+//!   current Z becomes the given value with the current G5x and G92
+//!   offsets, L11 as if in G59.3 without G92; the table persists like the
+//!   work offsets (`session::persist`);
 //! - M6 changes to the last T word's tool; the executor stops the spindle,
 //!   goes to the tool-change position and holds (`executor::script`);
 //!   afterwards the interpreter waits for the machine's real position;
@@ -30,27 +40,38 @@ use crate::command::Command;
 use crate::gcode::{ErrorKind, GcodeError};
 use crate::AXES;
 
-/// Entries in the tool table.
-pub const TOOLS: usize = 16;
-/// Highest tool number a table entry may have: exact in an `f32` record.
-pub const TOOL_MAX: u32 = 9_999_999;
+/// Entries in the tool table: 20 bytes each in RAM (and a 4-byte
+/// fingerprint in the persist mirror).
+pub const TOOLS: usize = 64;
+/// Axes a table entry holds offsets for: X, Y and Z (a rotary axis has
+/// no tool offset on a mill; each copy of the table the stack holds at
+/// boot costs 256 B more per axis, and the F401's stack is tight).
+pub const TOOL_AXES: usize = 3;
+/// Highest tool number a table entry may have: every integer up to it is
+/// exact in the `f32` a word carries.
+pub const TOOL_MAX: u32 = (1 << 24) - 1;
 /// Highest T word (GRBL accepts any 8-digit T).
 const T_MAX: f32 = 99_999_999.0;
 
-/// One tool: `number` 0 is an empty entry. Lengths and diameters in mm.
+/// One tool: `number` 0 is an empty entry. Offsets along X, Y, Z and the
+/// diameter, mm.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ToolEntry {
     pub number: u32,
-    pub length: f32,
+    pub offset: [f32; TOOL_AXES],
     pub diameter: f32,
 }
 
 impl ToolEntry {
     pub const EMPTY: ToolEntry = ToolEntry {
         number: 0,
-        length: 0.0,
+        offset: [0.0; TOOL_AXES],
         diameter: 0.0,
     };
+    /// The length along Z (a mill's tool length).
+    pub fn length(&self) -> f32 {
+        self.offset[2]
+    }
 }
 
 /// The entry of tool `n` (never for tool 0).
@@ -74,18 +95,16 @@ pub(super) fn owns_axes(b: &super::block::Block) -> bool {
     matches!(b.g_of(GGroup::ToolLength), Some((431 | 432, _)))
 }
 
-/// A tool's length along Z as an offset vector; a missing entry is no
-/// offset and a warning.
-fn length_of(st: &mut State, tb: &Tables, n: u32) -> crate::command::Pos {
-    let mut v = [0.0; AXES];
+/// A tool's offsets; tool 0 (none) has none, a tool without an entry is
+/// an error (LinuxCNC: "requested tool not found in the tool table").
+fn offset_of(tb: &Tables, n: u32) -> Result<crate::command::Pos, ErrorKind> {
     if n == 0 {
-        return v;
+        return Ok([0.0; AXES]);
     }
-    match find(&tb.get().tools, n) {
-        Some(e) => v[2] = e.length,
-        None => st.tool_warning = Some(n),
-    }
-    v
+    let e = find(&tb.get().tools, n).ok_or(ErrorKind::ToolNotInTable)?;
+    let mut v = [0.0; AXES];
+    v[..TOOL_AXES].copy_from_slice(&e.offset);
+    Ok(v)
 }
 
 fn axis_words(cx: &mut Ctx, st: &State) -> Option<crate::command::Pos> {
@@ -139,26 +158,40 @@ pub(super) fn tool_words(
     } else {
         None
     };
+    let h_err = |cx: &Ctx, k| cx.err(k, b'H');
     match g {
         430 => {
-            let n = h.unwrap_or(st.loaded);
-            st.tlo = length_of(st, tb, n);
+            // H0 and no H alike: the tool in the spindle (LinuxCNC 2.9).
+            let n = h.filter(|&n| n != 0).unwrap_or(st.loaded);
+            st.tlo = offset_of(tb, n).map_err(|k| match h {
+                Some(_) => h_err(cx, k),
+                None => GcodeError::new(k, col),
+            })?;
         }
         431 => {
             if h.is_some() {
                 return Err(cx.err(ErrorKind::UnusedWord(b'H'), b'H'));
             }
-            st.tlo = axis_words(cx, st).ok_or(GcodeError::new(ErrorKind::NoAxisWords, col))?;
+            // Only the named axes change; a bare G43.1 changes nothing.
+            let u = st.unit();
+            for (i, l) in AXIS_LETTERS.iter().enumerate() {
+                if let (Some(v), Some(t)) = (cx.take(*l), st.tlo.get_mut(i)) {
+                    *t = if i < 3 { v * u } else { v };
+                }
+            }
         }
         432 => {
             let words = axis_words(cx, st);
-            if h.is_none() && words.is_none() {
-                return Err(GcodeError::new(ErrorKind::ValueWordMissing(b'H'), col));
-            }
-            let add = length_of(st, tb, h.unwrap_or(0));
-            let w = words.unwrap_or([0.0; AXES]);
-            for i in 0..AXES {
-                st.tlo[i] += add[i] + w[i];
+            let add = match (h, words) {
+                (Some(_), Some(_)) => return Err(h_err(cx, ErrorKind::MixedToolOffset)),
+                (Some(n), None) => offset_of(tb, n).map_err(|k| h_err(cx, k))?,
+                (None, Some(w)) => w,
+                (None, None) => {
+                    return Err(GcodeError::new(ErrorKind::ValueWordMissing(b'H'), col))
+                }
+            };
+            for (t, a) in st.tlo.iter_mut().zip(add) {
+                *t += a;
             }
         }
         _ => {
@@ -181,20 +214,34 @@ pub(super) fn g10_tool(
 ) -> Result<(), GcodeError> {
     let n = cx.int(b'P', 1.0, TOOL_MAX as f32)?;
     let u = st.unit();
-    let z = cx.take(b'Z').map(|z| z * u);
-    let r = cx.take(b'R').map(|r| r * u);
-    if r.is_some_and(|r| r < 0.0) {
-        return Err(cx.err(ErrorKind::ValueOutOfRange(b'R'), b'R'));
+    let mut words = [None; TOOL_AXES];
+    for (l, w) in AXIS_LETTERS.iter().zip(words.iter_mut()) {
+        *w = cx.take(*l).map(|v| v * u);
     }
-    let length = z.map(|z| match l {
-        1 => z,
-        10 => st.pos[2] - st.wco_no_tool(tb.get())[2] - z,
-        _ => {
-            let g593 = tb.get().wcs.get(WCS_COUNT - 1).map_or(0.0, |w| w[2]);
-            st.pos[2] - g593 - z
-        }
-    });
-    let tools = &mut tb.edit().tools;
+    // LinuxCNC stores 2R as the diameter, whatever its sign.
+    let r = cx.take(b'R').map(|r| r * u);
+    if r.is_none() && words.iter().all(Option::is_none) {
+        return Err(GcodeError::new(ErrorKind::NoToolValues, col));
+    }
+    // L1: the values themselves; L10/L11: what makes the current position
+    // read the given value (with the current G5x/G92, or in G59.3).
+    let g593 = tb
+        .get()
+        .wcs
+        .get(WCS_COUNT - 1)
+        .copied()
+        .unwrap_or([0.0; AXES]);
+    let base = st.wco_no_tool(tb.get());
+    let mut offset = [None; TOOL_AXES];
+    for (i, (o, w)) in offset.iter_mut().zip(words).enumerate() {
+        let here = st.pos.get(i).copied().unwrap_or(0.0);
+        *o = w.map(|v| match l {
+            1 => v,
+            10 => here - base.get(i).copied().unwrap_or(0.0) - v,
+            _ => here - g593.get(i).copied().unwrap_or(0.0) - v,
+        });
+    }
+    let tools = &tb.get().tools;
     let slot = match tools.iter().position(|e| e.number == n) {
         Some(i) => i,
         None => tools
@@ -202,17 +249,19 @@ pub(super) fn g10_tool(
             .position(|e| e.number == 0)
             .ok_or(GcodeError::new(ErrorKind::ValueOutOfRange(b'P'), col))?,
     };
-    let Some(e) = tools.get_mut(slot) else {
-        return Ok(());
-    };
+    let e = tb
+        .tool(slot)
+        .ok_or(GcodeError::new(ErrorKind::TooManyCommands, col))?;
     if e.number != n {
         *e = ToolEntry {
             number: n,
             ..ToolEntry::EMPTY
         };
     }
-    if let Some(len) = length {
-        e.length = len;
+    for (o, v) in e.offset.iter_mut().zip(offset) {
+        if let Some(v) = v {
+            *o = v;
+        }
     }
     if let Some(r) = r {
         e.diameter = 2.0 * r;
@@ -222,10 +271,16 @@ pub(super) fn g10_tool(
 }
 
 impl super::Interpreter {
-    /// Once after a line that named a tool without a table entry (G43 H,
-    /// M6): the device tells the operator that tool has no offset.
+    /// Once after a line that changed to a tool without a table entry
+    /// (M6): the device tells the operator that tool has no offset.
     pub fn take_tool_warning(&mut self) -> Option<u32> {
         self.state.tool_warning.take()
+    }
+
+    /// Once after an arc with a zero offset off its plane (`I0` in G19):
+    /// the letter, which was ignored.
+    pub fn take_arc_warning(&mut self) -> Option<u8> {
+        self.state.off_plane_zero.take()
     }
 
     /// A tool setter measured the new tool: its length offset along Z
@@ -238,8 +293,9 @@ impl super::Interpreter {
     }
 }
 
-/// The table for `$#`: one `[T:n|length|diameter]` line per entry, in
-/// grblHAL's bracketed shape so GRBL senders skip what they do not know.
+/// The table for `$#`: one `[T:n|x,y,z|diameter]` line per entry, in
+/// grblHAL's bracketed shape (offsets per axis, as grblHAL prints them)
+/// so GRBL senders skip what they do not know.
 pub(super) fn write_table(
     w: &mut dyn core::fmt::Write,
     tools: &[ToolEntry; TOOLS],
@@ -247,7 +303,12 @@ pub(super) fn write_table(
 ) -> core::fmt::Result {
     for e in tools.iter().filter(|e| e.number != 0) {
         write!(w, "[T:{}|", e.number)?;
-        crate::num::write_fixed(w, e.length, 3)?;
+        for (i, o) in e.offset.iter().enumerate() {
+            if i > 0 {
+                w.write_char(',')?;
+            }
+            crate::num::write_fixed(w, *o, 3)?;
+        }
         w.write_char('|')?;
         crate::num::write_fixed(w, e.diameter, 3)?;
         write!(w, "]{eol}")?;

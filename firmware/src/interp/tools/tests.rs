@@ -36,19 +36,38 @@ fn g43_h_applies_the_table_length_and_g49_cancels() {
     assert_eq!(it.take_tool_warning(), None);
 }
 
+/// LinuxCNC refuses a length it does not know ("requested tool not found
+/// in the tool table"); the line leaves no trace. M6 still changes to it
+/// (a tool setter may measure it) and says so.
 #[test]
-fn a_tool_without_an_entry_has_no_offset_and_says_so() {
+fn a_tool_without_an_entry_is_refused_where_its_offset_would_apply() {
     let mut it = Interpreter::new();
     run(&mut it, "G43.1 Z7");
-    // cds.ngc's first line: the whole line runs, G20 included.
-    run(&mut it, "G43 H1 g20");
-    assert_eq!(it.take_tool_warning(), Some(1));
-    assert_eq!(it.take_tool_warning(), None, "told once");
-    assert_eq!(it.wco()[2], 0.0);
-    assert!(it.state().inch);
-    // H0 is "no tool", not a missing one.
+    // cds.ngc's first line: refused whole, G20 included.
+    assert_eq!(err(&mut it, "G43 H1 g20"), ErrorKind::ToolNotInTable);
+    assert!(!it.state().inch);
+    assert_eq!(it.wco()[2], 7.0, "the old offset stays");
+    assert_eq!(err(&mut it, "G43.2 H1"), ErrorKind::ToolNotInTable);
+    run(&mut it, "T5 M6");
+    assert_eq!(it.take_tool_warning(), Some(5));
+    it.set_machine_position([0.0; 4]);
+    assert_eq!(err(&mut it, "G43"), ErrorKind::ToolNotInTable);
+    run(&mut it, "G10 L1 P5 Z2");
+    run(&mut it, "G43");
+    assert_eq!(it.wco()[2], 2.0);
+}
+
+/// LinuxCNC 2.9: H0 is the tool in the spindle, not "no tool".
+#[test]
+fn g43_h0_uses_the_tool_in_the_spindle() {
+    let mut it = Interpreter::new();
+    run(&mut it, "G10 L1 P3 Z10");
+    run(&mut it, "T3 M6");
+    it.set_machine_position([0.0; 4]);
     run(&mut it, "G43 H0");
-    assert_eq!(it.take_tool_warning(), None);
+    assert_eq!(it.wco()[2], 10.0);
+    run(&mut it, "M61 Q0 G43 H0");
+    assert_eq!(it.wco()[2], 0.0, "no tool in the spindle: no offset");
 }
 
 #[test]
@@ -80,7 +99,9 @@ fn dynamic_and_additional_offsets() {
     let c = run(&mut it, "G1 F100 X1");
     assert_eq!(c.len(), 1);
     assert!(run(&mut it, "G43.1 Z2").is_empty());
-    assert_eq!(err(&mut it, "G43.1"), ErrorKind::NoAxisWords);
+    // A bare G43.1 changes nothing (LinuxCNC accepts it).
+    run(&mut it, "G43.1");
+    assert_eq!(it.wco()[2], 2.0);
     assert_eq!(err(&mut it, "G43.1 G0 Z1"), ErrorKind::AxisCommandConflict);
     assert_eq!(err(&mut it, "G43.2"), ErrorKind::ValueWordMissing(b'H'));
     assert_eq!(err(&mut it, "G49 H1"), ErrorKind::UnusedWord(b'H'));
@@ -97,18 +118,21 @@ fn g10_l10_and_l11_compute_the_length_from_the_current_point() {
     run(&mut it, "G43 H4");
     let mut s = String::new();
     it.write_offsets(&mut s, "\n", 3).unwrap();
-    assert!(s.contains("[TLO:25.000]\n[T:4|25.000|0.000]\n"), "{s}");
+    assert!(
+        s.contains("[TLO:25.000]\n[T:4|0.000,0.000,25.000|0.000]\n"),
+        "{s}"
+    );
     // L11: as if in G59.3 (Z-30) without G92: 20 - 5 = 15.
     run(&mut it, "G10 L11 P4 Z5 R1");
     let t = crate::interp::tools::find(&it.offsets().tools, 4).copied();
-    assert_eq!(t.map(|e| (e.length, e.diameter)), Some((15.0, 2.0)));
+    assert_eq!(t.map(|e| (e.length(), e.diameter)), Some((15.0, 2.0)));
     assert!(it.take_offsets_changed(), "the table persists like G10 L2");
 }
 
 #[test]
-fn the_table_has_sixteen_entries_keyed_by_number() {
+fn the_table_has_sixty_four_entries_keyed_by_number() {
     let mut it = Interpreter::new();
-    for n in 0..16 {
+    for n in 0..64 {
         run(&mut it, &format!("G10 L1 P{} Z{}", 100 + n, n));
     }
     assert_eq!(
@@ -118,15 +142,50 @@ fn the_table_has_sixteen_entries_keyed_by_number() {
     // Rewriting an existing number takes no new entry.
     run(&mut it, "G10 L1 P105 Z50");
     let e = crate::interp::tools::find(&it.offsets().tools, 105).copied();
-    assert_eq!(e.map(|e| e.length), Some(50.0));
+    assert_eq!(e.map(|e| e.length()), Some(50.0));
     assert_eq!(
         err(&mut it, "G10 L1 P0 Z1"),
         ErrorKind::ValueOutOfRange(b'P')
     );
+}
+
+/// Tool numbers up to 2^24 - 1 (every one exact in a word's f32; the
+/// issue's `P10000000` among them); beyond, refused rather than rounded
+/// onto a neighbour.
+#[test]
+fn large_tool_numbers() {
+    let mut it = Interpreter::new();
+    run(&mut it, "G10 L1 P10000000 Z1");
+    run(&mut it, "G10 L1 P16777215 Z2");
+    run(&mut it, "G43 H16777215");
+    assert_eq!(it.wco()[2], 2.0);
+    run(&mut it, "G43 H10000000");
+    assert_eq!(it.wco()[2], 1.0);
     assert_eq!(
-        err(&mut it, "G10 L1 P1 R-1"),
-        ErrorKind::ValueOutOfRange(b'R')
+        err(&mut it, "G10 L1 P16777217 Z1"),
+        ErrorKind::ValueOutOfRange(b'P')
     );
+}
+
+/// G10 L1 writes every axis the table holds, R as the radius (stored as
+/// the diameter, negative too, as LinuxCNC), and needs a value.
+#[test]
+fn g10_l1_every_axis_and_radius() {
+    let mut it = Interpreter::new();
+    assert_eq!(err(&mut it, "G10 L1 P3"), ErrorKind::NoToolValues);
+    run(&mut it, "G10 L1 P3 Z1 R-1");
+    let e = crate::interp::tools::find(&it.offsets().tools, 3).copied();
+    assert_eq!(e.map(|e| (e.length(), e.diameter)), Some((1.0, -2.0)));
+    run(&mut it, "G20 G10 L1 P5 X1 Y2 Z3 R0.5");
+    let e = crate::interp::tools::find(&it.offsets().tools, 5).copied();
+    assert_eq!(
+        e.map(|e| (e.offset, e.diameter)),
+        Some(([25.4, 50.8, 76.2], 25.4))
+    );
+    run(&mut it, "G21 G43 H5");
+    assert_eq!(it.wco(), [25.4, 50.8, 76.2, 0.0]);
+    // The table holds no rotary offset.
+    assert_eq!(err(&mut it, "G10 L1 P5 Z1 A1"), ErrorKind::AxisWordsUnused);
 }
 
 #[test]
