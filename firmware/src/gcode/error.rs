@@ -14,6 +14,7 @@
 //! | 300–309 | words that are recognised but not supported (named) |
 //! | 310–339 | block semantics: modal groups, missing/unused words, arcs |
 //! | 340–359 | dialect rules: several commands on a line, BeagleG's M list |
+//! | 360–379 | O-words: subroutines and flow control (`crate::flow`) |
 
 use core::fmt;
 
@@ -31,6 +32,29 @@ pub enum Unsupported {
     ControlFlow,
     /// LinuxCNC's `#<_hal[…]>` / `#<_ini[…]>` system parameters.
     SystemParam,
+}
+
+/// Why an O-word line (or a line inside its block) was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OWord {
+    /// Not `O<number or <name>> keyword [args]`, or words after it.
+    Syntax,
+    /// A closer, `else` or `elseif` without its opening line.
+    Unmatched,
+    /// The block does not fit the capture buffer: none of it runs.
+    TooLarge,
+    /// Calls or loops nested deeper than the flow stage holds.
+    TooDeep,
+    /// `call` of a subroutine not defined (or no longer held).
+    UndefinedSub,
+    /// A line inside a refused block: it is not run.
+    InRefusedBlock,
+    /// `break`/`continue` outside a loop, `return`/`endsub` outside a call.
+    Outside,
+    /// `sub` inside another block.
+    NestedSub,
+    /// A block inside a replayed body has no end.
+    Unclosed,
 }
 
 /// What went wrong. The column of the fault travels in [`GcodeError`].
@@ -132,6 +156,8 @@ pub enum ErrorKind {
     ArcWordOffPlane(u8),
     /// G86/G88 with the spindle stopped (LinuxCNC refuses them too).
     SpindleStopped,
+    // --- O-words (360..) ---
+    OWord(OWord),
 }
 
 impl ErrorKind {
@@ -189,6 +215,15 @@ impl ErrorKind {
             NoHeaters => 341,
             ArcWordOffPlane(_) => 342,
             SpindleStopped => 343,
+            OWord(self::OWord::Syntax) => 360,
+            OWord(self::OWord::Unmatched) => 361,
+            OWord(self::OWord::TooLarge) => 362,
+            OWord(self::OWord::TooDeep) => 363,
+            OWord(self::OWord::UndefinedSub) => 364,
+            OWord(self::OWord::InRefusedBlock) => 365,
+            OWord(self::OWord::Outside) => 366,
+            OWord(self::OWord::NestedSub) => 367,
+            OWord(self::OWord::Unclosed) => 368,
         }
     }
 
@@ -220,7 +255,7 @@ impl ErrorKind {
             InvalidTarget => 33,
             ArcRadius => 34,
             NoOffsetsInPlane => 35,
-            SpindleStopped => 20,
+            SpindleStopped | OWord(_) => 20,
             UnusedWord(_) | SplinePlane => 36,
             ValueOutOfRange(_) => 4,
             TooManyCommands => 11,
@@ -363,6 +398,21 @@ impl fmt::Display for ErrorKind {
             NoHeaters => f.write_str("this controller has no heaters (M104/M105/M109/M116)"),
             ArcWordOffPlane(c) => write!(f, "arc offset {} is not in the active plane", letter(c)),
             SpindleStopped => f.write_str("G86/G88 need the spindle turning"),
+            OWord(k) => f.write_str(match k {
+                self::OWord::Syntax => "bad O-word line (O<number> or O<name>, a keyword, [args])",
+                self::OWord::Unmatched => "O-word closer, else or elseif without its opening line",
+                self::OWord::TooLarge => {
+                    "O-word block too large for the capture buffer: refused, none of it runs"
+                }
+                self::OWord::TooDeep => "O-word calls or loops nested too deeply",
+                self::OWord::UndefinedSub => "call of a subroutine that is not defined",
+                self::OWord::InRefusedBlock => "line inside a refused O-word block: not run",
+                self::OWord::Outside => {
+                    "break/continue outside a loop, or return/endsub outside a call"
+                }
+                self::OWord::NestedSub => "sub defined inside another O-word block",
+                self::OWord::Unclosed => "O-word block without its end",
+            }),
         }
     }
 }

@@ -1,0 +1,555 @@
+//! O-word subroutines and flow control for streamed programs, between the
+//! session's line intake and the interpreter.
+//!
+//! A sender streams a program line by line and never sends it twice, so a
+//! loop's or a subroutine's body must be kept to run again. The stage
+//! keeps it in one fixed buffer ([`CAPTURE_BYTES`], compacted lines with
+//! their source line numbers; `arena.rs`):
+//!
+//! * `sub` … `endsub`: the body is stored as it arrives; nothing runs. Each
+//!   line is acknowledged when stored. The subroutine stays defined until
+//!   a reset; defining it again replaces it; when a new block needs the
+//!   room, the least recently used subroutine is dropped (a later `call`
+//!   of it is then refused, never half run).
+//! * `while`/`do`/`repeat`: the whole block is captured first, each line
+//!   acknowledged when stored, then replayed from the buffer. Its closing
+//!   line is answered when the replay has been interpreted (as any line is
+//!   answered once its commands are queued), with the first error inside
+//!   the replay if there is one. A block that does not fit is refused
+//!   before any line of it runs: its lines up to its closer are answered
+//!   with an error and never run.
+//! * `call`: replays the subroutine's body with fresh locals (`#1`-`#30`
+//!   from the arguments, names without `_` start undefined); `return` or
+//!   `endsub` with a value set `#<_value>` (and `#<_value_returned>`).
+//!   The caller's locals wait in the same buffer, from its top down.
+//! * `if`/`elseif`/`else`/`endif` outside a captured block are decided as
+//!   the lines arrive, without the buffer: a line in a branch not taken
+//!   is acknowledged and never run, in check mode too.
+//!
+//! Conditions and arguments are evaluated when the line is reached, with
+//! the interpreter's parameters as the lines before left them (as
+//! LinuxCNC's read-ahead does). Replay runs no faster than the command
+//! queue drains: the session asks for one [`Step`] at a time.
+//!
+//! LinuxCNC's O-codes are the reference (ideas only). Differences: the
+//! bounded buffer and depths above; `continue` in a `do` loop tests the
+//! condition (C's meaning).
+
+mod arena;
+pub mod oline;
+#[cfg(test)]
+mod tests;
+
+pub use arena::CAPTURE_BYTES;
+
+use crate::gcode::{ErrorKind, GcodeError, Name, OWord};
+use crate::interp::Interpreter;
+use arena::Arena;
+use oline::{Kw, OLine};
+
+/// Subroutines held at once.
+pub const MAX_SUBS: usize = 16;
+/// Loops and calls open at once in a replay.
+pub const MAX_FRAMES: usize = 16;
+/// Calls nested at once (LinuxCNC allows 10 as well).
+pub const MAX_CALLS: usize = 10;
+/// Streamed `if` blocks open at once.
+pub const MAX_IFS: usize = 8;
+/// Most arguments of a call: `#1`-`#30`.
+pub const MAX_ARGS: usize = 30;
+
+/// No position: the replay of a top-level `call` ends when it returns.
+const END: u16 = u16::MAX;
+
+fn err(k: OWord) -> GcodeError {
+    GcodeError::new(ErrorKind::OWord(k), 1)
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Sub {
+    /// The `sub` line's record; the body follows it.
+    start: u16,
+    /// Past the `endsub` line's record.
+    end: u16,
+    used: u32,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum IfState {
+    /// The branch being streamed runs.
+    Taking,
+    /// No branch taken yet: skip to the next `elseif`/`else`.
+    Seeking,
+    /// A branch ran: skip to `endif`.
+    Done,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct OpenIf {
+    name: Name,
+    state: IfState,
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Mode {
+    Normal,
+    /// Storing a block from its opener's record at `start`.
+    Capture {
+        start: u16,
+    },
+    /// Every line up to `name`'s `until` is refused.
+    Refuse {
+        name: Name,
+        until: Kw,
+    },
+    /// Running stored lines: `pc` next, `end` the current body's end;
+    /// `n` is the line that started it (answered when it ends).
+    Replay {
+        pc: u16,
+        end: u16,
+        free_from: Option<u16>,
+        n: u32,
+    },
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Frame {
+    /// A loop whose opener's record is at `start`; `left` passes of a
+    /// `repeat`.
+    Loop { start: u16, kw: Kw, left: u32 },
+    /// A call: where to go on return and the caller's body end; `low` is
+    /// where the caller's saved locals end.
+    Call { ret: u16, ret_end: u16, low: u16 },
+}
+
+/// What the session does with a line it received.
+#[derive(Debug, PartialEq)]
+pub enum Intake {
+    /// Not a flow line: interpret and answer it as usual.
+    Run,
+    /// Handled here (stored, skipped or refused): answer with this.
+    Reply(Result<(), GcodeError>),
+    /// A replay starts; answer this line when [`Step::Done`] comes.
+    Replay,
+}
+
+/// One step of a replay.
+#[derive(Debug, PartialEq)]
+pub enum Step {
+    /// No replay running.
+    Idle,
+    /// An O-word line was handled; ask again.
+    Busy,
+    /// Interpret the `len` bytes written to the buffer; `n` is the source
+    /// line (for `Ln:` and messages).
+    Run { n: u32, len: usize },
+    /// The replay ended: answer line `n` (the one that started it) with
+    /// `result`; an error names the source line it came from.
+    Done {
+        n: u32,
+        result: Result<(), (u32, GcodeError)>,
+    },
+}
+
+/// The flow-control stage's state: the buffer, the subroutines, the open
+/// streamed `if`s and a replay's loops and calls.
+#[derive(Clone, Debug)]
+pub struct Flow {
+    arena: Arena,
+    subs: heapless::Vec<Sub, MAX_SUBS>,
+    ifs: heapless::Vec<OpenIf, MAX_IFS>,
+    frames: heapless::Vec<Frame, MAX_FRAMES>,
+    mode: Mode,
+    clock: u32,
+}
+
+impl Default for Flow {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+fn closer(opener: Kw) -> Kw {
+    match opener {
+        Kw::Sub => Kw::EndSub,
+        Kw::Do => Kw::While,
+        Kw::Repeat => Kw::EndRepeat,
+        Kw::If => Kw::EndIf,
+        _ => Kw::EndWhile,
+    }
+}
+
+impl Flow {
+    pub const fn new() -> Self {
+        Flow {
+            arena: Arena::new(),
+            subs: heapless::Vec::new(),
+            ifs: heapless::Vec::new(),
+            frames: heapless::Vec::new(),
+            mode: Mode::Normal,
+            clock: 0,
+        }
+    }
+
+    /// A replay is running: the session takes no new lines until it ends.
+    pub fn replaying(&self) -> bool {
+        matches!(self.mode, Mode::Replay { .. })
+    }
+
+    /// Nothing open: no capture, refusal, replay or streamed `if`.
+    pub fn idle(&self) -> bool {
+        matches!(self.mode, Mode::Normal) && self.ifs.is_empty()
+    }
+
+    /// Bytes of the buffer in use (subroutines, a capture, saved locals).
+    pub fn used(&self) -> usize {
+        CAPTURE_BYTES - self.arena.free()
+    }
+
+    /// A reset: the caller's locals come back, everything else is
+    /// forgotten (subroutines, captures, open blocks).
+    pub fn reset(&mut self, interp: &mut Interpreter) {
+        self.unwind(interp);
+        *self = Flow::new();
+    }
+
+    /// One line from the sender. `n` is its line number (text count or
+    /// sequence number).
+    pub fn intake(&mut self, text: &[u8], n: u32, interp: &mut Interpreter) -> Intake {
+        let o = oline::parse(text);
+        match self.mode {
+            Mode::Replay { .. } => return Intake::Reply(Err(err(OWord::Unmatched))),
+            Mode::Refuse { name, until } => {
+                if let Some(Ok(ol)) = &o {
+                    if ol.name == name && ol.kw == until {
+                        self.mode = Mode::Normal;
+                    }
+                }
+                return Intake::Reply(Err(err(OWord::InRefusedBlock)));
+            }
+            Mode::Capture { start } => return self.capture(text, n, o, start),
+            Mode::Normal => {}
+        }
+        if let Some(top) = self.ifs.last().copied() {
+            if top.state != IfState::Taking {
+                return Intake::Reply(self.skipping(top, o, text, interp));
+            }
+        }
+        let ol = match o {
+            None => return Intake::Run,
+            Some(Err(e)) => return Intake::Reply(Err(e)),
+            Some(Ok(ol)) => ol,
+        };
+        let r = match ol.kw {
+            Kw::If => {
+                let r = self.cond(&ol, text, interp).and_then(|c| {
+                    let state = if c { IfState::Taking } else { IfState::Seeking };
+                    self.ifs
+                        .push(OpenIf {
+                            name: ol.name,
+                            state,
+                        })
+                        .map_err(|_| err(OWord::TooDeep))
+                });
+                if r.is_err() {
+                    // Its lines must not run as if it were not there.
+                    self.mode = Mode::Refuse {
+                        name: ol.name,
+                        until: Kw::EndIf,
+                    };
+                }
+                r
+            }
+            Kw::ElseIf | Kw::Else | Kw::EndIf => match self.ifs.last_mut() {
+                Some(top) if top.name == ol.name => {
+                    if ol.kw == Kw::EndIf {
+                        self.ifs.pop();
+                    } else {
+                        top.state = IfState::Done;
+                    }
+                    Ok(())
+                }
+                _ => Err(err(OWord::Unmatched)),
+            },
+            Kw::Sub | Kw::While | Kw::Do | Kw::Repeat => {
+                if ol.kw == Kw::Sub {
+                    self.forget_sub(&ol.name);
+                }
+                let start = self.arena.top;
+                self.mode = Mode::Capture { start };
+                return self.capture(text, n, Some(Ok(ol)), start);
+            }
+            Kw::Call => {
+                self.mode = Mode::Replay {
+                    pc: END,
+                    end: END,
+                    free_from: None,
+                    n,
+                };
+                match self.control(&ol, text, END, END, interp) {
+                    Ok(pc) => {
+                        self.set_pc(pc);
+                        return Intake::Replay;
+                    }
+                    Err(e) => {
+                        self.unwind(interp);
+                        self.mode = Mode::Normal;
+                        Err(e)
+                    }
+                }
+            }
+            _ => Err(err(OWord::Outside)),
+        };
+        Intake::Reply(r)
+    }
+
+    /// A line while the innermost streamed `if` skips.
+    fn skipping(
+        &mut self,
+        top: OpenIf,
+        o: Option<Result<OLine, GcodeError>>,
+        text: &[u8],
+        interp: &mut Interpreter,
+    ) -> Result<(), GcodeError> {
+        let Some(Ok(ol)) = o else { return Ok(()) };
+        if ol.name != top.name {
+            return Ok(());
+        }
+        let state = match (ol.kw, top.state) {
+            (Kw::EndIf, _) => {
+                self.ifs.pop();
+                return oline::end(text, ol.args);
+            }
+            (Kw::Else, IfState::Seeking) => IfState::Taking,
+            (Kw::ElseIf, IfState::Seeking) => match self.cond(&ol, text, interp) {
+                Ok(true) => IfState::Taking,
+                Ok(false) => IfState::Seeking,
+                Err(e) => {
+                    self.ifs.pop();
+                    self.mode = Mode::Refuse {
+                        name: ol.name,
+                        until: Kw::EndIf,
+                    };
+                    return Err(e);
+                }
+            },
+            _ => return Ok(()),
+        };
+        if let Some(t) = self.ifs.last_mut() {
+            t.state = state;
+        }
+        Ok(())
+    }
+
+    /// A line while a block is captured from `start`.
+    fn capture(
+        &mut self,
+        text: &[u8],
+        n: u32,
+        o: Option<Result<OLine, GcodeError>>,
+        start: u16,
+    ) -> Intake {
+        let Some(opener) = self.oline_at(start).or(match &o {
+            Some(Ok(ol)) => Some(*ol),
+            _ => None,
+        }) else {
+            return Intake::Reply(Err(err(OWord::Syntax)));
+        };
+        let until = closer(opener.kw);
+        let is_opener = self.arena.top == start;
+        let ends =
+            matches!(&o, Some(Ok(ol)) if !is_opener && ol.name == opener.name && ol.kw == until);
+        let bad = match &o {
+            Some(Err(e)) => Some(*e),
+            Some(Ok(ol)) if ol.kw == Kw::Sub && !is_opener => Some(err(OWord::NestedSub)),
+            _ => None,
+        };
+        let mut line = [0u8; crate::gcode::MAX_LINE];
+        let len = oline::compact(text, &mut line);
+        let stored = bad.is_none()
+            && (len == 0 && !is_opener || self.store(n, line.get(..len).unwrap_or(&[])));
+        // Evicting a subroutine moves the capture down.
+        let start = match self.mode {
+            Mode::Capture { start } => start,
+            _ => start,
+        };
+        if !stored {
+            // Whatever was stored goes; its closer ends the refusal.
+            self.arena.cut(start, self.arena.top);
+            let e = bad.unwrap_or(err(OWord::TooLarge));
+            self.mode = if ends {
+                Mode::Normal
+            } else {
+                Mode::Refuse {
+                    name: opener.name,
+                    until,
+                }
+            };
+            return Intake::Reply(Err(e));
+        }
+        if !ends {
+            return Intake::Reply(Ok(()));
+        }
+        if opener.kw == Kw::Sub {
+            if self.subs.is_full() {
+                self.evict();
+            }
+            let start = match self.mode {
+                Mode::Capture { start } => start,
+                _ => start,
+            };
+            self.clock += 1;
+            let sub = Sub {
+                start,
+                end: self.arena.top,
+                used: self.clock,
+            };
+            self.mode = Mode::Normal;
+            let _ = self.subs.push(sub);
+            return Intake::Reply(Ok(()));
+        }
+        self.mode = Mode::Replay {
+            pc: start,
+            end: self.arena.top,
+            free_from: Some(start),
+            n,
+        };
+        Intake::Replay
+    }
+
+    /// Stores a line of the block being captured, dropping the least
+    /// recently used subroutines for room (nothing runs from them while a
+    /// block is captured).
+    fn store(&mut self, n: u32, text: &[u8]) -> bool {
+        loop {
+            if self.arena.push_line(n, text) {
+                return true;
+            }
+            let start = match self.mode {
+                Mode::Capture { start } => start,
+                _ => self.arena.top,
+            };
+            // The block alone does not fit: keep the subroutines.
+            let block = usize::from(self.arena.top - start) + arena::HEADER + text.len();
+            if block > CAPTURE_BYTES || !self.evict() {
+                return false;
+            }
+        }
+    }
+
+    /// Drops the least recently used subroutine; false when none is held.
+    fn evict(&mut self) -> bool {
+        let Some(i) = (0..self.subs.len()).min_by_key(|&i| self.subs.get(i).map_or(0, |s| s.used))
+        else {
+            return false;
+        };
+        self.remove_sub(i);
+        true
+    }
+
+    fn forget_sub(&mut self, name: &Name) {
+        if let Some(i) = self.find_sub(name) {
+            self.remove_sub(i);
+        }
+    }
+
+    fn remove_sub(&mut self, i: usize) {
+        let Some(s) = self.subs.get(i).copied() else {
+            return;
+        };
+        self.subs.remove(i);
+        let size = s.end - s.start;
+        self.arena.cut(s.start, s.end);
+        for o in self.subs.iter_mut() {
+            if o.start >= s.end {
+                o.start -= size;
+                o.end -= size;
+            }
+        }
+        if let Mode::Capture { start } = &mut self.mode {
+            if *start >= s.end {
+                *start -= size;
+            }
+        }
+    }
+
+    fn find_sub(&self, name: &Name) -> Option<usize> {
+        self.subs
+            .iter()
+            .position(|s| self.oline_at(s.start).is_some_and(|o| o.name == *name))
+    }
+
+    /// The O-word line stored at `at`, if that record is one.
+    fn oline_at(&self, at: u16) -> Option<OLine> {
+        let (_, text, _) = self.arena.line(at)?;
+        oline::parse(text)?.ok()
+    }
+
+    /// The condition of an `if`/`elseif`/`while`: one value, non-zero true.
+    fn cond(&self, ol: &OLine, text: &[u8], interp: &mut Interpreter) -> Result<bool, GcodeError> {
+        Ok(value(ol, text, interp)?.ok_or(err(OWord::Syntax))? != 0.0)
+    }
+
+    fn set_pc(&mut self, new: u16) {
+        if let Mode::Replay { pc, .. } = &mut self.mode {
+            *pc = new;
+        }
+    }
+}
+
+/// The optional single argument after the keyword, then the line's end.
+fn value(ol: &OLine, text: &[u8], interp: &mut Interpreter) -> Result<Option<f32>, GcodeError> {
+    if !oline::has_arg(text, ol.args) {
+        oline::end(text, ol.args)?;
+        return Ok(None);
+    }
+    let (v, after) = interp.eval_at(text, ol.args)?;
+    oline::end(text, after)?;
+    Ok(Some(v))
+}
+
+mod replay;
+
+impl Flow {
+    /// Feeds one line and runs all it releases at once: `run` interprets
+    /// each line to execute (text, source line). For tools that take a
+    /// whole file (check mode, comparisons); the device's session steps
+    /// instead, a bounded number per pass. A replay longer than
+    /// `max_steps` steps ends with [`OWord::TooDeep`].
+    pub fn feed_line(
+        &mut self,
+        text: &[u8],
+        n: u32,
+        interp: &mut Interpreter,
+        max_steps: u64,
+        run: &mut dyn FnMut(&mut Interpreter, &[u8], u32) -> Result<(), GcodeError>,
+    ) -> Result<(), (u32, GcodeError)> {
+        match self.intake(text, n, interp) {
+            Intake::Run => run(interp, text, n).map_err(|e| (n, e)),
+            Intake::Reply(r) => r.map_err(|e| (n, e)),
+            Intake::Replay => {
+                let mut buf = [0u8; crate::gcode::MAX_LINE];
+                let mut steps = 0u64;
+                loop {
+                    steps += 1;
+                    if steps > max_steps {
+                        self.abort(interp);
+                        return Err((n, err(OWord::TooDeep)));
+                    }
+                    match self.step(interp, &mut buf) {
+                        Step::Run { n: ln, len } => {
+                            let line = buf.get(..len).unwrap_or(&[]);
+                            if let Err(e) = run(interp, line, ln) {
+                                self.abort(interp);
+                                return Err((ln, e));
+                            }
+                        }
+                        Step::Busy => {}
+                        Step::Done { result, .. } => return result,
+                        Step::Idle => return Ok(()),
+                    }
+                }
+            }
+        }
+    }
+}
