@@ -51,6 +51,8 @@ pub use sys::RT_REPLY_ROOM;
 
 use crate::command::Command;
 use crate::executor::{self, MachineError};
+use crate::flow::{Flow, Intake, Step};
+use crate::gcode::GcodeError;
 use crate::interp::{Interpreter, LINE_COMMANDS};
 use crate::link::{FramedAction, FramedPort, LinkEvent};
 use crate::persist::{Persist, Report};
@@ -71,6 +73,10 @@ pub const LINE_SLOTS: usize = 8;
 /// ([`Device::poll_realtime`]).
 pub const TX_HEADROOM: usize = 768;
 
+/// Replay steps (stored lines or O-word lines) one pass takes at most: an
+/// O-word loop that moves nothing must not hold the task.
+pub const REPLAY_STEPS: u32 = 32;
+
 /// Static facts for `$I` and the handshake.
 #[derive(Clone, Copy, Debug)]
 pub struct Identity {
@@ -82,6 +88,10 @@ pub struct Identity {
 #[derive(Debug)]
 pub struct Device<S: Storage = NoStorage> {
     pub interp: Interpreter,
+    /// O-word flow control between the line intake and the interpreter.
+    flow: Flow,
+    /// The line whose replay runs came framed (its answer is a frame).
+    replay_framed: bool,
     port: FramedPort,
     ident: Identity,
     cmds: Deque<(u32, Command), CMD_SLOTS>,
@@ -157,7 +167,10 @@ impl<S: Storage> Device<S> {
     /// unread input up to the splitter's marker, so a new client never
     /// gets an `ok` for a line it did not send.
     pub fn port_reset(&mut self, link: &mut impl LinkPort, m: &impl MotionPort) {
-        let busy = !m.motion_idle() || !self.cmds.is_empty() || !self.slots.is_empty();
+        let busy = !m.motion_idle()
+            || !self.cmds.is_empty()
+            || !self.slots.is_empty()
+            || self.flow.replaying();
         // The splitter is back in text mode already; the assembler switches
         // only at the marker, so it still tells what the old client spoke.
         if (link.framed() || link.events_framed()) && busy {
@@ -181,7 +194,7 @@ impl<S: Storage> Device<S> {
 
     /// True when nothing is queued in the device.
     pub fn drained(&self) -> bool {
-        self.cmds.is_empty() && self.slots.is_empty() && !self.sync
+        self.cmds.is_empty() && self.slots.is_empty() && !self.sync && !self.flow.replaying()
     }
 
     fn info(&self, m: &impl MotionPort) -> DeviceInfo {
@@ -217,7 +230,8 @@ impl<S: Storage> Device<S> {
             }
             // The splitter runs ahead: when it is framed, a switch to frames
             // is on its way and whatever text precedes it has no listener.
-            if !(link.events_framed() || link.framed() || self.can_take()) {
+            let framed = link.events_framed() || link.framed();
+            if !(framed || self.can_take()) || !framed && self.flow.replaying() {
                 break;
             }
             let free = self.free_slots();
@@ -259,6 +273,7 @@ impl<S: Storage> Device<S> {
             if let Some(e) = alarm {
                 self.cmds.clear();
                 self.slots.clear();
+                self.flow.reset(&mut self.interp);
                 self.pending.cancel_queued();
                 self.sync = true;
                 if core::mem::take(&mut self.quiet_alarm) {
@@ -306,6 +321,7 @@ impl<S: Storage> Device<S> {
     /// `framed` is the port's mode for unprompted reports; lines from the
     /// slots are framed lines and are answered with frames.
     fn feed(&mut self, m: &mut impl MotionPort, tx: &mut impl Tx, framed: bool) {
+        let mut budget = REPLAY_STEPS;
         loop {
             while m.ready() {
                 let Some((line, cmd)) = self.cmds.pop_front() else {
@@ -319,10 +335,18 @@ impl<S: Storage> Device<S> {
             if self.sync || self.cmds.capacity() - self.cmds.len() < LINE_COMMANDS {
                 return;
             }
+            if self.flow.replaying() {
+                if budget == 0 {
+                    return;
+                }
+                budget -= 1;
+                self.replay_step(m, &mut Out::new(&mut *tx, self.replay_framed));
+                continue;
+            }
             let Some((seq, text)) = self.slots.pop_front() else {
                 return;
             };
-            self.line(&text, seq, m, &mut Out::new(&mut *tx, true));
+            self.job_line(&text, seq, m, &mut Out::new(&mut *tx, true));
         }
     }
 
@@ -351,7 +375,7 @@ impl<S: Storage> Device<S> {
                 };
                 self.text_lines = self.text_lines.wrapping_add(1);
                 let n = self.text_lines;
-                self.line(text, n, m, o);
+                self.job_line(text, n, m, o);
             }
             LinkEvent::System(cmd) => {
                 let r = self.system(cmd, m, o);
@@ -425,28 +449,92 @@ impl<S: Storage> Device<S> {
         Ok(())
     }
 
-    /// One job line (text mode) or one framed line leaving its slot.
-    /// `n` is its machine line number (text count or sequence number).
+    /// One job line (text mode) or one framed line leaving its slot, through
+    /// the O-word stage. `n` is its machine line number (text count or
+    /// sequence number).
+    fn job_line(&mut self, text: &[u8], n: u32, m: &mut impl MotionPort, o: &mut Out<'_, impl Tx>) {
+        if crate::link::syscmd::parse(text).is_some() || self.locked(text) {
+            return self.line(text, n, m, o);
+        }
+        match self.flow.intake(text, n, &mut self.interp) {
+            Intake::Run => self.line(text, n, m, o),
+            Intake::Reply(r) => {
+                let seq = o.framed().then_some(n);
+                match r {
+                    Ok(()) => self.reply_line(Ok(()), seq, o),
+                    Err(e) => self.reply_error(e, None, seq, o),
+                }
+            }
+            // Answered when the replay ends (`replay_step`).
+            Intake::Replay => self.replay_framed = o.framed(),
+        }
+    }
+
+    /// One step of a running replay; the line that started it is answered
+    /// when it ends, with the first error inside it.
+    fn replay_step(&mut self, m: &mut impl MotionPort, o: &mut Out<'_, impl Tx>) {
+        let mut buf = [0u8; crate::gcode::MAX_LINE];
+        let done = match self.flow.step(&mut self.interp, &mut buf) {
+            Step::Idle | Step::Busy => return,
+            Step::Run { n, len } => {
+                let text = buf.get(..len).unwrap_or(&[]);
+                match self.interpret(text, n, m, o) {
+                    Ok(()) => return,
+                    Err(e) => self
+                        .flow
+                        .abort(&mut self.interp)
+                        .map(|at| (at, Err((n, e)))),
+                }
+            }
+            Step::Done { n, result } => Some((n, result)),
+        };
+        let Some((at, result)) = done else { return };
+        let seq = o.framed().then_some(at);
+        match result {
+            Ok(()) => self.reply_line(Ok(()), seq, o),
+            Err((line, e)) => self.reply_error(e, Some(line), seq, o),
+        }
+    }
+
+    fn locked(&self, text: &[u8]) -> bool {
+        let blank = text.iter().all(u8::is_ascii_whitespace);
+        (self.sleep || self.seen_alarm.is_some() && !self.check) && !blank
+    }
+
+    /// One line to the interpreter, answered.
     fn line(&mut self, text: &[u8], n: u32, m: &mut impl MotionPort, o: &mut Out<'_, impl Tx>) {
         let seq = o.framed().then_some(n);
         if let Some(cmd) = crate::link::syscmd::parse(text) {
             let r = cmd.map_err(|c| c.code()).and_then(|c| self.system(c, m, o));
             return self.reply_line(r, seq, o);
         }
-        let blank = text.iter().all(u8::is_ascii_whitespace);
-        if (self.sleep || self.seen_alarm.is_some() && !self.check) && !blank {
+        if self.locked(text) {
             return self.reply_line(Err(protocol::Code::Locked.code()), seq, o);
         }
         if !self.check && !self.can_take() {
             // Only text that precedes a switch to frames gets here.
             return self.reply_line(Err(protocol::Code::RxOverflow.code()), seq, o);
         }
+        match self.interpret(text, n, m, o) {
+            Ok(()) => self.reply_line(Ok(()), seq, o),
+            Err(e) => self.reply_error(e, None, seq, o),
+        }
+    }
+
+    /// Interprets one line and queues its commands as line `n`; no answer.
+    fn interpret(
+        &mut self,
+        text: &[u8],
+        n: u32,
+        m: &mut impl MotionPort,
+        o: &mut Out<'_, impl Tx>,
+    ) -> Result<(), GcodeError> {
         let check = self.check;
         self.interp.set_g28_homes(m.settings().g28_homes);
         let cmds = &mut self.cmds;
         let mut probe = false;
         let mut store = persist::Pending::default();
-        let r = self.interp.execute_line(text, &mut |c| {
+        self.interp.execute_line(text, &mut |c| {
             // Operator text shows when the line is read, as GRBL's
             // `(MSG,…)` does: `[MSG:…]` (a frame in framed mode).
             if let Command::Message(t) = &c {
@@ -457,30 +545,43 @@ impl<S: Storage> Device<S> {
                 // Room for a whole line was checked before taking it.
                 let _ = cmds.push_back((n, c));
             }
-        });
-        match r {
-            Ok(()) => {
-                if let Some(t) = self.interp.take_tool_warning() {
-                    sys::no_tool_entry(t, o);
-                }
-                if !check && self.interp.needs_sync() {
-                    self.sync = true;
-                    self.probe_sync = probe;
-                }
-                self.after_line(store, m, o);
-                self.reply_line(Ok(()), seq, o)
-            }
-            Err(e) => {
-                if o.framed() {
-                    let mut t = protocol::msg::MsgText::new();
-                    let _ = core::fmt::write(&mut t, format_args!("{e}"));
-                    o.frame(&DeviceMsg::Msg(t));
-                    self.reply_line(Err(e.code()), seq, o)
-                } else {
-                    self.reply_line(Err(u16::from(e.grbl_code())), seq, o)
-                }
-            }
+        })?;
+        if let Some(t) = self.interp.take_tool_warning() {
+            sys::no_tool_entry(t, o);
         }
+        if !check && self.interp.needs_sync() {
+            self.sync = true;
+            self.probe_sync = probe;
+        }
+        self.after_line(store, m, o);
+        Ok(())
+    }
+
+    /// A G-code error as the answer to a line; `at` is the source line a
+    /// replay failed on, told first (`[MSG:line N: …]`).
+    fn reply_error(
+        &mut self,
+        e: GcodeError,
+        at: Option<u32>,
+        seq: Option<u32>,
+        o: &mut Out<'_, impl Tx>,
+    ) {
+        if o.framed() {
+            let mut t = protocol::msg::MsgText::new();
+            if let Some(l) = at {
+                let _ = core::fmt::write(&mut t, format_args!("line {l}: "));
+            }
+            let _ = core::fmt::write(&mut t, format_args!("{e}"));
+            o.frame(&DeviceMsg::Msg(t));
+        } else if let Some(l) = at {
+            let _ = core::fmt::Write::write_fmt(o, format_args!("[MSG:line {l}: {e}]\r\n"));
+        }
+        let code = if o.framed() {
+            e.code()
+        } else {
+            u16::from(e.grbl_code())
+        };
+        self.reply_line(Err(code), seq, o)
     }
 
     fn reply_line(&mut self, r: Result<(), u16>, seq: Option<u32>, o: &mut Out<'_, impl Tx>) {

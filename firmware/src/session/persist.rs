@@ -88,6 +88,8 @@ impl<S: Storage> Device<S> {
         }
         Device {
             interp,
+            flow: crate::flow::Flow::new(),
+            replay_framed: false,
             port: FramedPort::new(),
             ident,
             cmds: Deque::new(),

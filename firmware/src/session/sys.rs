@@ -178,6 +178,7 @@ impl<S: crate::seams::Storage> Device<S> {
                 m.rt().request_reset();
                 self.cmds.clear();
                 self.slots.clear();
+                self.flow.reset(&mut self.interp);
                 self.interp.reset();
                 self.check = false;
                 self.sleep = false;
@@ -328,6 +329,7 @@ impl<S: crate::seams::Storage> Device<S> {
             SysCmd::CheckMode => {
                 if self.check {
                     self.check = false;
+                    self.flow.reset(&mut self.interp);
                     self.interp.reset();
                     self.sync = true;
                     let _ = reply::msg(o, "Disabled");

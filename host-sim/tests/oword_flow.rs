@@ -1,0 +1,186 @@
+//! O-word flow control through the device session (issue 30): lines in a
+//! branch not taken never run, loops and calls replay from the capture
+//! buffer with their source lines in `Ln:`, a block too large for the
+//! buffer is refused before any of it runs, a reset clears it all.
+
+use host_sim::record::Discard;
+use protocol::client::grbl::{classify, TextEvent};
+
+mod rig;
+
+use rig::{origin, Rig};
+
+fn x(r: &mut Rig) -> f32 {
+    let st = r.until_idle();
+    st.mpos.map_or(f32::NAN, |p| p[0])
+}
+
+fn is_err(reply: &[String]) -> bool {
+    reply
+        .last()
+        .is_some_and(|l| matches!(classify(l), TextEvent::Error(_)))
+}
+
+#[test]
+fn lines_in_an_untaken_branch_never_run() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    for l in ["O1 if [0]", "G0 X5", "O1 endif"] {
+        assert_eq!(r.cmd(l), ["ok"], "{l}");
+    }
+    assert_eq!(x(&mut r), 0.0, "the line inside `if [0]` moved");
+    for l in [
+        "#2=3",
+        "O2 if [#2 EQ 1]",
+        "G0 X1",
+        "O2 elseif [#2 EQ 3]",
+        "G0 X3",
+        "O2 else",
+        "G0 X9",
+        "O2 endif",
+    ] {
+        assert_eq!(r.cmd(l), ["ok"], "{l}");
+    }
+    assert_eq!(x(&mut r), 3.0);
+}
+
+#[test]
+fn untaken_branch_never_runs_in_check_mode_either() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    assert_eq!(r.cmd("$C"), ["[MSG:Enabled]", "ok"]);
+    // An arc that is an error where it stands: never interpreted.
+    for l in ["O1 if [0]", "G2 X-5 R0", "O1 endif"] {
+        assert_eq!(r.cmd(l), ["ok"], "{l}");
+    }
+    assert!(
+        is_err(&r.cmd("G2 X-5 R0")),
+        "the same line outside the if fails"
+    );
+}
+
+#[test]
+fn while_runs_every_pass_and_status_shows_the_source_line() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    // Text lines are numbered as received: the move is line 4.
+    for l in [
+        "G91",
+        "#1=0",
+        "O1 while [#1 LT 3]",
+        "G1 X10 F600",
+        "#1=[#1+1]",
+    ] {
+        assert_eq!(r.cmd(l), ["ok"], "{l}");
+    }
+    assert_eq!(
+        r.status().state,
+        "Idle",
+        "nothing runs before the block ends"
+    );
+    assert_eq!(r.cmd("O1 endwhile"), ["ok"]);
+    r.run(20);
+    let st = r.status();
+    assert_eq!((st.state.as_str(), st.line), ("Run", Some(4)), "{st:?}");
+    assert_eq!(r.cmd("G90"), ["ok"]);
+    assert_eq!(x(&mut r), 30.0, "three passes");
+}
+
+#[test]
+fn sub_defined_in_the_stream_runs_only_when_called() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    for l in [
+        "O<go> sub",
+        "G0 X[#1*2] Y#<_y>",
+        "O<go> return [#1+1]",
+        "O<go> endsub",
+    ] {
+        assert_eq!(r.cmd(l), ["ok"], "{l}");
+    }
+    assert_eq!(x(&mut r), 0.0, "the body ran where it was defined");
+    assert_eq!(r.cmd("#<_y>=1"), ["ok"]);
+    assert_eq!(r.cmd("O<go> call [4]"), ["ok"]);
+    assert_eq!(x(&mut r), 8.0);
+    assert_eq!(r.cmd("G0 X#<_value>"), ["ok"]);
+    assert_eq!(x(&mut r), 5.0);
+}
+
+#[test]
+fn a_block_too_large_is_refused_before_any_of_it_runs() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    assert_eq!(r.cmd("G91"), ["ok"]);
+    assert_eq!(r.cmd("O1 repeat [2]"), ["ok"]);
+    let mut replies = Vec::new();
+    for _ in 0..100 {
+        replies.push(r.cmd("G0 X1 Y0.0000000 Z0.0000000"));
+    }
+    let first = replies.iter().position(|x| is_err(x)).expect("refused");
+    assert!(replies[first..].iter().all(|x| is_err(x)), "{replies:?}");
+    assert!(is_err(&r.cmd("O1 endrepeat")), "the closer is refused too");
+    assert_eq!(x(&mut r), 0.0, "a line of the refused block moved");
+    assert_eq!(r.cmd("G0 X1"), ["ok"], "after its closer lines run again");
+    assert_eq!(x(&mut r), 1.0);
+}
+
+#[test]
+fn an_error_inside_a_replay_answers_its_closing_line() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    for l in ["G91", "O1 repeat [3]", "G0 X1", "G0 X[1/0]"] {
+        assert_eq!(r.cmd(l), ["ok"], "{l}");
+    }
+    let end = r.cmd("O1 endrepeat");
+    assert!(is_err(&end), "{end:?}");
+    assert!(
+        end[0].starts_with("[MSG:line 4: division by zero"),
+        "{end:?}"
+    );
+    assert_eq!(x(&mut r), 1.0, "the pass stopped at the error");
+}
+
+#[test]
+fn reset_stops_an_endless_loop_and_clears_the_flow_state() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    for l in [
+        "G91",
+        "O1 sub",
+        "G1 X1 F3000",
+        "O1 endsub",
+        "O2 while [1]",
+        "O1 call",
+    ] {
+        assert_eq!(r.cmd(l), ["ok"], "{l}");
+    }
+    // The loop's closer is answered only when the replay ends: never.
+    assert_eq!(r.cmd("O2 endwhile"), Vec::<String>::new());
+    r.send(b"G90\n");
+    r.run(200);
+    assert_eq!(r.status().state, "Run");
+    r.send(&[0x18]);
+    r.run(20);
+    r.lines();
+    assert_eq!(r.status().state, "Alarm");
+    assert_eq!(r.cmd("$X"), ["[MSG:Caution: Unlocked]", "ok"]);
+    // Subroutines are forgotten, and lines are read again (the reset put
+    // the modal state back to G90).
+    assert!(is_err(&r.cmd("O1 call")));
+    assert_eq!(r.cmd("G0 X1"), ["ok"]);
+    assert_eq!(x(&mut r), 1.0);
+}
