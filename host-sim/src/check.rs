@@ -23,6 +23,7 @@
 //! the interpreter guessed (homed axes at 0, probes touching at their target).
 
 use burin::command::{ArcDir, Command, Feed, Plane, Pos, ReportKind, SpindleDir};
+use burin::flow::Flow;
 use burin::interp::Interpreter;
 use burin::AXIS_NAMES;
 use std::io::{self, Write};
@@ -164,43 +165,40 @@ pub fn check_file(
 ) -> io::Result<usize> {
     let mut interp = Interpreter::new();
     interp.set_g28_homes(settings.g28_homes);
+    let mut flow = Flow::new();
     let mut errors = 0;
+    let mut at = interp.state().pos;
     for (i, line) in source.split('\n').enumerate() {
         let n = i + 1;
-        let mut cmds: Vec<Command> = Vec::new();
-        let mut at = interp.state().pos;
-        match interp.execute_line(line.as_bytes(), &mut |c| cmds.push(c)) {
-            Ok(()) => {
-                if dump {
-                    // A canned cycle is dumped as the moves it expands to.
-                    for c in &cmds {
-                        let steps: Vec<Command> = match c {
-                            Command::Cycle(cy) => cy.steps(&at).collect(),
-                            c => vec![c.clone()],
-                        };
-                        for s in &steps {
-                            writeln!(out, "{{\"line\":{n},{}}}", command_json(s))?;
-                            if let Some(e) = s.end() {
-                                at = *e;
-                            }
+        // O-word loops and calls run the stored lines they release; each
+        // is reported with the line it was written on.
+        let r = flow.feed_line(line.as_bytes(), n as u32, &mut interp, MAX_STEPS, &mut |interp, text, ln| {
+            let mut cmds: Vec<Command> = Vec::new();
+            at = interp.state().pos;
+            interp.execute_line(text, &mut |c| cmds.push(c))?;
+            if dump {
+                // A canned cycle is dumped as the moves it expands to.
+                for c in &cmds {
+                    let steps: Vec<Command> = match c {
+                        Command::Cycle(cy) => cy.steps(&at).collect(),
+                        c => vec![c.clone()],
+                    };
+                    for s in &steps {
+                        // Errors inside `run` abort the replay; a write
+                        // error is reported by the next write.
+                        let _ = writeln!(out, "{{\"line\":{ln},{}}}", command_json(s));
+                        if let Some(e) = s.end() {
+                            at = *e;
                         }
                     }
                 }
-                if interp.needs_sync() {
-                    match cmds
-                        .iter()
-                        .rev()
-                        .find(|c| matches!(c, Command::Probe { .. }))
-                    {
-                        Some(Command::Probe { end, .. }) => interp.probe_finished(*end, true),
-                        _ => interp.set_machine_position(interp.state().pos),
-                    }
-                }
             }
-            Err(e) => {
-                errors += 1;
-                writeln!(out, "{path_label}:{n}:{}: error[{}]: {e}", e.col, e.code())?;
-            }
+            sync_after(interp, &cmds);
+            Ok(())
+        });
+        if let Err((ln, e)) = r {
+            errors += 1;
+            writeln!(out, "{path_label}:{ln}:{}: error[{}]: {e}", e.col, e.code())?;
         }
     }
     Ok(errors)
@@ -215,28 +213,47 @@ pub fn motion_ends(
 ) -> Result<Vec<Pos>, (usize, String)> {
     let mut interp = Interpreter::new();
     interp.set_g28_homes(settings.g28_homes);
+    let mut flow = Flow::new();
     let mut ends = Vec::new();
+    let mut ended = false;
     for (i, line) in source.split('\n').enumerate() {
-        let mut cmds: Vec<Command> = Vec::new();
-        interp
-            .execute_line(line.as_bytes(), &mut |c| cmds.push(c))
-            .map_err(|e| (i + 1, format!("error[{}]: {e}", e.code())))?;
-        for c in &cmds {
-            if matches!(c, Command::ProgramEnd) {
-                return Ok(ends);
+        flow.feed_line(line.as_bytes(), i as u32 + 1, &mut interp, MAX_STEPS, &mut |interp, text, _| {
+            if ended {
+                return Ok(());
             }
-            ends.extend(c.end().copied());
-        }
-        if interp.needs_sync() {
-            match cmds
-                .iter()
-                .rev()
-                .find(|c| matches!(c, Command::Probe { .. }))
-            {
-                Some(Command::Probe { end, .. }) => interp.probe_finished(*end, true),
-                _ => interp.set_machine_position(interp.state().pos),
+            let mut cmds: Vec<Command> = Vec::new();
+            interp.execute_line(text, &mut |c| cmds.push(c))?;
+            for c in &cmds {
+                if matches!(c, Command::ProgramEnd) {
+                    ended = true;
+                    return Ok(());
+                }
+                ends.extend(c.end().copied());
             }
+            sync_after(interp, &cmds);
+            Ok(())
+        })
+        .map_err(|(l, e)| (l as usize, format!("error[{}]: {e}", e.code())))?;
+        if ended {
+            return Ok(ends);
         }
     }
     Ok(ends)
+}
+
+/// Replay steps one line may release (an endless O-word loop ends there).
+const MAX_STEPS: u64 = 50_000_000;
+
+/// After a home or probe: the machine is where the interpreter guessed.
+fn sync_after(interp: &mut Interpreter, cmds: &[Command]) {
+    if interp.needs_sync() {
+        match cmds
+            .iter()
+            .rev()
+            .find(|c| matches!(c, Command::Probe { .. }))
+        {
+            Some(Command::Probe { end, .. }) => interp.probe_finished(*end, true),
+            _ => interp.set_machine_position(interp.state().pos),
+        }
+    }
 }
