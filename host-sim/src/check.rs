@@ -172,30 +172,36 @@ pub fn check_file(
         let n = i + 1;
         // O-word loops and calls run the stored lines they release; each
         // is reported with the line it was written on.
-        let r = flow.feed_line(line.as_bytes(), n as u32, &mut interp, MAX_STEPS, &mut |interp, text, ln| {
-            let mut cmds: Vec<Command> = Vec::new();
-            at = interp.state().pos;
-            interp.execute_line(text, &mut |c| cmds.push(c))?;
-            if dump {
-                // A canned cycle is dumped as the moves it expands to.
-                for c in &cmds {
-                    let steps: Vec<Command> = match c {
-                        Command::Cycle(cy) => cy.steps(&at).collect(),
-                        c => vec![c.clone()],
-                    };
-                    for s in &steps {
-                        // Errors inside `run` abort the replay; a write
-                        // error is reported by the next write.
-                        let _ = writeln!(out, "{{\"line\":{ln},{}}}", command_json(s));
-                        if let Some(e) = s.end() {
-                            at = *e;
+        let r = flow.feed_line(
+            line.as_bytes(),
+            n as u32,
+            &mut interp,
+            MAX_STEPS,
+            &mut |interp, text, ln| {
+                let mut cmds: Vec<Command> = Vec::new();
+                at = interp.state().pos;
+                interp.execute_line(text, &mut |c| cmds.push(c))?;
+                if dump {
+                    // A canned cycle is dumped as the moves it expands to.
+                    for c in &cmds {
+                        let steps: Vec<Command> = match c {
+                            Command::Cycle(cy) => cy.steps(&at).collect(),
+                            c => vec![c.clone()],
+                        };
+                        for s in &steps {
+                            // Errors inside `run` abort the replay; a write
+                            // error is reported by the next write.
+                            let _ = writeln!(out, "{{\"line\":{ln},{}}}", command_json(s));
+                            if let Some(e) = s.end() {
+                                at = *e;
+                            }
                         }
                     }
                 }
-            }
-            sync_after(interp, &cmds);
-            Ok(())
-        });
+                sync_after(interp, &cmds);
+                Ok(())
+            },
+        );
         if let Err((ln, e)) = r {
             errors += 1;
             writeln!(out, "{path_label}:{ln}:{}: error[{}]: {e}", e.col, e.code())?;
@@ -217,22 +223,28 @@ pub fn motion_ends(
     let mut ends = Vec::new();
     let mut ended = false;
     for (i, line) in source.split('\n').enumerate() {
-        flow.feed_line(line.as_bytes(), i as u32 + 1, &mut interp, MAX_STEPS, &mut |interp, text, _| {
-            if ended {
-                return Ok(());
-            }
-            let mut cmds: Vec<Command> = Vec::new();
-            interp.execute_line(text, &mut |c| cmds.push(c))?;
-            for c in &cmds {
-                if matches!(c, Command::ProgramEnd) {
-                    ended = true;
+        flow.feed_line(
+            line.as_bytes(),
+            i as u32 + 1,
+            &mut interp,
+            MAX_STEPS,
+            &mut |interp, text, _| {
+                if ended {
                     return Ok(());
                 }
-                ends.extend(c.end().copied());
-            }
-            sync_after(interp, &cmds);
-            Ok(())
-        })
+                let mut cmds: Vec<Command> = Vec::new();
+                interp.execute_line(text, &mut |c| cmds.push(c))?;
+                for c in &cmds {
+                    if matches!(c, Command::ProgramEnd) {
+                        ended = true;
+                        return Ok(());
+                    }
+                    ends.extend(c.end().copied());
+                }
+                sync_after(interp, &cmds);
+                Ok(())
+            },
+        )
         .map_err(|(l, e)| (l as usize, format!("error[{}]: {e}", e.code())))?;
         if ended {
             return Ok(ends);
