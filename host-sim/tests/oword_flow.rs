@@ -184,3 +184,51 @@ fn reset_stops_an_endless_loop_and_clears_the_flow_state() {
     assert_eq!(r.cmd("G0 X1"), ["ok"]);
     assert_eq!(x(&mut r), 1.0);
 }
+
+/// Framed lines: each stored line is acknowledged into its slot as usual;
+/// a replay's commands carry the stored line's sequence number, and an
+/// error inside it comes as the closing line's `Error`, with a message
+/// naming the stored line.
+#[test]
+fn framed_replay_carries_the_stored_lines_and_its_error() {
+    use protocol::DeviceMsg;
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.dev.log = Some(Vec::new());
+    let s = r.go_framed();
+    let lines = [
+        "G91",
+        "O1 repeat [3]",
+        "G0 X1",
+        "O1 endrepeat",
+        "O2 repeat [2]",
+        "G0 X[1/0]",
+        "O2 endrepeat",
+        "G90",
+    ];
+    let mut burst = Vec::new();
+    for (i, l) in lines.iter().enumerate() {
+        burst.extend(rig::line_frame(s + i as u32, l));
+    }
+    r.send(&burst);
+    let mut msgs = Vec::new();
+    for _ in 0..100 {
+        msgs.extend(r.run_framed(10));
+    }
+    let errs: Vec<_> = msgs
+        .iter()
+        .filter_map(|m| match m {
+            DeviceMsg::Error { seq, code, .. } => Some((*seq, *code)),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(errs, vec![(Some(s + 6), 201)], "{msgs:?}");
+    let named = format!("line {}: division by zero", s + 5);
+    assert!(
+        msgs.iter()
+            .any(|m| matches!(m, DeviceMsg::Msg(t) if t.as_str() == named)),
+        "{msgs:?}"
+    );
+    assert_eq!(r.dev.log.as_deref(), Some(&[s + 2, s + 2, s + 2][..]));
+}

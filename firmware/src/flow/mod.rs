@@ -510,6 +510,9 @@ fn value(ol: &OLine, text: &[u8], interp: &mut Interpreter) -> Result<Option<f32
 
 mod replay;
 
+/// What [`Flow::feed_line`] calls for each line to interpret.
+pub type RunLine<'a> = dyn FnMut(&mut Interpreter, &[u8], u32) -> Result<(), GcodeError> + 'a;
+
 impl Flow {
     /// Feeds one line and runs all it releases at once: `run` interprets
     /// each line to execute (text, source line). For tools that take a
@@ -522,7 +525,7 @@ impl Flow {
         n: u32,
         interp: &mut Interpreter,
         max_steps: u64,
-        run: &mut dyn FnMut(&mut Interpreter, &[u8], u32) -> Result<(), GcodeError>,
+        run: &mut RunLine<'_>,
     ) -> Result<(), (u32, GcodeError)> {
         match self.intake(text, n, interp) {
             Intake::Run => run(interp, text, n).map_err(|e| (n, e)),

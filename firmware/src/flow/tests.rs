@@ -4,7 +4,10 @@ use crate::gcode::OWord;
 
 /// Runs `src` line by line; returns the X of every move's end with the
 /// source line it came from, and each failed line with its code.
-fn run(src: &str) -> (Vec<(u32, f32)>, Vec<(u32, u16)>) {
+/// (source line, X) per move; (source line, code) per error.
+type Ran = (Vec<(u32, f32)>, Vec<(u32, u16)>);
+
+fn run(src: &str) -> Ran {
     let mut flow = Flow::new();
     let mut interp = Interpreter::new();
     let mut moves = Vec::new();

@@ -40,6 +40,7 @@
 
 mod late;
 mod out;
+mod oword;
 mod persist;
 mod ports;
 mod reprap;
@@ -51,7 +52,7 @@ pub use sys::RT_REPLY_ROOM;
 
 use crate::command::Command;
 use crate::executor::{self, MachineError};
-use crate::flow::{Flow, Intake, Step};
+use crate::flow::Flow;
 use crate::gcode::GcodeError;
 use crate::interp::{Interpreter, LINE_COMMANDS};
 use crate::link::{FramedAction, FramedPort, LinkEvent};
@@ -231,7 +232,7 @@ impl<S: Storage> Device<S> {
             // The splitter runs ahead: when it is framed, a switch to frames
             // is on its way and whatever text precedes it has no listener.
             let framed = link.events_framed() || link.framed();
-            if !(framed || self.can_take()) || !framed && self.flow.replaying() {
+            if !(framed || self.can_take() && !self.flow.replaying()) {
                 break;
             }
             let free = self.free_slots();
@@ -449,53 +450,6 @@ impl<S: Storage> Device<S> {
         Ok(())
     }
 
-    /// One job line (text mode) or one framed line leaving its slot, through
-    /// the O-word stage. `n` is its machine line number (text count or
-    /// sequence number).
-    fn job_line(&mut self, text: &[u8], n: u32, m: &mut impl MotionPort, o: &mut Out<'_, impl Tx>) {
-        if crate::link::syscmd::parse(text).is_some() || self.locked(text) {
-            return self.line(text, n, m, o);
-        }
-        match self.flow.intake(text, n, &mut self.interp) {
-            Intake::Run => self.line(text, n, m, o),
-            Intake::Reply(r) => {
-                let seq = o.framed().then_some(n);
-                match r {
-                    Ok(()) => self.reply_line(Ok(()), seq, o),
-                    Err(e) => self.reply_error(e, None, seq, o),
-                }
-            }
-            // Answered when the replay ends (`replay_step`).
-            Intake::Replay => self.replay_framed = o.framed(),
-        }
-    }
-
-    /// One step of a running replay; the line that started it is answered
-    /// when it ends, with the first error inside it.
-    fn replay_step(&mut self, m: &mut impl MotionPort, o: &mut Out<'_, impl Tx>) {
-        let mut buf = [0u8; crate::gcode::MAX_LINE];
-        let done = match self.flow.step(&mut self.interp, &mut buf) {
-            Step::Idle | Step::Busy => return,
-            Step::Run { n, len } => {
-                let text = buf.get(..len).unwrap_or(&[]);
-                match self.interpret(text, n, m, o) {
-                    Ok(()) => return,
-                    Err(e) => self
-                        .flow
-                        .abort(&mut self.interp)
-                        .map(|at| (at, Err((n, e)))),
-                }
-            }
-            Step::Done { n, result } => Some((n, result)),
-        };
-        let Some((at, result)) = done else { return };
-        let seq = o.framed().then_some(at);
-        match result {
-            Ok(()) => self.reply_line(Ok(()), seq, o),
-            Err((line, e)) => self.reply_error(e, Some(line), seq, o),
-        }
-    }
-
     fn locked(&self, text: &[u8]) -> bool {
         let blank = text.iter().all(u8::is_ascii_whitespace);
         (self.sleep || self.seen_alarm.is_some() && !self.check) && !blank
@@ -555,33 +509,6 @@ impl<S: Storage> Device<S> {
         }
         self.after_line(store, m, o);
         Ok(())
-    }
-
-    /// A G-code error as the answer to a line; `at` is the source line a
-    /// replay failed on, told first (`[MSG:line N: …]`).
-    fn reply_error(
-        &mut self,
-        e: GcodeError,
-        at: Option<u32>,
-        seq: Option<u32>,
-        o: &mut Out<'_, impl Tx>,
-    ) {
-        if o.framed() {
-            let mut t = protocol::msg::MsgText::new();
-            if let Some(l) = at {
-                let _ = core::fmt::write(&mut t, format_args!("line {l}: "));
-            }
-            let _ = core::fmt::write(&mut t, format_args!("{e}"));
-            o.frame(&DeviceMsg::Msg(t));
-        } else if let Some(l) = at {
-            let _ = core::fmt::Write::write_fmt(o, format_args!("[MSG:line {l}: {e}]\r\n"));
-        }
-        let code = if o.framed() {
-            e.code()
-        } else {
-            u16::from(e.grbl_code())
-        };
-        self.reply_line(Err(code), seq, o)
     }
 
     fn reply_line(&mut self, r: Result<(), u16>, seq: Option<u32>, o: &mut Out<'_, impl Tx>) {
