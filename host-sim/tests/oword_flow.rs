@@ -27,10 +27,18 @@ fn lines_in_an_untaken_branch_never_run() {
     let mut rec = Discard;
     let mut r = Rig::new(&cfg, &mut rec);
     r.lines();
-    for l in ["O1 if [0]", "G0 X5", "O1 endif"] {
-        assert_eq!(r.cmd(l), ["ok"], "{l}");
-    }
-    assert_eq!(x(&mut r), 0.0, "the line inside `if [0]` moved");
+    // The position first: before issue 30 the O-lines were refused
+    // (error 302) and the line between them moved to X5.
+    let replies: Vec<_> = ["O1 if [0]", "G0 X5", "O1 endif"]
+        .iter()
+        .map(|l| r.cmd(l))
+        .collect();
+    assert_eq!(
+        x(&mut r),
+        0.0,
+        "the line inside `if [0]` moved: {replies:?}"
+    );
+    assert!(replies.iter().all(|x| x == &["ok"]), "{replies:?}");
     for l in [
         "#2=3",
         "O2 if [#2 EQ 1]",
@@ -44,6 +52,27 @@ fn lines_in_an_untaken_branch_never_run() {
         assert_eq!(r.cmd(l), ["ok"], "{l}");
     }
     assert_eq!(x(&mut r), 3.0);
+}
+
+#[test]
+fn a_dollar_command_in_an_untaken_branch_or_a_loop_never_runs() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    for l in ["O1 if [0]", "$J=G91 X5 F1000", "O1 endif"] {
+        assert_eq!(r.cmd(l), ["ok"], "{l}");
+    }
+    assert_eq!(x(&mut r), 0.0, "a jog in `if [0]` moved");
+    assert_eq!(r.cmd("O2 repeat [2]"), ["ok"]);
+    assert!(
+        is_err(&r.cmd("$J=G91 X5 F1000")),
+        "a jog is refused in a loop body"
+    );
+    assert!(is_err(&r.cmd("O2 endrepeat")));
+    assert_eq!(x(&mut r), 0.0);
+    assert_eq!(r.cmd("$J=G91 X1 F1000"), ["ok"], "outside blocks `$` runs");
+    assert_eq!(x(&mut r), 1.0);
 }
 
 #[test]

@@ -201,6 +201,12 @@ impl Flow {
         matches!(self.mode, Mode::Normal) && self.ifs.is_empty()
     }
 
+    /// A line given now would run as it is (no capture, refusal, replay,
+    /// or streamed `if` skipping).
+    pub fn runs_directly(&self) -> bool {
+        matches!(self.mode, Mode::Normal) && self.ifs.iter().all(|i| i.state == IfState::Taking)
+    }
+
     /// Bytes of the buffer in use (subroutines, a capture, saved locals).
     pub fn used(&self) -> usize {
         CAPTURE_BYTES - self.arena.free()
@@ -359,8 +365,11 @@ impl Flow {
         let is_opener = self.arena.top == start;
         let ends =
             matches!(&o, Some(Ok(ol)) if !is_opener && ol.name == opener.name && ol.kw == until);
+        let dollar = text.iter().find(|b| !b.is_ascii_whitespace()) == Some(&b'$');
         let bad = match &o {
             Some(Err(e)) => Some(*e),
+            // A `$` command is no G-code to replay.
+            None if dollar => Some(GcodeError::new(ErrorKind::ExpectedLetter(b'$'), 1)),
             Some(Ok(ol)) if ol.kw == Kw::Sub && !is_opener => Some(err(OWord::NestedSub)),
             _ => None,
         };

@@ -52,7 +52,7 @@ pub use sys::RT_REPLY_ROOM;
 
 use crate::command::Command;
 use crate::executor::{self, MachineError};
-use crate::flow::Flow;
+use crate::flow::{Flow, Intake};
 use crate::gcode::GcodeError;
 use crate::interp::{Interpreter, LINE_COMMANDS};
 use crate::link::{FramedAction, FramedPort, LinkEvent};
@@ -379,6 +379,13 @@ impl<S: Storage> Device<S> {
                 self.job_line(text, n, m, o);
             }
             LinkEvent::System(cmd) => {
+                // Not in a branch not taken, nor stored in a block.
+                if !self.flow.runs_directly() {
+                    let n = self.text_lines;
+                    if let Intake::Reply(r) = self.flow.intake(b"$", n, &mut self.interp) {
+                        return self.reply_error_or_ok(r, o);
+                    }
+                }
                 let r = self.system(cmd, m, o);
                 sys::reply(r, None, o);
             }

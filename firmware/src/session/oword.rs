@@ -19,7 +19,10 @@ impl<S: Storage> Device<S> {
         m: &mut impl MotionPort,
         o: &mut Out<'_, impl Tx>,
     ) {
-        if crate::link::syscmd::parse(text).is_some() || self.locked(text) {
+        // A `$` line runs at once unless it stands in a branch not taken
+        // or a block being captured: the stage skips or refuses it there.
+        let sys = crate::link::syscmd::parse(text).is_some();
+        if sys && self.flow.runs_directly() || self.locked(text) {
             return self.line(text, n, m, o);
         }
         match self.flow.intake(text, n, &mut self.interp) {
@@ -33,6 +36,18 @@ impl<S: Storage> Device<S> {
             }
             // Answered when the replay ends (`replay_step`).
             Intake::Replay => self.replay_framed = o.framed(),
+        }
+    }
+
+    /// The stage's answer to a text-mode `$` command it held back.
+    pub(super) fn reply_error_or_ok(
+        &mut self,
+        r: Result<(), GcodeError>,
+        o: &mut Out<'_, impl Tx>,
+    ) {
+        match r {
+            Ok(()) => self.reply_line(Ok(()), None, o),
+            Err(e) => self.reply_error(e, None, None, o),
         }
     }
 
