@@ -261,3 +261,56 @@ fn framed_replay_carries_the_stored_lines_and_its_error() {
     );
     assert_eq!(r.dev.log.as_deref(), Some(&[s + 2, s + 2, s + 2][..]));
 }
+
+/// The sample program (every construct; it agrees with LinuxCNC's rs274
+/// in `cargo xtask rs274`) streamed line by line into the device, as a
+/// send-response sender does, runs the commands check mode finds (every pass of
+/// every loop and call), from the same source lines, in the same order.
+#[test]
+fn streamed_sample_runs_the_moves_check_mode_finds() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/rs274/oword_flow.ngc"
+    );
+    let src = std::fs::read_to_string(path).expect("sample");
+    let mut dump = Vec::new();
+    let settings = burin::settings::Settings::default();
+    let errors = host_sim::check::check_file("s", &src, true, &settings, &mut dump).expect("check");
+    assert_eq!(errors, 0);
+    let want: Vec<u32> = String::from_utf8_lossy(&dump)
+        .lines()
+        .filter_map(|l| {
+            l.strip_prefix("{\"line\":")?
+                .split(',')
+                .next()?
+                .parse()
+                .ok()
+        })
+        .collect();
+    assert!(want.len() > 15, "{want:?}");
+
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    r.dev.log = Some(Vec::new());
+    for line in src.lines() {
+        r.send(line.as_bytes());
+        r.send(b"\n");
+        let mut got = Vec::new();
+        for _ in 0..10_000 {
+            r.run(2);
+            got.extend(r.lines());
+            if got.iter().any(|l| l == "ok" || l.starts_with("error:")) {
+                break;
+            }
+        }
+        assert_eq!(
+            got.last().map(String::as_str),
+            Some("ok"),
+            "{line}: {got:?}"
+        );
+    }
+    r.until_idle();
+    assert_eq!(r.dev.log.as_deref(), Some(&want[..]));
+}
