@@ -314,3 +314,34 @@ fn streamed_sample_runs_the_moves_check_mode_finds() {
     r.until_idle();
     assert_eq!(r.dev.log.as_deref(), Some(&want[..]));
 }
+
+/// A text sender that goes away while an O-word replay runs: the machine
+/// holds (the replay would otherwise run on with no one to stop it);
+/// `~` from the next client resumes it.
+#[test]
+fn port_close_during_a_replay_holds() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    for l in ["G91", "O2 while [1]", "G1 X1 F3000"] {
+        assert_eq!(r.cmd(l), ["ok"], "{l}");
+    }
+    r.send(b"O2 endwhile\n");
+    r.run(100);
+    assert_eq!(r.status().state, "Run");
+    r.dev.port_closed();
+    r.run(200);
+    let st = r.status();
+    assert!(st.state.starts_with("Hold"), "{st:?}");
+    let x = st.mpos.map_or(0.0, |p| p[0]);
+    r.run(200);
+    assert_eq!(
+        r.status().mpos.map_or(1.0, |p| p[0]),
+        x,
+        "moved in the hold"
+    );
+    r.send(b"~");
+    r.run(100);
+    assert_eq!(r.status().state, "Run");
+}

@@ -174,7 +174,9 @@ impl<S: Storage> Device<S> {
             || self.flow.replaying();
         // The splitter is back in text mode already; the assembler switches
         // only at the marker, so it still tells what the old client spoke.
-        if (link.framed() || link.events_framed()) && busy {
+        // An O-word replay would go on with no one to stop it (a `while
+        // [1]` never ends): it holds too, in either mode, and `~` resumes.
+        if (link.framed() || link.events_framed()) && busy || self.flow.replaying() {
             m.rt().feed_hold();
             // The old client's unread input is discarded right after this
             // (the shell's pass flushes the link), so the next message is
