@@ -161,7 +161,8 @@ impl<S: Storage> Device<S> {
     /// (it reconnects, resends what was not acknowledged and resumes with
     /// cycle start); the next client is told so. A text session keeps
     /// running, as GRBL does when its sender goes away: those senders do
-    /// not expect a hold they did not ask for.
+    /// not expect a hold they did not ask for. An O-word replay holds in
+    /// either mode: it may have no end.
     ///
     /// The receive side (the USB interrupt, host-sim's port) has already
     /// reset its splitter; the controller then discards the old client's
