@@ -229,6 +229,11 @@ impl Flow {
     /// One line from the sender. `n` is its line number (text count or
     /// sequence number).
     pub fn intake(&mut self, text: &[u8], n: u32, interp: &mut Interpreter) -> Intake {
+        // After a program's closing `%` nothing runs: the interpreter skips
+        // every line up to the next `%`, O-word lines included.
+        if matches!(self.mode, Mode::Normal) && interp.state().percent == 2 {
+            return Intake::Run;
+        }
         let o = oline::parse(text);
         match self.mode {
             Mode::Replay { .. } => return Intake::Reply(Err(err(OWord::Unmatched))),

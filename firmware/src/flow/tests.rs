@@ -263,3 +263,9 @@ fn random_programs_never_panic() {
         assert!(flow.idle() && flow.used() == 0, "{src:?}");
     }
 }
+
+#[test]
+fn nothing_after_a_closing_percent_runs() {
+    let (m, e) = run("%\nG0 X1\n%\nO1 sub\nG0 X5\nO1 endsub\nO1 call\nO2 if [1]\nG0 X6\nO2 endif");
+    assert_eq!((xs(&m), e), (vec![1.0], vec![]));
+}
