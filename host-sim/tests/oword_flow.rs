@@ -345,3 +345,33 @@ fn port_close_during_a_replay_holds() {
     r.run(100);
     assert_eq!(r.status().state, "Run");
 }
+
+/// Framed mode takes the same path: a line in a branch not taken is
+/// acknowledged into its slot and never reaches the executor.
+#[test]
+fn framed_untaken_branch_never_runs() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.dev.log = Some(Vec::new());
+    let s = r.go_framed();
+    let mut burst = Vec::new();
+    for (i, l) in ["O1 if [0]", "G0 X5", "O1 endif", "G0 X1"]
+        .iter()
+        .enumerate()
+    {
+        burst.extend(rig::line_frame(s + i as u32, l));
+    }
+    r.send(&burst);
+    let mut msgs = Vec::new();
+    for _ in 0..50 {
+        msgs.extend(r.run_framed(10));
+    }
+    assert!(
+        !msgs
+            .iter()
+            .any(|m| matches!(m, protocol::DeviceMsg::Error { .. })),
+        "{msgs:?}"
+    );
+    assert_eq!(r.dev.log.as_deref(), Some(&[s + 3][..]));
+}
