@@ -26,7 +26,8 @@ pub enum Unsupported {
     Code { letter: u8, tenths: u16 },
     /// A word letter with no meaning here (E, B, C, U, V, W, D, H, ...).
     Letter(u8),
-    /// `O` words: subroutines, loops and conditionals.
+    /// An `O` word the flow stage did not take (not first on its line,
+    /// or the interpreter used alone).
     OWord,
     /// A keyword such as `WHILE` or `IF` outside an expression.
     ControlFlow,
@@ -364,7 +365,9 @@ impl fmt::Display for ErrorKind {
                 write!(f, "unsupported word {}", letter(c))
             }
             Unsupported(self::Unsupported::OWord) => {
-                f.write_str("unsupported O-word (subroutines and control flow)")
+                // The flow stage (`crate::flow`) takes O-word lines; one
+                // reaches the interpreter only when the O is not first.
+                f.write_str("O-word not at the start of its line (or no flow stage)")
             }
             Unsupported(self::Unsupported::ControlFlow) => {
                 f.write_str("unsupported control flow (keyword or compound assignment)")
