@@ -119,6 +119,7 @@ pub struct Controller<S: Storage> {
 
 impl<S: Storage> Controller<S> {
     /// `wake_ms`: how long the drivers need between enable and a first step.
+    #[inline(always)]
     pub fn new(session: Device<S>, settings: &Settings, wake_ms: u16) -> Self {
         let resets = session.stats.resets;
         Controller {

@@ -23,6 +23,7 @@
 //! the interpreter guessed (homed axes at 0, probes touching at their target).
 
 use burin::command::{ArcDir, Command, Feed, Plane, Pos, ReportKind, SpindleDir};
+use burin::flow::Flow;
 use burin::interp::Interpreter;
 use burin::AXIS_NAMES;
 use std::io::{self, Write};
@@ -164,19 +165,28 @@ pub fn check_file(
 ) -> io::Result<usize> {
     let mut interp = Interpreter::new();
     interp.set_g28_homes(settings.g28_homes);
+    let mut flow = Flow::new();
     let mut errors = 0;
+    let mut at = interp.state().pos;
     for (i, line) in source.split('\n').enumerate() {
         let n = i + 1;
-        let mut cmds: Vec<Command> = Vec::new();
-        let mut at = interp.state().pos;
-        match interp.execute_line(line.as_bytes(), &mut |c| cmds.push(c)) {
-            Ok(()) => {
+        // O-word loops and calls run the stored lines they release; each
+        // is reported with the line it was written on.
+        let r = flow.feed_line(
+            line.as_bytes(),
+            n as u32,
+            &mut interp,
+            MAX_STEPS,
+            &mut |interp, text, ln| {
+                let mut cmds: Vec<Command> = Vec::new();
+                at = interp.state().pos;
+                interp.execute_line(text, &mut |c| cmds.push(c))?;
                 if let Some(l) = interp.take_arc_warning() {
-                    writeln!(
+                    let _ = writeln!(
                         out,
-                        "{path_label}:{n}: warning: arc offset {}0 is off the plane: ignored",
+                        "{path_label}:{ln}: warning: arc offset {}0 is off the plane: ignored",
                         char::from(l)
-                    )?;
+                    );
                 }
                 if dump {
                     // A canned cycle is dumped as the moves it expands to.
@@ -186,28 +196,22 @@ pub fn check_file(
                             c => vec![c.clone()],
                         };
                         for s in &steps {
-                            writeln!(out, "{{\"line\":{n},{}}}", command_json(s))?;
+                            // Errors inside `run` abort the replay; a write
+                            // error is reported by the next write.
+                            let _ = writeln!(out, "{{\"line\":{ln},{}}}", command_json(s));
                             if let Some(e) = s.end() {
                                 at = *e;
                             }
                         }
                     }
                 }
-                if interp.needs_sync() {
-                    match cmds
-                        .iter()
-                        .rev()
-                        .find(|c| matches!(c, Command::Probe { .. }))
-                    {
-                        Some(Command::Probe { end, .. }) => interp.probe_finished(*end, true),
-                        _ => interp.set_machine_position(interp.state().pos),
-                    }
-                }
-            }
-            Err(e) => {
-                errors += 1;
-                writeln!(out, "{path_label}:{n}:{}: error[{}]: {e}", e.col, e.code())?;
-            }
+                sync_after(interp, &cmds);
+                Ok(())
+            },
+        );
+        if let Err((ln, e)) = r {
+            errors += 1;
+            writeln!(out, "{path_label}:{ln}:{}: error[{}]: {e}", e.col, e.code())?;
         }
     }
     Ok(errors)
@@ -222,27 +226,35 @@ pub fn motion_ends(
 ) -> Result<Vec<Pos>, (usize, String)> {
     let mut interp = Interpreter::new();
     interp.set_g28_homes(settings.g28_homes);
+    let mut flow = Flow::new();
     let mut ends = Vec::new();
+    let mut ended = false;
     for (i, line) in source.split('\n').enumerate() {
-        let mut cmds: Vec<Command> = Vec::new();
-        interp
-            .execute_line(line.as_bytes(), &mut |c| cmds.push(c))
-            .map_err(|e| (i + 1, format!("error[{}]: {e}", e.code())))?;
-        for c in &cmds {
-            if matches!(c, Command::ProgramEnd) {
-                return Ok(ends);
-            }
-            ends.extend(c.end().copied());
-        }
-        if interp.needs_sync() {
-            match cmds
-                .iter()
-                .rev()
-                .find(|c| matches!(c, Command::Probe { .. }))
-            {
-                Some(Command::Probe { end, .. }) => interp.probe_finished(*end, true),
-                _ => interp.set_machine_position(interp.state().pos),
-            }
+        flow.feed_line(
+            line.as_bytes(),
+            i as u32 + 1,
+            &mut interp,
+            MAX_STEPS,
+            &mut |interp, text, _| {
+                if ended {
+                    return Ok(());
+                }
+                let mut cmds: Vec<Command> = Vec::new();
+                interp.execute_line(text, &mut |c| cmds.push(c))?;
+                for c in &cmds {
+                    if matches!(c, Command::ProgramEnd) {
+                        ended = true;
+                        return Ok(());
+                    }
+                    ends.extend(c.end().copied());
+                }
+                sync_after(interp, &cmds);
+                Ok(())
+            },
+        )
+        .map_err(|(l, e)| (l as usize, format!("error[{}]: {e}", e.code())))?;
+        if ended {
+            return Ok(ends);
         }
     }
     Ok(ends)
@@ -295,60 +307,90 @@ pub fn canon_moves(
             .map_err(|e| (0, format!("prelude `{line}`: error[{}]: {e}", e.code())))?;
     }
     let mut moves = Vec::new();
+    let mut flow = Flow::new();
+    let mut ended = false;
     for (i, line) in source.split('\n').enumerate() {
-        let mut cmds: Vec<Command> = Vec::new();
-        let mut at = interp.state().pos;
-        interp
-            .execute_line(line.as_bytes(), &mut |c| cmds.push(c))
-            .map_err(|e| (i + 1, format!("error[{}]: {e}", e.code())))?;
-        let tlo = interp.state().tlo;
-        for c in &cmds {
-            if matches!(c, Command::ProgramEnd) {
-                return Ok(moves);
-            }
-            let steps: Vec<Command> = match c {
-                Command::Cycle(cy) => cy.steps(&at).collect(),
-                c => vec![c.clone()],
-            };
-            for s in &steps {
-                let m = |kind, end: &Pos, feed: Option<Feed>| CanonMove {
-                    kind,
-                    end: *end,
-                    arc: None,
-                    feed,
-                    tlo,
-                };
-                let mv = match s {
-                    Command::Rapid { end } => Some(m(MoveKind::Traverse, end, None)),
-                    Command::Line { end, feed } => Some(m(MoveKind::Feed, end, Some(*feed))),
-                    Command::Probe { end, feed, .. } => Some(m(MoveKind::Probe, end, Some(*feed))),
-                    Command::Spline(sp) => Some(m(MoveKind::Spline, &sp.end, Some(sp.feed))),
-                    Command::Arc(a) => {
-                        let turns = i32::from(a.turns) + 1;
-                        let rot = if a.dir == ArcDir::Cw { -turns } else { turns };
-                        Some(CanonMove {
-                            arc: Some((a.plane, a.center, rot)),
-                            ..m(MoveKind::Arc, &a.end, Some(a.feed))
-                        })
-                    }
-                    _ => None,
-                };
-                moves.extend(mv);
-                if let Some(e) = s.end() {
-                    at = *e;
+        // O-word loops and calls run the stored lines they release.
+        flow.feed_line(
+            line.as_bytes(),
+            i as u32 + 1,
+            &mut interp,
+            MAX_STEPS,
+            &mut |interp, text, _| {
+                if ended {
+                    return Ok(());
                 }
-            }
-        }
-        if interp.needs_sync() {
-            match cmds
-                .iter()
-                .rev()
-                .find(|c| matches!(c, Command::Probe { .. }))
-            {
-                Some(Command::Probe { end, .. }) => interp.probe_finished(*end, true),
-                _ => interp.set_machine_position(interp.state().pos),
-            }
+                let mut cmds: Vec<Command> = Vec::new();
+                let mut at = interp.state().pos;
+                interp.execute_line(text, &mut |c| cmds.push(c))?;
+                let tlo = interp.state().tlo;
+                for c in &cmds {
+                    if matches!(c, Command::ProgramEnd) {
+                        ended = true;
+                        return Ok(());
+                    }
+                    let steps: Vec<Command> = match c {
+                        Command::Cycle(cy) => cy.steps(&at).collect(),
+                        c => vec![c.clone()],
+                    };
+                    for s in &steps {
+                        moves.extend(canon_move(s, tlo));
+                        if let Some(e) = s.end() {
+                            at = *e;
+                        }
+                    }
+                }
+                sync_after(interp, &cmds);
+                Ok(())
+            },
+        )
+        .map_err(|(l, e)| (l as usize, format!("error[{}]: {e}", e.code())))?;
+        if ended {
+            return Ok(moves);
         }
     }
     Ok(moves)
+}
+
+/// One command as the comparison's move (none for what does not move).
+fn canon_move(s: &Command, tlo: Pos) -> Option<CanonMove> {
+    let m = |kind, end: &Pos, feed: Option<Feed>| CanonMove {
+        kind,
+        end: *end,
+        arc: None,
+        feed,
+        tlo,
+    };
+    match s {
+        Command::Rapid { end } => Some(m(MoveKind::Traverse, end, None)),
+        Command::Line { end, feed } => Some(m(MoveKind::Feed, end, Some(*feed))),
+        Command::Probe { end, feed, .. } => Some(m(MoveKind::Probe, end, Some(*feed))),
+        Command::Spline(sp) => Some(m(MoveKind::Spline, &sp.end, Some(sp.feed))),
+        Command::Arc(a) => {
+            let turns = i32::from(a.turns) + 1;
+            let rot = if a.dir == ArcDir::Cw { -turns } else { turns };
+            Some(CanonMove {
+                arc: Some((a.plane, a.center, rot)),
+                ..m(MoveKind::Arc, &a.end, Some(a.feed))
+            })
+        }
+        _ => None,
+    }
+}
+
+/// Replay steps one line may release (an endless O-word loop ends there).
+const MAX_STEPS: u64 = 50_000_000;
+
+/// After a home or probe: the machine is where the interpreter guessed.
+fn sync_after(interp: &mut Interpreter, cmds: &[Command]) {
+    if interp.needs_sync() {
+        match cmds
+            .iter()
+            .rev()
+            .find(|c| matches!(c, Command::Probe { .. }))
+        {
+            Some(Command::Probe { end, .. }) => interp.probe_finished(*end, true),
+            _ => interp.set_machine_position(interp.state().pos),
+        }
+    }
 }

@@ -644,9 +644,11 @@ mod app {
         persist: Persist<crate::storage::Store>,
         boot: &burin::persist::Loaded,
     ) -> &'static mut Controller<crate::storage::Store> {
-        let session = Device::with_storage(identity, persist, Some(boot));
+        // One expression, both constructors inlined: the session (with the
+        // O-word stage's 2 KiB capture buffer) is built in the slot, not
+        // built on the stack and copied there.
         slot.write(Controller::new(
-            session,
+            Device::with_storage(identity, persist, Some(boot)),
             &boot.settings,
             crate::outputs::WAKE_MS,
         ))

@@ -14,6 +14,7 @@
 //! | 300–309 | words that are recognised but not supported (named) |
 //! | 310–339 | block semantics: modal groups, missing/unused words, arcs, tools |
 //! | 340–359 | dialect rules: several commands on a line, BeagleG's M list |
+//! | 360–379 | O-words: subroutines and flow control (`crate::flow`) |
 
 use core::fmt;
 
@@ -25,12 +26,36 @@ pub enum Unsupported {
     Code { letter: u8, tenths: u16 },
     /// A word letter with no meaning here (E, B, C, U, V, W, D, H, ...).
     Letter(u8),
-    /// `O` words: subroutines, loops and conditionals.
+    /// An `O` word the flow stage did not take (not first on its line,
+    /// or the interpreter used alone).
     OWord,
     /// A keyword such as `WHILE` or `IF` outside an expression.
     ControlFlow,
     /// LinuxCNC's `#<_hal[…]>` / `#<_ini[…]>` system parameters.
     SystemParam,
+}
+
+/// Why an O-word line (or a line inside its block) was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OWord {
+    /// Not `O<number or <name>> keyword [args]`, or words after it.
+    Syntax,
+    /// A closer, `else` or `elseif` without its opening line.
+    Unmatched,
+    /// The block does not fit the capture buffer: none of it runs.
+    TooLarge,
+    /// Calls or loops nested deeper than the flow stage holds.
+    TooDeep,
+    /// `call` of a subroutine not defined (or no longer held).
+    UndefinedSub,
+    /// A line inside a refused block: it is not run.
+    InRefusedBlock,
+    /// `break`/`continue` outside a loop, `return`/`endsub` outside a call.
+    Outside,
+    /// `sub` inside another block.
+    NestedSub,
+    /// A block inside a replayed body has no end.
+    Unclosed,
 }
 
 /// What went wrong. The column of the fault travels in [`GcodeError`].
@@ -142,6 +167,8 @@ pub enum ErrorKind {
     NoToolValues,
     /// G43.2 with both H and axis words.
     MixedToolOffset,
+    // --- O-words (360..) ---
+    OWord(OWord),
 }
 
 impl ErrorKind {
@@ -203,6 +230,15 @@ impl ErrorKind {
             ToolNotInTable => 330,
             NoToolValues => 331,
             MixedToolOffset => 332,
+            OWord(self::OWord::Syntax) => 360,
+            OWord(self::OWord::Unmatched) => 361,
+            OWord(self::OWord::TooLarge) => 362,
+            OWord(self::OWord::TooDeep) => 363,
+            OWord(self::OWord::UndefinedSub) => 364,
+            OWord(self::OWord::InRefusedBlock) => 365,
+            OWord(self::OWord::Outside) => 366,
+            OWord(self::OWord::NestedSub) => 367,
+            OWord(self::OWord::Unclosed) => 368,
         }
     }
 
@@ -234,7 +270,7 @@ impl ErrorKind {
             InvalidTarget => 33,
             ArcRadius => 34,
             NoOffsetsInPlane => 35,
-            SpindleStopped => 20,
+            SpindleStopped | OWord(_) => 20,
             MixedArcFormat => 34,
             ToolNotInTable | NoToolValues => 4,
             MixedToolOffset => 24,
@@ -346,7 +382,9 @@ impl fmt::Display for ErrorKind {
                 write!(f, "unsupported word {}", letter(c))
             }
             Unsupported(self::Unsupported::OWord) => {
-                f.write_str("unsupported O-word (subroutines and control flow)")
+                // The flow stage (`crate::flow`) takes O-word lines; one
+                // reaches the interpreter only when the O is not first.
+                f.write_str("O-word not at the start of its line (or no flow stage)")
             }
             Unsupported(self::Unsupported::ControlFlow) => {
                 f.write_str("unsupported control flow (keyword or compound assignment)")
@@ -384,6 +422,21 @@ impl fmt::Display for ErrorKind {
             ToolNotInTable => f.write_str("tool not in the tool table (G10 L1 P<tool> first)"),
             NoToolValues => f.write_str("G10 L1 without offsets has no effect"),
             MixedToolOffset => f.write_str("G43.2 with both H and axis words"),
+            OWord(k) => f.write_str(match k {
+                self::OWord::Syntax => "bad O-word line (O<number> or O<name>, a keyword, [args])",
+                self::OWord::Unmatched => "O-word closer, else or elseif without its opening line",
+                self::OWord::TooLarge => {
+                    "O-word block too large for the capture buffer: refused, none of it runs"
+                }
+                self::OWord::TooDeep => "O-word calls or loops nested too deeply",
+                self::OWord::UndefinedSub => "call of a subroutine that is not defined",
+                self::OWord::InRefusedBlock => "line inside a refused O-word block: not run",
+                self::OWord::Outside => {
+                    "break/continue outside a loop, or return/endsub outside a call"
+                }
+                self::OWord::NestedSub => "sub defined inside another O-word block",
+                self::OWord::Unclosed => "O-word block without its end",
+            }),
         }
     }
 }

@@ -10,10 +10,10 @@ mod expr;
 pub mod lexer;
 pub mod params;
 
-pub use error::{ErrorKind, GcodeError, Unsupported};
+pub use error::{ErrorKind, GcodeError, OWord, Unsupported};
 pub use expr::MAX_DEPTH;
 pub use lexer::{Lexer, Token};
-pub use params::{Name, ParamStore, Params};
+pub use params::{Local, Name, ParamStore, Params};
 
 /// Longest accepted line in bytes, not counting the line terminator. Longer
 /// lines are an error, never truncated: a cut-off `X1000` would be `X10`.

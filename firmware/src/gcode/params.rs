@@ -64,6 +64,21 @@ pub trait ParamStore {
     fn set_named(&mut self, name: &Name, v: f32) -> Result<(), ErrorKind>;
 }
 
+/// Highest local numbered parameter: a call's arguments `#1`-`#30`.
+pub const LOCALS: u16 = 30;
+
+/// One local parameter with its value (see [`Params::locals`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Local {
+    Num(u16, f32),
+    Named(Name, f32),
+}
+
+/// Names without a leading `_` belong to the call level that set them.
+fn is_local(n: &Name) -> bool {
+    n.as_bytes().first() != Some(&b'_')
+}
+
 #[derive(Clone, Copy, Debug)]
 enum Undo {
     /// Numbered parameter `n` had `Some(old)` or did not exist.
@@ -218,6 +233,41 @@ impl Params {
         self.named
             .push((*name, v))
             .map_err(|_| ErrorKind::ParamTableFull)
+    }
+
+    /// A subroutine's local parameters (LinuxCNC's scoping): `#1`-`#30` and
+    /// names without a leading `_`. A call saves the caller's elsewhere and
+    /// removes them; its return drops the callee's and puts them back.
+    pub fn locals(&self) -> impl Iterator<Item = Local> + '_ {
+        let num = self
+            .numbered
+            .iter()
+            .take_while(|e| e.0 <= LOCALS)
+            .map(|&(n, v)| Local::Num(n, v));
+        let named = self
+            .named
+            .iter()
+            .filter(|e| is_local(&e.0))
+            .map(|&(n, v)| Local::Named(n, v));
+        num.chain(named)
+    }
+
+    /// Drops every local parameter (see [`Params::locals`]); no undo, as
+    /// it happens between lines.
+    pub fn clear_locals(&mut self) {
+        self.undo.clear();
+        self.numbered.retain(|e| e.0 > LOCALS);
+        self.named.retain(|e| !is_local(&e.0));
+    }
+
+    /// Restores one saved local, outside any line (no undo entry).
+    pub fn put_local(&mut self, l: Local) -> Result<(), ErrorKind> {
+        let r = match l {
+            Local::Num(n, v) => self.set_num(n, v),
+            Local::Named(name, v) => self.set_name(&name, v),
+        };
+        self.undo.clear();
+        r
     }
 
     /// Numbered parameters currently stored (for tests and `$#`-style dumps).

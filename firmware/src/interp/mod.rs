@@ -19,6 +19,7 @@ mod codes;
 pub mod cycles;
 mod exec;
 mod finite;
+mod flowvals;
 mod geom;
 mod homes;
 mod mcodes;

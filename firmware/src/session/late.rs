@@ -56,6 +56,7 @@ impl<S: crate::seams::Storage> Device<S> {
             report(e, line, o);
             self.cmds.clear();
             self.slots.clear();
+            self.flow.reset(&mut self.interp);
             self.pending.cancel_queued();
             self.sync = true;
             // A probe behind the line never runs: no result to take.

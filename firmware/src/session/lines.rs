@@ -3,11 +3,18 @@
 
 use super::{persist, sys, Device, MotionPort, Out, Tx};
 use crate::command::Command;
-use protocol::DeviceMsg;
+use crate::gcode::GcodeError;
 
 impl<S: crate::seams::Storage> Device<S> {
-    /// One job line (text mode) or one framed line leaving its slot.
-    /// `n` is its machine line number (text count or sequence number).
+    /// Sleep, or an alarm outside check mode: only blank lines pass.
+    pub(super) fn locked(&self, text: &[u8]) -> bool {
+        let blank = text.iter().all(u8::is_ascii_whitespace);
+        (self.sleep || self.seen_alarm.is_some() && !self.check) && !blank
+    }
+
+    /// One line to the interpreter, answered (a job line the O-word stage
+    /// lets run, or one of its replayed lines). `n` is its machine line
+    /// number (text count or N word, or sequence number).
     pub(super) fn line(
         &mut self,
         text: &[u8],
@@ -21,20 +28,33 @@ impl<S: crate::seams::Storage> Device<S> {
             self.reply_line(r, seq, o);
             return self.reset_if_due(m, o);
         }
-        let blank = text.iter().all(u8::is_ascii_whitespace);
-        if (self.sleep || self.seen_alarm.is_some() && !self.check) && !blank {
+        if self.locked(text) {
             return self.reply_line(Err(protocol::Code::Locked.code()), seq, o);
         }
         if !self.check && !self.can_take() {
             // Only text that precedes a switch to frames gets here.
             return self.reply_line(Err(protocol::Code::RxOverflow.code()), seq, o);
         }
+        match self.interpret(text, n, m, o) {
+            Ok(()) => self.reply_line(Ok(()), seq, o),
+            Err(e) => self.reply_error(e, None, seq, o),
+        }
+    }
+
+    /// Interprets one line and queues its commands as line `n`; no answer.
+    pub(super) fn interpret(
+        &mut self,
+        text: &[u8],
+        n: u32,
+        m: &mut impl MotionPort,
+        o: &mut Out<'_, impl Tx>,
+    ) -> Result<(), GcodeError> {
         let check = self.check;
         self.interp.set_g28_homes(m.settings().g28_homes);
         let cmds = &mut self.cmds;
         let mut probe = false;
         let mut store = persist::Pending::default();
-        let r = self.interp.execute_line(text, &mut |c| {
+        self.interp.execute_line(text, &mut |c| {
             // Operator text shows when the line is read, as GRBL's
             // `(MSG,…)` does: `[MSG:…]` (a frame in framed mode).
             if let Command::Message(t) = &c {
@@ -45,33 +65,19 @@ impl<S: crate::seams::Storage> Device<S> {
                 // Room for a whole line was checked before taking it.
                 let _ = cmds.push_back((n, c));
             }
-        });
-        match r {
-            Ok(()) => {
-                if let Some(t) = self.interp.take_tool_warning() {
-                    sys::no_tool_entry(t, o);
-                }
-                if let Some(l) = self.interp.take_arc_warning() {
-                    sys::off_plane_zero(l, o);
-                }
-                if !check && self.interp.needs_sync() {
-                    self.sync = true;
-                    self.probe_sync = probe;
-                }
-                self.after_line(store, m, o);
-                self.reply_line(Ok(()), seq, o)
-            }
-            Err(e) => {
-                if o.framed() {
-                    let mut t = protocol::msg::MsgText::new();
-                    let _ = core::fmt::write(&mut t, format_args!("{e}"));
-                    o.frame(&DeviceMsg::Msg(t));
-                    self.reply_line(Err(e.code()), seq, o)
-                } else {
-                    self.reply_line(Err(u16::from(e.grbl_code())), seq, o)
-                }
-            }
+        })?;
+        if let Some(t) = self.interp.take_tool_warning() {
+            sys::no_tool_entry(t, o);
         }
+        if let Some(l) = self.interp.take_arc_warning() {
+            sys::off_plane_zero(l, o);
+        }
+        if !check && self.interp.needs_sync() {
+            self.sync = true;
+            self.probe_sync = probe;
+        }
+        self.after_line(store, m, o);
+        Ok(())
     }
 
     /// The soft reset `$C` asked for, after its `ok`.

@@ -43,6 +43,7 @@
 mod late;
 mod lines;
 mod out;
+mod oword;
 mod persist;
 mod ports;
 mod realtime;
@@ -55,6 +56,7 @@ pub use sys::RT_REPLY_ROOM;
 
 use crate::command::Command;
 use crate::executor::{self, MachineError};
+use crate::flow::{Flow, Intake};
 use crate::interp::{Interpreter, LINE_COMMANDS};
 use crate::link::{FramedAction, FramedPort, LinkEvent};
 use crate::persist::{Persist, Report};
@@ -75,6 +77,10 @@ pub const LINE_SLOTS: usize = 8;
 /// ([`Device::poll_realtime`]).
 pub const TX_HEADROOM: usize = 768;
 
+/// Replay steps (stored lines or O-word lines) one pass takes at most: an
+/// O-word loop that moves nothing must not hold the task.
+pub const REPLAY_STEPS: u32 = 32;
+
 /// Static facts for `$I` and the handshake.
 #[derive(Clone, Copy, Debug)]
 pub struct Identity {
@@ -86,6 +92,10 @@ pub struct Identity {
 #[derive(Debug)]
 pub struct Device<S: Storage = NoStorage> {
     pub interp: Interpreter,
+    /// O-word flow control between the line intake and the interpreter.
+    flow: Flow,
+    /// The line whose replay runs came framed (its answer is a frame).
+    replay_framed: bool,
     port: FramedPort,
     ident: Identity,
     cmds: Deque<(u32, Command), CMD_SLOTS>,
@@ -156,17 +166,23 @@ impl<S: Storage> Device<S> {
     /// (it reconnects, resends what was not acknowledged and resumes with
     /// cycle start); the next client is told so. A text session keeps
     /// running, as GRBL does when its sender goes away: those senders do
-    /// not expect a hold they did not ask for.
+    /// not expect a hold they did not ask for. An O-word replay holds in
+    /// either mode: it may have no end.
     ///
     /// The receive side (the USB interrupt, host-sim's port) has already
     /// reset its splitter; the controller then discards the old client's
     /// unread input up to the splitter's marker, so a new client never
     /// gets an `ok` for a line it did not send.
     pub fn port_reset(&mut self, link: &mut impl LinkPort, m: &impl MotionPort) {
-        let busy = !m.motion_idle() || !self.cmds.is_empty() || !self.slots.is_empty();
+        let busy = !m.motion_idle()
+            || !self.cmds.is_empty()
+            || !self.slots.is_empty()
+            || self.flow.replaying();
         // The splitter is back in text mode already; the assembler switches
         // only at the marker, so it still tells what the old client spoke.
-        if (link.framed() || link.events_framed()) && busy {
+        // An O-word replay would go on with no one to stop it (a `while
+        // [1]` never ends): it holds too, in either mode, and `~` resumes.
+        if (link.framed() || link.events_framed()) && busy || self.flow.replaying() {
             m.rt().feed_hold();
             // The old client's unread input is discarded right after this
             // (the shell's pass flushes the link), so the next message is
@@ -187,7 +203,7 @@ impl<S: Storage> Device<S> {
 
     /// True when nothing is queued in the device.
     pub fn drained(&self) -> bool {
-        self.cmds.is_empty() && self.slots.is_empty() && !self.sync
+        self.cmds.is_empty() && self.slots.is_empty() && !self.sync && !self.flow.replaying()
     }
 
     fn info(&self, m: &impl MotionPort) -> DeviceInfo {
@@ -223,7 +239,8 @@ impl<S: Storage> Device<S> {
             }
             // The splitter runs ahead: when it is framed, a switch to frames
             // is on its way and whatever text precedes it has no listener.
-            if !(link.events_framed() || link.framed() || self.can_take()) {
+            let framed = link.events_framed() || link.framed();
+            if !(framed || self.can_take() && !self.flow.replaying()) {
                 break;
             }
             // GRBL asleep reads nothing: lines wait for the reset, which
@@ -270,6 +287,7 @@ impl<S: Storage> Device<S> {
             if let Some(e) = alarm {
                 self.cmds.clear();
                 self.slots.clear();
+                self.flow.reset(&mut self.interp);
                 self.pending.cancel_queued();
                 self.sync = true;
                 if core::mem::take(&mut self.quiet_alarm) {
@@ -317,6 +335,7 @@ impl<S: Storage> Device<S> {
     /// `framed` is the port's mode for unprompted reports; lines from the
     /// slots are framed lines and are answered with frames.
     fn feed(&mut self, m: &mut impl MotionPort, tx: &mut impl Tx, framed: bool) {
+        let mut budget = REPLAY_STEPS;
         loop {
             while m.ready() {
                 let Some((line, cmd)) = self.cmds.pop_front() else {
@@ -330,10 +349,18 @@ impl<S: Storage> Device<S> {
             if self.sync || self.cmds.capacity() - self.cmds.len() < LINE_COMMANDS {
                 return;
             }
+            if self.flow.replaying() {
+                if budget == 0 {
+                    return;
+                }
+                budget -= 1;
+                self.replay_step(m, &mut Out::new(&mut *tx, self.replay_framed));
+                continue;
+            }
             let Some((seq, text)) = self.slots.pop_front() else {
                 return;
             };
-            self.line(&text, seq, m, &mut Out::new(&mut *tx, true));
+            self.job_line(&text, seq, m, &mut Out::new(&mut *tx, true));
         }
     }
 
@@ -364,9 +391,16 @@ impl<S: Storage> Device<S> {
                 // `Ln:` is the line's N word when it has one (GRBL's),
                 // else the count of lines.
                 let n = reprap::label(text).unwrap_or(self.text_lines);
-                self.line(text, n, m, o);
+                self.job_line(text, n, m, o);
             }
             LinkEvent::System(cmd) => {
+                // Not in a branch not taken, nor stored in a block.
+                if !self.flow.runs_directly() {
+                    let n = self.text_lines;
+                    if let Intake::Reply(r) = self.flow.intake(b"$", n, &mut self.interp) {
+                        return self.reply_error_or_ok(r, o);
+                    }
+                }
                 let r = self.system(cmd, m, o);
                 sys::reply(r, None, o);
                 self.reset_if_due(m, o);

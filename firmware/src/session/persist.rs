@@ -81,6 +81,7 @@ impl<S: Storage> Device<S> {
     /// A session over `persist`. `boot` is what `persist.load()` gave
     /// before the machine was built with its settings: its offsets go to
     /// the interpreter, its report follows the first banner.
+    #[inline(always)]
     pub fn with_storage(ident: Identity, persist: Persist<S>, boot: Option<&Loaded>) -> Self {
         let mut interp = Interpreter::new();
         if let Some(b) = boot {
@@ -88,6 +89,8 @@ impl<S: Storage> Device<S> {
         }
         Device {
             interp,
+            flow: crate::flow::Flow::new(),
+            replay_framed: false,
             port: FramedPort::new(),
             ident,
             cmds: Deque::new(),

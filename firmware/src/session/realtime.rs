@@ -71,6 +71,7 @@ impl<S: crate::seams::Storage> Device<S> {
         m.rt().request_reset();
         self.cmds.clear();
         self.slots.clear();
+        self.flow.reset(&mut self.interp);
         self.interp.reset();
         self.check = false;
         self.sleep = false;
