@@ -365,3 +365,24 @@ fn zigzags_between_long_moves_keep_the_axis_limits() {
         }
     }
 }
+
+/// bench-motion's own jobs (`host_sim::bench::jobs`, issue 31): pen
+/// plotter polylines of thousands of sub-millimetre moves near the axis
+/// rates, and a 3-D line contour whose Z turns at every vertex. The
+/// limits hold as on the corpus, and so does the curvature check (each
+/// axis's centripetal acceleration where the polyline curves,
+/// `host_sim::bench::curvature`), which the 50 ms windows cannot see.
+#[test]
+fn generated_bench_jobs_keep_the_limits_and_the_curvature_check() {
+    let cfg = machine();
+    let (_, amax) = axis_limits(&cfg);
+    for (name, src) in host_sim::bench::jobs::all() {
+        let f = check(&cfg, name, &src);
+        for (i, (c, a)) in f.curv.peak.iter().zip(amax).enumerate().take(3) {
+            assert!(
+                *c <= 1.05 * a,
+                "{name}: axis {i} centripetal {c:.1} mm/s², limit {a:.1}"
+            );
+        }
+    }
+}
