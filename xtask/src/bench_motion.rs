@@ -58,6 +58,7 @@ pub struct BenchMotionArgs {
 struct Totals {
     time: f64,
     bound: f64,
+    curved_ref: f64,
     grbl: f64,
     all_grbl: bool,
     short: u64,
@@ -104,7 +105,8 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
          the step trace (j within {:.0}/{:.0}/{:.0} mm/s^3 of step quantisation); curv = each axis's \
          centripetal acceleration v^2*|n_i|/r at curve vertices (turns <= {:.0} deg; circle through \
          a vertex and its neighbours, a few chords apart where nearer ones lie within half a step of a line); short = step intervals below the rate limit (1 tick slack); \
-         bound = junction deviation and the axis limits only (no curvature rule); bound a / curv = \
+         bound = junction deviation and the axis limits only (no curvature rule); +curv = a reference, \
+         not a bound: the same with burin's curvature rule v^2 <= a*l/phi (issue 12's bound); bound a / curv = \
          the same meters on the bound's own profile",
         vmax[0],
         vmax[1],
@@ -120,11 +122,12 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
         host_sim::bench::curvature::MAX_TURN.to_degrees(),
     );
     println!(
-        "{:<44} {:>8} {:>8} {:>6} {:>8} {:>6} | {:>14} | {:>14} | {:>14} | {:>14} | {:>11} | {:>14} | {:>14}",
+        "{:<44} {:>8} {:>8} {:>6} {:>8} {:>8} {:>6} | {:>14} | {:>14} | {:>14} | {:>14} | {:>11} | {:>14} | {:>14}",
         "job",
         "burin s",
         "bound s",
         "ratio",
+        "+curv s",
         "GRBL s",
         "/GRBL",
         "peak v % X/Y/Z",
@@ -173,11 +176,12 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
         }
         let short = l.short_intervals;
         println!(
-            "{:<44} {:>8.2} {:>8.2} {:>6.3} {:>8} {:>6} | {} | {} | {} | {} | {:>3} {:>3} {:>3} | {} | {}",
+            "{:<44} {:>8.2} {:>8.2} {:>6.3} {:>8.2} {:>8} {:>6} | {} | {} | {} | {} | {:>3} {:>3} {:>3} | {} | {}",
             name,
             f.time_s,
             f.bound_s,
             f.time_s / f.bound_s.max(1e-9),
+            f.curved_ref_s,
             grbl.map_or("-".into(), |g| format!("{g:.2}")),
             grbl.map_or("-".into(), |g| format!("{:.3}", f.time_s / g)),
             three(cols[0]),
@@ -207,6 +211,7 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
         }
         tot.time += f.time_s;
         tot.bound += f.bound_s;
+        tot.curved_ref += f.curved_ref_s;
         tot.short += short.iter().sum::<u64>();
         match grbl {
             Some(g) => tot.grbl += g,
@@ -222,11 +227,12 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
         }
         let grbl = tot.all_grbl && tot.grbl > 0.0;
         println!(
-            "{:<44} {:>8.2} {:>8.2} {:>6.3} {:>8} {:>6} | {} | {} | {} | {} | {:>11} | {} | {}",
+            "{:<44} {:>8.2} {:>8.2} {:>6.3} {:>8.2} {:>8} {:>6} | {} | {} | {} | {} | {:>11} | {} | {}",
             label,
             tot.time,
             tot.bound,
             tot.time / tot.bound.max(1e-9),
+            tot.curved_ref,
             if grbl {
                 format!("{:.2}", tot.grbl)
             } else {

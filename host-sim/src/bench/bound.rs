@@ -115,6 +115,8 @@ pub struct Bound {
     stop_pending: bool,
     /// Dwells seen since the last piece (counted only if motion follows).
     dwell_pending: f64,
+    /// Add burin's curvature rule at every vertex ([`Bound::with_curvature_rule`]).
+    curvature_rule: bool,
 }
 
 impl Bound {
@@ -125,6 +127,7 @@ impl Bound {
             pos: Some(start_mm.map(f64::from)),
             pieces: Vec::new(),
             stop_pending: false,
+            curvature_rule: false,
             dwell_pending: 0.0,
         }
     }
@@ -179,6 +182,19 @@ impl Bound {
         self.pos.unwrap_or([0.0; AXES])
     }
 
+    /// A reference, not the bound: the same path with burin's curvature
+    /// rule `v² ≤ a·l/φ` at every vertex too (issue 12's bound). No limit
+    /// states it, so it bounds nothing; the gap between it and the bound
+    /// is what the curves' own centripetal acceleration costs a controller
+    /// that keeps it (which the bound's "curv" figure says the bound does
+    /// not), and the gap between burin and it what burin loses elsewhere.
+    pub fn with_curvature_rule(&self) -> Self {
+        Bound {
+            curvature_rule: true,
+            ..self.clone()
+        }
+    }
+
     /// Corner limit between pieces `a` and `b` (mm/s).
     fn corner(&self, a: &Piece, b: &Piece) -> f64 {
         let cos = a.unit.iter().zip(&b.unit).map(|(x, y)| x * y).sum::<f64>();
@@ -201,7 +217,12 @@ impl Bound {
             return f64::INFINITY;
         }
         let r = f64::from(self.settings.junction_deviation) * sin_half / (1.0 - sin_half);
-        (acc * r).sqrt()
+        let jd = (acc * r).sqrt();
+        if !self.curvature_rule {
+            return jd;
+        }
+        let phi = cos.clamp(-1.0, 1.0).acos().max(1e-12);
+        jd.min((acc * a.len.min(b.len) / phi).sqrt())
     }
 
     /// Number of pieces so far (zero-length moves make none).

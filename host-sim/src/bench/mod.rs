@@ -25,6 +25,9 @@ pub struct JobFigures {
     pub time_s: f64,
     /// Time-optimal bound of the same path, s.
     pub bound_s: f64,
+    /// The same with burin's curvature rule (a reference, no bound:
+    /// [`Bound::with_curvature_rule`]), s.
+    pub curved_ref_s: f64,
     pub limits: TraceLimits,
     pub summary: Summary,
     /// The commanded end of the path, rounded to steps.
@@ -98,6 +101,7 @@ pub fn run_job(cfg: &MachineConfig, source: &str) -> JobFigures {
         time_s,
         bound_end_steps: std::array::from_fn(|i| (end[i] * spm[i]).round() as i64),
         bound_s: prof.last().map_or(0.0, |p| p.end_s),
+        curved_ref_s: both.bound.bound().with_curvature_rule().time_s(),
         losses: both.bound.losses(&prof),
         bound_limits: match &both.info {
             Some(info) => replay::bound_limits(
