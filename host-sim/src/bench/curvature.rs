@@ -37,8 +37,9 @@ pub struct Curvature {
     pub at: [usize; AXES],
 }
 
-/// The widest stencil, in chords each side of a vertex.
-pub const MAX_SPAN: usize = 16;
+/// The widest stencil, in chords each side of a vertex: circle_small's
+/// chords of 0.016 mm on a radius of 25.4 mm need 40 for half a step.
+pub const MAX_SPAN: usize = 64;
 
 /// The curvature check over a job. `hit_s[k]`: when the trace stood on
 /// piece `k`'s end, s (None when it passed it between steps); `step_mm`:
