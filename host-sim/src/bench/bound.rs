@@ -1,22 +1,29 @@
 //! The time-optimal bound of `cargo xtask bench-motion`: how fast the
-//! commanded path could be run at best under the machine's limits. A small
-//! reference written apart from the planner (no ring, no step rounding, no
-//! incremental replanning), so that the planner is judged against something
-//! that does not share its mistakes.
+//! commanded path could be run at best under the machine's stated limits.
+//! A small reference written apart from the planner (no ring, no step
+//! rounding, no incremental replanning), so that the planner is judged
+//! against something that does not share its mistakes.
 //!
 //! The path is the commanded one in millimetres, as the executor expands it
 //! (arcs and splines as their chords, at the same `$12` tolerance), with the
-//! stops the job asks for (dwells, synced commands). Constraints:
+//! stops the job asks for (dwells, synced commands). Constraints, and only
+//! the stated ones (issue 31):
 //!
 //! * on each straight piece, every axis within its rate (`$110`…) and its
 //!   acceleration (`$120`…): path speed `≤ min_i vmax_i/|u_i|`, path
 //!   acceleration `≤ min_i amax_i/|u_i|` (`u` the unit direction);
-//! * at each vertex, the corner rule: junction deviation (`$11`), with the
-//!   acceleration the axes allow along the direction change, and the
-//!   curvature rule `v² ≤ a·l/φ` (the chords turn by φ every `l` mm: the
-//!   tool follows a curve of radius about `l/φ`), both on the commanded
-//!   geometry;
+//! * at each vertex, junction deviation (`$11`), with the acceleration the
+//!   axes allow along the direction change, on the commanded geometry;
 //! * the programmed feed; standstill at the start, the end and every stop.
+//!
+//! No rule of burin's own: not its curvature rule `v² ≤ a·l/φ` on chords,
+//! not its corner holds (issue 12's bound had the first; GRBL, keeping
+//! every window limit, beat it on circle_small and zigzag). So the bound is
+//! the fastest that any controller can be that honours `$110`–`$122`,
+//! `$11` and `$12` as GRBL states them. A controller that also keeps each
+//! axis's centripetal acceleration on curves (the meter's curvature check,
+//! [`super::curvature`]) cannot reach it where the chords turn faster than
+//! that allows: the table's "bound curv" column shows by how much.
 //!
 //! Why it is a lower bound: one backward and one forward pass over the
 //! whole job (unlimited look-ahead) give, at every point, the highest speed
@@ -108,6 +115,8 @@ pub struct Bound {
     stop_pending: bool,
     /// Dwells seen since the last piece (counted only if motion follows).
     dwell_pending: f64,
+    /// Add burin's curvature rule at every vertex ([`Bound::with_curvature_rule`]).
+    curvature_rule: bool,
 }
 
 impl Bound {
@@ -118,6 +127,7 @@ impl Bound {
             pos: Some(start_mm.map(f64::from)),
             pieces: Vec::new(),
             stop_pending: false,
+            curvature_rule: false,
             dwell_pending: 0.0,
         }
     }
@@ -172,6 +182,19 @@ impl Bound {
         self.pos.unwrap_or([0.0; AXES])
     }
 
+    /// A reference, not the bound: the same path with burin's curvature
+    /// rule `v² ≤ a·l/φ` at every vertex too (issue 12's bound). No limit
+    /// states it, so it bounds nothing; the gap between it and the bound
+    /// is what the curves' own centripetal acceleration costs a controller
+    /// that keeps it (which the bound's "curv" figure says the bound does
+    /// not), and the gap between burin and it what burin loses elsewhere.
+    pub fn with_curvature_rule(&self) -> Self {
+        Bound {
+            curvature_rule: true,
+            ..self.clone()
+        }
+    }
+
     /// Corner limit between pieces `a` and `b` (mm/s).
     fn corner(&self, a: &Piece, b: &Piece) -> f64 {
         let cos = a.unit.iter().zip(&b.unit).map(|(x, y)| x * y).sum::<f64>();
@@ -194,9 +217,12 @@ impl Bound {
             return f64::INFINITY;
         }
         let r = f64::from(self.settings.junction_deviation) * sin_half / (1.0 - sin_half);
+        let jd = (acc * r).sqrt();
+        if !self.curvature_rule {
+            return jd;
+        }
         let phi = cos.clamp(-1.0, 1.0).acos().max(1e-12);
-        let l = a.len.min(b.len);
-        (acc * r).sqrt().min((acc * l / phi).sqrt())
+        jd.min((acc * a.len.min(b.len) / phi).sqrt())
     }
 
     /// Number of pieces so far (zero-length moves make none).
@@ -316,5 +342,42 @@ mod tests {
         stop.push(&PathEvent::Stop { seconds: 1.0 });
         stop.push(&to(100.0, 0.0, 10.0));
         assert!(stop.time_s() > one.time_s() + 1.0);
+    }
+
+    /// Chords of a small circle turning by φ each: the bound passes each
+    /// vertex at the junction deviation speed alone, faster than burin's
+    /// own curvature rule `v² ≤ a·l/φ` would (issue 31: that rule is no
+    /// stated limit, so a bound with it was no lower bound).
+    #[test]
+    fn chord_vertices_run_at_junction_deviation_alone() {
+        let s = Settings::default();
+        let (r, n) = (0.5f64, 64);
+        let mut b = Bound::new(s, [r as f32, 0.0, 0.0, 0.0]);
+        // Four turns: the third is past the ramp from rest.
+        for k in 1..=4 * n {
+            let t = k as f64 / n as f64 * std::f64::consts::TAU;
+            b.push(&to((r * t.cos()) as f32, (r * t.sin()) as f32, 1e4));
+        }
+        let prof = b.profile();
+        // Piece `j` starts at vertex `j`: at 2n + n/2, the far side (-r, 0).
+        let j = 2 * n + n / 2;
+        let v = prof[j].v0;
+        let phi = std::f64::consts::TAU / n as f64;
+        let l = prof[j].len;
+        let a = f64::from(s.axes[0].max_accel);
+        assert!(
+            v > 1.5 * (a * l / phi).sqrt(),
+            "{v} against {}",
+            (a * l / phi).sqrt()
+        );
+        // Junction deviation along the radial change (X here, at the far
+        // side: the change lies along one axis).
+        let sin_half = (phi / 2.0).cos();
+        let rjd = f64::from(s.junction_deviation) * sin_half / (1.0 - sin_half);
+        assert!(
+            (v - (a * rjd).sqrt()).abs() < 0.02 * v,
+            "{v} against {}",
+            (a * rjd).sqrt()
+        );
     }
 }

@@ -63,6 +63,21 @@ impl Locator {
         &self.bound
     }
 
+    /// The source line of each piece.
+    pub fn lines(&self) -> &[u32] {
+        &self.lines
+    }
+
+    /// When the trace stood on each piece's end, s from its first step
+    /// (None where it passed the vertex between steps).
+    pub fn hit_s(&self) -> Vec<Option<f64>> {
+        let t0 = self.t0.unwrap_or(0);
+        self.hit
+            .iter()
+            .map(|h| h.map(|t| (t - t0) as f64 / self.tick_hz))
+            .collect()
+    }
+
     /// Losses per source line, worst first, against `prof`, the bound's
     /// profile (`Bound::profile` of [`Locator::bound`]).
     pub fn losses(&self, prof: &[PieceProfile]) -> Vec<LineLoss> {

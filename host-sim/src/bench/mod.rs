@@ -4,6 +4,8 @@
 //! figure is the same on every machine and every run.
 
 pub mod bound;
+pub mod curvature;
+pub mod jobs;
 pub mod limits;
 pub mod losses;
 pub mod replay;
@@ -23,6 +25,9 @@ pub struct JobFigures {
     pub time_s: f64,
     /// Time-optimal bound of the same path, s.
     pub bound_s: f64,
+    /// The same with burin's curvature rule (a reference, no bound:
+    /// [`Bound::with_curvature_rule`]), s.
+    pub curved_ref_s: f64,
     pub limits: TraceLimits,
     pub summary: Summary,
     /// The commanded end of the path, rounded to steps.
@@ -31,6 +36,12 @@ pub struct JobFigures {
     pub losses: Vec<LineLoss>,
     /// The same meter on the bound's own profile ([`replay`]).
     pub bound_limits: TraceLimits,
+    /// The curvature check ([`curvature`]) of the run and of the bound's
+    /// profile.
+    pub curv: curvature::Curvature,
+    pub bound_curv: curvature::Curvature,
+    /// Source line of each piece of the path (for [`curvature::Curvature::at`]).
+    pub piece_lines: Vec<u32>,
 }
 
 struct Both {
@@ -81,10 +92,16 @@ pub fn run_job(cfg: &MachineConfig, source: &str) -> JobFigures {
     let spm = cfg.settings.axes.map(|a| f64::from(a.steps_per_mm));
     // The bound's profile once, for its time, the losses and the replay.
     let prof = both.bound.bound().profile();
+    let step_mm = spm.map(|s| 1.0 / s);
+    let bound_hits: Vec<Option<f64>> = prof.iter().map(|p| Some(p.end_s)).collect();
     JobFigures {
+        curv: curvature::check(&prof, &both.bound.hit_s(), step_mm),
+        bound_curv: curvature::check(&prof, &bound_hits, step_mm),
+        piece_lines: both.bound.lines().to_vec(),
         time_s,
         bound_end_steps: std::array::from_fn(|i| (end[i] * spm[i]).round() as i64),
         bound_s: prof.last().map_or(0.0, |p| p.end_s),
+        curved_ref_s: both.bound.bound().with_curvature_rule().time_s(),
         losses: both.bound.losses(&prof),
         bound_limits: match &both.info {
             Some(info) => replay::bound_limits(
