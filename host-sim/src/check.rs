@@ -149,6 +149,8 @@ pub fn command_json(c: &Command) -> String {
         Command::SaveSettings => "\"kind\":\"save_settings\"".into(),
         Command::LoadSettings => "\"kind\":\"load_settings\"".into(),
         Command::ClearAlarm => "\"kind\":\"clear_alarm\"".into(),
+        // The compensation stage takes these; none leaves the interpreter.
+        Command::CutterComp(c) => format!("\"kind\":\"cutter_comp\",\"on\":{}", c.is_some()),
     }
 }
 
@@ -167,13 +169,16 @@ pub fn check_file(
     let mut errors = 0;
     for (i, line) in source.split('\n').enumerate() {
         let n = i + 1;
-        let mut cmds: Vec<Command> = Vec::new();
+        let mut tagged: Vec<(u32, Command)> = Vec::new();
         let mut at = interp.state().pos;
-        match interp.execute_line(line.as_bytes(), &mut |c| cmds.push(c)) {
+        // Each command carries the line it came from (cutter compensation
+        // hands a move on when the next one shows where it ends).
+        match interp.execute_line_at(line.as_bytes(), n as u32, &mut |l, c| tagged.push((l, c))) {
             Ok(()) => {
+                let cmds: Vec<Command> = tagged.iter().map(|(_, c)| c.clone()).collect();
                 if dump {
                     // A canned cycle is dumped as the moves it expands to.
-                    for c in &cmds {
+                    for (n, c) in &tagged {
                         let steps: Vec<Command> = match c {
                             Command::Cycle(cy) => cy.steps(&at).collect(),
                             c => vec![c.clone()],

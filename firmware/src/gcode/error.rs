@@ -14,6 +14,7 @@
 //! | 300–309 | words that are recognised but not supported (named) |
 //! | 310–339 | block semantics: modal groups, missing/unused words, arcs |
 //! | 340–359 | dialect rules: several commands on a line, BeagleG's M list |
+//! | 380–399 | cutter radius compensation (`crate::comp`) |
 
 use core::fmt;
 
@@ -132,6 +133,29 @@ pub enum ErrorKind {
     ArcWordOffPlane(u8),
     /// G86/G88 with the spindle stopped (LinuxCNC refuses them too).
     SpindleStopped,
+    // --- cutter radius compensation (380..) ---
+    /// The entry move (or entry arc) is not longer than the tool radius.
+    CompEntryTooShort,
+    /// The tool does not fit inside an arc it cuts from the inside.
+    CompToolTooBig,
+    /// An inside corner the compensated tool cannot reach without cutting
+    /// into the part (a move or arc would run backwards).
+    CompGouge,
+    /// The move right after G40 must be straight.
+    CompArcAfterG40,
+    /// More commands wait behind a held compensated move than fit.
+    CompQueueFull,
+    /// Compensation in G19, an arc outside its plane, or `L` outside G18.
+    CompPlane,
+    /// G41/G42 while compensation is already on.
+    CompAlreadyOn,
+    /// Something compensation cannot carry on through (tool change, canned
+    /// cycle, G28/G30, probe, G53, G92, a coordinate system or tool offset
+    /// change, a plane change, a spline): the letter and number in tenths.
+    CompForbidden {
+        letter: u8,
+        tenths: u16,
+    },
 }
 
 impl ErrorKind {
@@ -189,6 +213,14 @@ impl ErrorKind {
             NoHeaters => 341,
             ArcWordOffPlane(_) => 342,
             SpindleStopped => 343,
+            CompEntryTooShort => 380,
+            CompToolTooBig => 381,
+            CompGouge => 382,
+            CompArcAfterG40 => 383,
+            CompQueueFull => 384,
+            CompPlane => 385,
+            CompAlreadyOn => 386,
+            CompForbidden { .. } => 387,
         }
     }
 
@@ -221,6 +253,10 @@ impl ErrorKind {
             ArcRadius => 34,
             NoOffsetsInPlane => 35,
             SpindleStopped => 20,
+            CompEntryTooShort | CompToolTooBig | CompGouge => 33,
+            CompArcAfterG40 | CompAlreadyOn | CompForbidden { .. } => 20,
+            CompQueueFull => 11,
+            CompPlane => 20,
             UnusedWord(_) | SplinePlane => 36,
             ValueOutOfRange(_) => 4,
             TooManyCommands => 11,
@@ -363,6 +399,24 @@ impl fmt::Display for ErrorKind {
             NoHeaters => f.write_str("this controller has no heaters (M104/M105/M109/M116)"),
             ArcWordOffPlane(c) => write!(f, "arc offset {} is not in the active plane", letter(c)),
             SpindleStopped => f.write_str("G86/G88 need the spindle turning"),
+            CompEntryTooShort => f.write_str(
+                "cutter compensation entry move is not longer than the tool radius",
+            ),
+            CompToolTooBig => f.write_str("tool radius not less than the arc radius it cuts inside"),
+            CompGouge => f.write_str(
+                "inside corner the compensated tool cannot reach without gouging",
+            ),
+            CompArcAfterG40 => f.write_str("the move after G40 must be straight, not an arc"),
+            CompQueueFull => f.write_str(
+                "too many commands between two compensated moves",
+            ),
+            CompPlane => f.write_str("cutter compensation only in G17 or G18 (L only in G18)"),
+            CompAlreadyOn => f.write_str("cutter compensation is already on (G40 first)"),
+            CompForbidden { letter: l, tenths } => {
+                f.write_str("cannot use ")?;
+                write_code(f, l, tenths)?;
+                f.write_str(" with cutter compensation on (G40 first)")
+            }
         }
     }
 }
