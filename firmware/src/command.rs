@@ -100,6 +100,31 @@ pub enum SpindleDir {
     Ccw,
 }
 
+/// Which side of the programmed path a compensated tool runs on, looking
+/// along the direction of travel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CompSide {
+    /// G41, G41.1.
+    Left,
+    /// G42, G42.1.
+    Right,
+}
+
+/// Cutter compensation turned on: what the interpreter knows then.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CompOn {
+    pub side: CompSide,
+    /// Tool radius, machine mm. Zero compensates nothing (LinuxCNC).
+    pub radius: f32,
+    /// G17 or G18.
+    pub plane: Plane,
+    /// Lathe tool orientation (G41.1/G42.1 `L`, G18 only): for 1-8 the
+    /// tool's origin is off the radius centre.
+    pub orientation: u8,
+    /// Where the tool is, machine mm.
+    pub start: Pos,
+}
+
 /// Operator text from `(MSG, …)` or M117.
 pub type Message = heapless::String<64>;
 
@@ -193,6 +218,9 @@ pub enum Command {
     LoadSettings,
     /// M999: clear an alarm / restart after an error.
     ClearAlarm,
+    /// G41/G42/G41.1/G42.1 (`Some`) and G40 (`None`): consumed by the
+    /// compensation stage (`crate::comp`); the executor never sees it.
+    CutterComp(Option<CompOn>),
 }
 
 /// What M114/M115/M119 ask for.

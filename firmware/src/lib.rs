@@ -23,6 +23,7 @@ pub mod settings;
 pub mod usb_ids;
 
 pub mod command;
+pub mod comp;
 pub mod flow;
 pub mod gcode;
 pub mod interp;

@@ -150,6 +150,8 @@ pub fn command_json(c: &Command) -> String {
         Command::SaveSettings => "\"kind\":\"save_settings\"".into(),
         Command::LoadSettings => "\"kind\":\"load_settings\"".into(),
         Command::ClearAlarm => "\"kind\":\"clear_alarm\"".into(),
+        // The compensation stage takes these; none leaves the interpreter.
+        Command::CutterComp(c) => format!("\"kind\":\"cutter_comp\",\"on\":{}", c.is_some()),
     }
 }
 
@@ -171,16 +173,18 @@ pub fn check_file(
     for (i, line) in source.split('\n').enumerate() {
         let n = i + 1;
         // O-word loops and calls run the stored lines they release; each
-        // is reported with the line it was written on.
+        // is reported with the line it was written on, and a move cutter
+        // compensation held back with its own line.
         let r = flow.feed_line(
             line.as_bytes(),
             n as u32,
             &mut interp,
             MAX_STEPS,
             &mut |interp, text, ln| {
-                let mut cmds: Vec<Command> = Vec::new();
+                let mut tagged: Vec<(u32, Command)> = Vec::new();
                 at = interp.state().pos;
-                interp.execute_line(text, &mut |c| cmds.push(c))?;
+                interp.execute_line_at(text, ln, &mut |l, c| tagged.push((l, c)))?;
+                let cmds: Vec<Command> = tagged.iter().map(|(_, c)| c.clone()).collect();
                 if let Some(l) = interp.take_arc_warning() {
                     let _ = writeln!(
                         out,
@@ -190,7 +194,7 @@ pub fn check_file(
                 }
                 if dump {
                     // A canned cycle is dumped as the moves it expands to.
-                    for c in &cmds {
+                    for (l, c) in &tagged {
                         let steps: Vec<Command> = match c {
                             Command::Cycle(cy) => cy.steps(&at).collect(),
                             c => vec![c.clone()],
@@ -198,7 +202,7 @@ pub fn check_file(
                         for s in &steps {
                             // Errors inside `run` abort the replay; a write
                             // error is reported by the next write.
-                            let _ = writeln!(out, "{{\"line\":{ln},{}}}", command_json(s));
+                            let _ = writeln!(out, "{{\"line\":{l},{}}}", command_json(s));
                             if let Some(e) = s.end() {
                                 at = *e;
                             }

@@ -15,6 +15,7 @@
 //! | 310–339 | block semantics: modal groups, missing/unused words, arcs, tools |
 //! | 340–359 | dialect rules: several commands on a line, BeagleG's M list |
 //! | 360–379 | O-words: subroutines and flow control (`crate::flow`) |
+//! | 380–399 | cutter radius compensation (`crate::comp`) |
 
 use core::fmt;
 
@@ -169,6 +170,29 @@ pub enum ErrorKind {
     MixedToolOffset,
     // --- O-words (360..) ---
     OWord(OWord),
+    // --- cutter radius compensation (380..) ---
+    /// The entry move (or entry arc) is not longer than the tool radius.
+    CompEntryTooShort,
+    /// The tool does not fit inside an arc it cuts from the inside.
+    CompToolTooBig,
+    /// An inside corner the compensated tool cannot reach without cutting
+    /// into the part (a move or arc would run backwards).
+    CompGouge,
+    /// The move right after G40 must be straight.
+    CompArcAfterG40,
+    /// More commands wait behind a held compensated move than fit.
+    CompQueueFull,
+    /// Compensation in G19, an arc outside its plane, or `L` outside G18.
+    CompPlane,
+    /// G41/G42 while compensation is already on.
+    CompAlreadyOn,
+    /// Something compensation cannot carry on through (tool change, canned
+    /// cycle, G28/G30, probe, G53, G92, a coordinate system or tool offset
+    /// change, a plane change, a spline): the letter and number in tenths.
+    CompForbidden {
+        letter: u8,
+        tenths: u16,
+    },
 }
 
 impl ErrorKind {
@@ -239,6 +263,14 @@ impl ErrorKind {
             OWord(self::OWord::Outside) => 366,
             OWord(self::OWord::NestedSub) => 367,
             OWord(self::OWord::Unclosed) => 368,
+            CompEntryTooShort => 380,
+            CompToolTooBig => 381,
+            CompGouge => 382,
+            CompArcAfterG40 => 383,
+            CompQueueFull => 384,
+            CompPlane => 385,
+            CompAlreadyOn => 386,
+            CompForbidden { .. } => 387,
         }
     }
 
@@ -274,6 +306,10 @@ impl ErrorKind {
             MixedArcFormat => 34,
             ToolNotInTable | NoToolValues => 4,
             MixedToolOffset => 24,
+            CompEntryTooShort | CompToolTooBig | CompGouge => 33,
+            CompArcAfterG40 | CompAlreadyOn | CompForbidden { .. } => 20,
+            CompQueueFull => 11,
+            CompPlane => 20,
             UnusedWord(_) | SplinePlane => 36,
             ValueOutOfRange(_) => 4,
             TooManyCommands => 11,
@@ -437,6 +473,24 @@ impl fmt::Display for ErrorKind {
                 self::OWord::NestedSub => "sub defined inside another O-word block",
                 self::OWord::Unclosed => "O-word block without its end",
             }),
+            CompEntryTooShort => f.write_str(
+                "cutter compensation entry move is not longer than the tool radius",
+            ),
+            CompToolTooBig => f.write_str("tool radius not less than the arc radius it cuts inside"),
+            CompGouge => f.write_str(
+                "inside corner the compensated tool cannot reach without gouging",
+            ),
+            CompArcAfterG40 => f.write_str("the move after G40 must be straight, not an arc"),
+            CompQueueFull => f.write_str(
+                "too many commands between two compensated moves",
+            ),
+            CompPlane => f.write_str("cutter compensation only in G17 or G18 (L only in G18)"),
+            CompAlreadyOn => f.write_str("cutter compensation is already on (G40 first)"),
+            CompForbidden { letter: l, tenths } => {
+                f.write_str("cannot use ")?;
+                write_code(f, l, tenths)?;
+                f.write_str(" with cutter compensation on (G40 first)")
+            }
         }
     }
 }

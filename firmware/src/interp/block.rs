@@ -73,7 +73,7 @@ fn g_group(tenths: u16) -> Option<GGroup> {
         901 | 911 => ArcDistance,
         930 | 940 => FeedMode,
         200 | 210 | 700 | 710 => Units,
-        400 => Cutter,
+        400 | 410 | 411 | 420 | 421 => Cutter,
         430..=432 | 490 => ToolLength,
         540 | 550 | 560 | 570 | 580 | 590..=593 => Wcs,
         610 | 611 | 640 => Path,
@@ -154,7 +154,8 @@ const VALUE_LETTERS: u32 = bit(b'X')
     | bit(b'Q')
     | bit(b'R')
     | bit(b'S')
-    | bit(b'T');
+    | bit(b'T')
+    | bit(b'D');
 
 pub(crate) const fn bit(letter: u8) -> u32 {
     1u32 << (letter.wrapping_sub(b'A') % 26)

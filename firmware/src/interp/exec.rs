@@ -12,10 +12,11 @@
 //!   probes down along Z by [`G30_PROBE_TRAVEL`], an optional Z word being
 //!   the touch plate's thickness, which becomes work Z on contact;
 //! - G27 seeks the switches of the named (or all) axes to verify home;
-//! - G40, G61, G61.1 and G64 (with its P/Q tolerances) are accepted as
-//!   no-ops: they select the only modes burin has (no cutter compensation;
-//!   blending is the planner's junction deviation); tools and tool length
-//!   offsets are `tools`, canned cycles `cycles`;
+//! - G61, G61.1 and G64 (with its P/Q tolerances) are accepted as no-ops:
+//!   they select the only mode burin has (blending is the planner's
+//!   junction deviation); tools and tool length offsets are `tools`, canned
+//!   cycles `cycles`, cutter compensation (G40-G42.1) `cutter`;
+//! - M2/M30 also turn cutter compensation off (LinuxCNC);
 //! - M2/M30 stop spindle and coolant, and reset G1 G17 G90 G94 G54 and
 //!   suspend G92 (LinuxCNC), keeping units;
 //! - axis letters without a number (`G28 X Y`, `M18 Z`) are accepted only
@@ -160,6 +161,7 @@ pub(crate) fn execute(
     if let Some(r) = plain_move(&mut cx, st, tb, out) {
         return r;
     }
+    super::cutter::check_block(b, st)?;
     let col0 = b.first_col;
     let gcol = |g: GGroup| b.g_of(g).map_or(col0, |x| x.1);
 
@@ -257,6 +259,8 @@ pub(crate) fn execute(
         )?;
     }
 
+    super::cutter::cutter(&mut cx, st, tb, out)?;
+
     // Which command owns the axis words.
     let non_modal = b.g_of(GGroup::NonModal);
     let nm = non_modal.map(|x| x.0);
@@ -322,6 +326,7 @@ pub(crate) fn execute(
                 st.wcs = 0;
                 st.g92_active = false;
                 st.last_g5 = None;
+                st.comp = None;
                 if st.percent == 1 {
                     st.percent = 3;
                 }

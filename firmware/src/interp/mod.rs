@@ -16,6 +16,7 @@
 
 mod block;
 mod codes;
+mod cutter;
 pub mod cycles;
 mod exec;
 mod finite;
@@ -33,6 +34,7 @@ pub use state::{Motion, Offsets, State, WCS_COUNT};
 pub use tools::{ToolEntry, TOOLS};
 
 use crate::command::{Command, Plane, Pos};
+use crate::comp::Comp;
 use crate::gcode::{ErrorKind, GcodeError, Lexer, Name, ParamStore, Params, Token};
 use block::Block;
 use core::fmt::{self, Write};
@@ -46,6 +48,8 @@ pub struct Interpreter {
     state: State,
     offsets: Offsets,
     params: Params,
+    /// The cutter compensation stage the line's commands pass through.
+    comp: Comp,
 }
 
 impl Default for Interpreter {
@@ -106,6 +110,7 @@ impl Interpreter {
                 tools: [ToolEntry::EMPTY; TOOLS],
             },
             params: Params::new(),
+            comp: Comp::new(),
         }
     }
 
@@ -116,6 +121,68 @@ impl Interpreter {
         &mut self,
         line: &[u8],
         out: &mut dyn FnMut(Command),
+    ) -> Result<(), GcodeError> {
+        self.execute_line_at(line, 0, &mut |_, c| out(c))
+    }
+
+    /// [`execute_line`](Self::execute_line) for line `n`: what comes out
+    /// is tagged with the line it belongs to, which differs from `n` for
+    /// moves cutter compensation held back until this line showed where
+    /// they end. A path compensation cannot follow refuses the line.
+    pub fn execute_line_at(
+        &mut self,
+        line: &[u8],
+        n: u32,
+        out: &mut dyn FnMut(u32, Command),
+    ) -> Result<(), GcodeError> {
+        // Most lines meet compensation off with nothing held: they pass
+        // straight through, without the copy and the buffer.
+        // An idle stage is a new one, so only an engaged one is copied.
+        let mut pass: Option<Comp> = (!self.comp.idle()).then(|| self.comp.clone());
+        let idle = pass.is_none();
+        let mut held: heapless::Vec<(u32, Command), { LINE_COMMANDS + crate::comp::EXTRA_OUT }> =
+            heapless::Vec::new();
+        self.execute_line_then(line, &mut |cmds| {
+            if idle && !cmds.iter().any(|c| matches!(c, Command::CutterComp(_))) {
+                for c in cmds {
+                    out(n, c.clone());
+                }
+                return Ok(());
+            }
+            let p = pass.get_or_insert_with(Comp::new);
+            let mut full = false;
+            for c in cmds {
+                p.push(n, c.clone(), &mut |l, c| full |= held.push((l, c)).is_err())
+                    .map_err(|k| GcodeError::new(k, 0))?;
+            }
+            if full {
+                return Err(GcodeError::new(ErrorKind::TooManyCommands, 0));
+            }
+            Ok(())
+        })?;
+        if let Some(p) = pass {
+            self.comp = p;
+            for (l, c) in held {
+                out(l, c);
+            }
+        }
+        Ok(())
+    }
+
+    /// Commands one line may hand on at most, compensation's held ones
+    /// included: the room a caller keeps for a line.
+    pub fn max_line_output(&self) -> usize {
+        LINE_COMMANDS + self.comp.max_extra()
+    }
+
+    /// [`execute_line`](Self::execute_line) with the line's commands handed
+    /// over as a whole to `take`, which may still refuse the line (the
+    /// cutter compensation stage finds a path it cannot compensate): the
+    /// interpreter is then as it was before the line.
+    pub fn execute_line_then(
+        &mut self,
+        line: &[u8],
+        take: &mut dyn FnMut(&[Command]) -> Result<(), GcodeError>,
     ) -> Result<(), GcodeError> {
         let snapshot = self.state;
         let mut saved = Saved::default();
@@ -130,15 +197,10 @@ impl Interpreter {
                 Ok(())
             }
         });
-        match r {
-            Ok(()) => {
-                // By reference: moving the whole buffer into an iterator
-                // would copy all its slots (1.3 KB) on every line.
-                for c in buf.iter() {
-                    out(c.clone());
-                }
-                Ok(())
-            }
+        // By reference: moving the whole buffer would copy all its slots
+        // (1.3 KB) on every line.
+        match r.and_then(|()| take(&buf)) {
+            Ok(()) => Ok(()),
             Err(e) => {
                 self.state = snapshot;
                 saved.restore(&mut self.offsets);
@@ -347,6 +409,7 @@ impl Interpreter {
             g28_homes: s.g28_homes,
             ..State::new()
         };
+        self.comp.reset();
     }
 
     /// Work coordinate offset (active G54.. plus G92), machine mm: GRBL's WCO.
@@ -377,6 +440,11 @@ impl Interpreter {
             if s.incremental { 91 } else { 90 },
             if s.inverse_time { 93 } else { 94 },
         )?;
+        match s.comp {
+            Some(crate::command::CompSide::Left) => w.write_str("G41 ")?,
+            Some(crate::command::CompSide::Right) => w.write_str("G42 ")?,
+            None => {}
+        }
         w.write_str(match s.spindle {
             crate::command::SpindleDir::Cw => "M3",
             crate::command::SpindleDir::Ccw => "M4",

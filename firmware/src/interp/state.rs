@@ -133,6 +133,8 @@ pub struct State {
     /// `%` lines seen: 1 after the opening one; 2 after the closing one,
     /// when lines are skipped until the next `%` or a reset.
     pub percent: u8,
+    /// G41/G42 (G41.1/G42.1) in effect; `None`: G40.
+    pub comp: Option<crate::command::CompSide>,
 }
 
 impl Default for State {
@@ -175,6 +177,7 @@ impl State {
             offsets_changed: false,
             g28_homes: false,
             percent: 0,
+            comp: None,
         }
     }
 

@@ -54,7 +54,9 @@ impl<S: crate::seams::Storage> Device<S> {
         let cmds = &mut self.cmds;
         let mut probe = false;
         let mut store = persist::Pending::default();
-        self.interp.execute_line(text, &mut |c| {
+        // What comes out carries its own line: a move cutter compensation
+        // held back runs as the line that commanded it.
+        self.interp.execute_line_at(text, n, &mut |l, c| {
             // Operator text shows when the line is read, as GRBL's
             // `(MSG,…)` does: `[MSG:…]` (a frame in framed mode).
             if let Command::Message(t) = &c {
@@ -62,8 +64,9 @@ impl<S: crate::seams::Storage> Device<S> {
             }
             if !check && !store.take_command(&c) {
                 probe |= matches!(c, Command::Probe { .. });
-                // Room for a whole line was checked before taking it.
-                let _ = cmds.push_back((n, c));
+                // Room for a whole line (and what compensation held) was
+                // checked before taking it.
+                let _ = cmds.push_back((l, c));
             }
         })?;
         if let Some(t) = self.interp.take_tool_warning() {

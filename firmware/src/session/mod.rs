@@ -10,7 +10,9 @@
 //!
 //! * Text mode: a line is taken from the link only when the command queue
 //!   ([`CMD_SLOTS`]) has room for the most commands one line can produce
-//!   ([`LINE_COMMANDS`]), so interpreting never has to drop a command.
+//!   ([`LINE_COMMANDS`], plus what cutter compensation held back:
+//!   `Interpreter::max_line_output`), so interpreting never has to drop a
+//!   command.
 //!   Otherwise the link is left alone: its ring fills, then USB (or the
 //!   pty) pushes back on the sender. `ok` means what it means in GRBL: the
 //!   line was interpreted and its commands are queued.
@@ -67,6 +69,8 @@ use protocol::{DeviceInfo, DeviceMsg, HostMsg, LineText};
 
 /// Command queue between the interpreter and the executor.
 pub const CMD_SLOTS: usize = 2 * LINE_COMMANDS;
+// A line's own commands plus what cutter compensation held.
+const _: () = assert!(CMD_SLOTS >= LINE_COMMANDS + crate::comp::EXTRA_OUT);
 /// Framed job lines acknowledged but not yet interpreted (the credits).
 pub const LINE_SLOTS: usize = 8;
 
@@ -273,7 +277,7 @@ impl<S: Storage> Device<S> {
     }
 
     fn can_take(&self) -> bool {
-        !self.sync && self.cmds.capacity() - self.cmds.len() >= LINE_COMMANDS
+        !self.sync && self.cmds.capacity() - self.cmds.len() >= self.interp.max_line_output()
     }
 
     /// Alarms and the end of jogs and syncs.
@@ -346,7 +350,7 @@ impl<S: Storage> Device<S> {
                     self.refused(&cmd, line, e, m, &mut Out::new(&mut *tx, framed));
                 }
             }
-            if self.sync || self.cmds.capacity() - self.cmds.len() < LINE_COMMANDS {
+            if !self.can_take() {
                 return;
             }
             if self.flow.replaying() {
