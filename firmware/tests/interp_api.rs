@@ -14,9 +14,12 @@ fn run(it: &mut Interpreter, line: &str) -> Vec<Command> {
 fn size_is_bounded() {
     let n = core::mem::size_of::<Interpreter>();
     println!("size_of::<Interpreter>() = {n} bytes");
+    // 4136 B: the 64-tool table (1.3 KB, issue 30) and cutter
+    // compensation's queue (376 B, issue 33) since the 4 KiB bound; the
+    // image's RAM budget (`cargo xtask build`) is the board's real limit.
     assert!(
-        n < 4096,
-        "Interpreter grew to {n} bytes (F401 has 64 KiB RAM)"
+        n <= 4608,
+        "Interpreter grew to {n} bytes (the F401's statics budget is 44 KiB)"
     );
 }
 
@@ -124,7 +127,7 @@ fn grbl_codes() {
     };
     assert_eq!(grbl(&mut it, "G1 X1"), 22);
     assert_eq!(grbl(&mut it, "G0 G1 X1"), 21);
-    assert_eq!(grbl(&mut it, "G41"), 20);
+    assert_eq!(grbl(&mut it, "G33 X1 K1"), 20);
     assert_eq!(grbl(&mut it, "G0 X1 X2"), 25);
     assert_eq!(grbl(&mut it, "G0 I1 X1"), 36);
     assert_eq!(grbl(&mut it, "G2 X1 F1"), 35);

@@ -146,10 +146,8 @@ impl Comp {
             set_end(&mut cmd, &on, e);
             self.hold(
                 line,
-                Item::Straight {
-                    cmd: cmd.clone(),
-                    dir: narrow([cos(alpha), sin(alpha)]),
-                },
+                Item::straight(&cmd, narrow([cos(alpha), sin(alpha)]))
+                    .ok_or(ErrorKind::CompGouge)?,
             )?;
             self.first = false;
             self.finish(&cmd, p);
@@ -161,10 +159,7 @@ impl Comp {
             set_end(&mut cmd, &on, c);
             self.hold(
                 line,
-                Item::Straight {
-                    cmd: cmd.clone(),
-                    dir: [0.0, 0.0],
-                },
+                Item::straight(&cmd, [0.0, 0.0]).ok_or(ErrorKind::CompGouge)?,
             )?;
             self.finish(&cmd, p);
             return Ok(());
@@ -258,10 +253,8 @@ impl Comp {
         set_end(&mut cmd, &on, e);
         self.hold(
             line,
-            Item::Straight {
-                cmd: cmd.clone(),
-                dir: narrow([p[0] - op[0], p[1] - op[1]]),
-            },
+            Item::straight(&cmd, narrow([p[0] - op[0], p[1] - op[1]]))
+                .ok_or(ErrorKind::CompGouge)?,
         )?;
         self.finish(&cmd, p);
         Ok(())

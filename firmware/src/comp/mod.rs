@@ -53,14 +53,62 @@ struct Held {
 
 #[derive(Clone, Debug)]
 enum Item {
-    /// A G0/G1 (`Rapid`/`Line`) and the direction its end may move along
+    /// A G0 (`feed` none) or G1 and the direction its end may move along
     /// without reversing it (LinuxCNC's gouge check); zero: unchecked.
-    Straight { cmd: Command, dir: [f32; 2] },
+    Straight {
+        end: Pos,
+        feed: Option<Feed>,
+        dir: [f32; 2],
+    },
     /// A compensated arc and its sweep as programmed (radians, signed;
     /// zero: unchecked).
     Arc { arc: Arc, sweep: f32 },
-    /// A dwell, spindle or coolant command waiting its turn.
-    Other(Command),
+    /// A dwell, spindle or coolant command waiting its turn (kept small:
+    /// the queue lives in the interpreter, in RAM the F401 has little of).
+    Other(Waiting),
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Waiting {
+    Dwell(f32),
+    Spindle(crate::command::SpindleDir, f32),
+    Coolant { mist: bool, flood: bool },
+}
+
+impl Item {
+    /// A G0/G1 as held (other commands: none).
+    fn straight(cmd: &Command, dir: [f32; 2]) -> Option<Item> {
+        match *cmd {
+            Command::Rapid { end } => Some(Item::Straight {
+                end,
+                feed: None,
+                dir,
+            }),
+            Command::Line { end, feed } => Some(Item::Straight {
+                end,
+                feed: Some(feed),
+                dir,
+            }),
+            _ => None,
+        }
+    }
+
+    fn command(&self) -> Command {
+        match *self {
+            Item::Straight {
+                end, feed: None, ..
+            } => Command::Rapid { end },
+            Item::Straight {
+                end,
+                feed: Some(feed),
+                ..
+            } => Command::Line { end, feed },
+            Item::Arc { arc, .. } => Command::Arc(arc),
+            Item::Other(Waiting::Dwell(seconds)) => Command::Dwell { seconds },
+            Item::Other(Waiting::Spindle(dir, speed)) => Command::Spindle { dir, speed },
+            Item::Other(Waiting::Coolant { mist, flood }) => Command::Coolant { mist, flood },
+        }
+    }
 }
 
 /// The compensation stage's state.
@@ -165,10 +213,14 @@ impl Comp {
                     None => Ok(self.pass(line, Command::Arc(a), out)),
                 }
             }
-            Command::Dwell { .. } | Command::Spindle { .. } | Command::Coolant { .. }
-                if !self.queue.is_empty() =>
-            {
-                self.hold(line, Item::Other(cmd))
+            Command::Dwell { seconds } if !self.queue.is_empty() => {
+                self.hold(line, Item::Other(Waiting::Dwell(seconds)))
+            }
+            Command::Spindle { dir, speed } if !self.queue.is_empty() => {
+                self.hold(line, Item::Other(Waiting::Spindle(dir, speed)))
+            }
+            Command::Coolant { mist, flood } if !self.queue.is_empty() => {
+                self.hold(line, Item::Other(Waiting::Coolant { mist, flood }))
             }
             Command::ProgramEnd => {
                 // M2/M30: held moves run as they stand, compensation off.
@@ -230,12 +282,7 @@ impl Comp {
         let orient = self.on.map_or(0, |o| lathe_orientation(&o));
         let radius = self.on.map_or(0.0, |o| o.radius);
         for h in self.queue.iter() {
-            let cmd = match &h.item {
-                Item::Straight { cmd, .. } => cmd.clone(),
-                Item::Arc { arc, .. } => Command::Arc(*arc),
-                Item::Other(c) => c.clone(),
-            };
-            out(h.line, lathe_origin(cmd, orient, radius));
+            out(h.line, lathe_origin(h.item.command(), orient, radius));
         }
         self.queue.clear();
     }
@@ -283,10 +330,8 @@ impl Comp {
                         end[u] = tu;
                         end[v] = tv;
                         h.item = Item::Straight {
-                            cmd: Command::Line {
-                                end,
-                                feed: arc.feed,
-                            },
+                            end,
+                            feed: Some(arc.feed),
                             dir: [0.0; 2],
                         };
                         continue;
@@ -304,17 +349,15 @@ impl Comp {
                     arc.end[u] = tu;
                     arc.end[v] = tv;
                 }
-                Item::Straight { cmd, dir } => {
+                Item::Straight { end, dir, .. } => {
                     if let Some(s) = start {
                         let dot = dir[0] * (to[0] - s[0]) + dir[1] * (to[1] - s[1]);
                         if dot < 0.0 {
                             return Err(ErrorKind::CompGouge);
                         }
                     }
-                    if let Command::Rapid { end } | Command::Line { end, .. } = cmd {
-                        end[u] = tu;
-                        end[v] = tv;
-                    }
+                    end[u] = tu;
+                    end[v] = tv;
                 }
                 Item::Other(_) => {}
             }
