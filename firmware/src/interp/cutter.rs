@@ -124,7 +124,7 @@ pub(super) fn cutter(
         } else {
             super::tools::find(&tb.get().tools, n)
                 .map(|e| e.diameter)
-                .ok_or_else(|| cx.err(ErrorKind::ValueOutOfRange(b'D'), b'D'))?
+                .ok_or_else(|| cx.err(ErrorKind::ToolNotInTable, b'D'))?
         };
         (diameter / 2.0, 0)
     };
