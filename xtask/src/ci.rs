@@ -1,4 +1,4 @@
-//! `cargo xtask ci`: every check, in the order the README promises. CI runs
+//! `cargo xtask ci`: every check, in the order docs/testing.md lists. CI runs
 //! exactly this (`.ci/run`), so a green local run means a green CI run.
 
 use crate::util::{cargo, ensure_target, run, TARGET};
