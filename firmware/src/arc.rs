@@ -47,7 +47,7 @@ pub fn max_chord_angle(r: f32, tol: f32) -> f32 {
 /// slightly; the radius is blended linearly) arc.
 ///
 /// Points are the start plus the turned start radius minus itself
-/// ([`geom::offset`]), not the centre plus the radius: on a huge radius the
+/// (`geom::offset`), not the centre plus the radius: on a huge radius the
 /// centre is far away and coarse in f32, the displacement from the start
 /// is not.
 #[derive(Clone, Debug)]

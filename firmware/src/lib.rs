@@ -14,13 +14,18 @@
 #![deny(unsafe_code)]
 #![warn(missing_debug_implementations)]
 
-// In pipeline order; a module imports only from modules above it (the
-// hardware seams and the number and settings types first).
+// In pipeline order. From `executor` on, a module imports only from modules
+// above it. Above that line imports run both ways: `stepper` owns types the
+// earlier modules use (`StepConfig`, `Switches` in `seams`; the step-rate
+// ceiling in `settings`; the step-config cell in `realtime`; `planner`'s
+// intervals), `command` uses `interp::Cycle`, and `interp` -> `arc` ->
+// `planner`; so `seams`, `settings`, `command`, `interp`, `arc`, `planner`,
+// `realtime` and `stepper` form one import cycle. The order is the reading
+// order, not a layering the compiler checks.
 pub mod chip;
 pub mod num;
 pub mod seams;
 pub mod settings;
-pub mod usb_ids;
 
 pub mod command;
 pub mod comp;

@@ -27,9 +27,9 @@ pub trait StepPins {
     fn step_low(&mut self);
     /// Stepper drivers on/off.
     fn set_enabled(&mut self, on: bool);
-    /// The hardware ends each pulse by itself at a tick the driver gives
-    /// ([`StepPins::end_pulse_at`]), so a step costs one interrupt, not
-    /// two. The F411/F401 boards do (a timer compare triggers a DMA write
+    /// The hardware ends each pulse by itself, the width after the rise
+    /// ([`StepPins::set_pulse_width`], armed by [`StepPins::step_high`]), so
+    /// a step costs one interrupt, not two. The F411/F401 boards do (a timer compare triggers a DMA write
     /// of the step-off word to BSRR); QEMU's model has no DMA and lowers
     /// the pins in a second interrupt ([`StepPins::step_low`]).
     const ENDS_PULSES: bool = false;

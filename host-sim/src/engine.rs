@@ -7,7 +7,7 @@
 //! segment queue whenever the stepper took a segment. The step event and
 //! USB input take no virtual time. The parse/plan task costs the
 //! [`HostModel`](crate::config::HostModel) time per line and per block, and
-//! job lines arrive over its link (see [`host`]). There are no threads,
+//! job lines arrive over its link (see `engine/host.rs`). There are no threads,
 //! clocks or hash maps, so two runs of the same job are identical event for
 //! event.
 
@@ -23,7 +23,7 @@ pub use dma::PulseDma;
 use std::collections::VecDeque;
 
 use burin::command::Command;
-use burin::executor::{Machine, MachineError, Note, PathKind};
+use burin::executor::{Machine, MachineError, Note};
 use burin::planner::Speed;
 use burin::realtime::Realtime;
 use burin::stepper::driver::StepDriver;
@@ -32,7 +32,7 @@ use burin::AXES;
 use heapless::spsc::Queue;
 
 use crate::config::{MachineConfig, Masks};
-use crate::record::{AxisInfo, MoveKind, PathEvent, Recorder, RunError, RunInfo, Summary};
+use crate::record::{AxisInfo, PathEvent, Recorder, RunError, RunInfo, Summary};
 pub use job::run_job;
 pub use pins::{Edge, VirtualHw};
 pub use task::DeviceTask;
@@ -108,17 +108,6 @@ struct Stats {
     steps_per_mm: [f32; AXES],
     /// Simulated work: step interrupts entered and task passes run.
     work: u64,
-}
-
-fn kind(k: PathKind) -> MoveKind {
-    match k {
-        PathKind::Rapid => MoveKind::Rapid,
-        PathKind::Feed => MoveKind::Feed,
-        PathKind::Arc => MoveKind::Arc,
-        PathKind::Spline => MoveKind::Spline,
-        PathKind::Probe => MoveKind::Probe,
-        PathKind::Home => MoveKind::Home,
-    }
 }
 
 fn machine_error(line: u32, e: MachineError) -> RunError {
@@ -395,14 +384,14 @@ fn note(stats: &mut Stats, rec: &mut dyn Recorder, n: Note) {
             }
             stats.last_path = Some(end);
             stats.blocks += 1;
-            rec.commanded(line, kind(k), end);
+            rec.commanded(line, k, end);
             let (feed_mm_s, seconds) = match speed {
                 Speed::Feed(v) => (v, None),
                 Speed::Time(t) => (f32::INFINITY, Some(t)),
                 Speed::Rapid => (f32::INFINITY, None),
             };
             rec.path(&PathEvent::To {
-                kind: kind(k),
+                kind: k,
                 to_mm: end,
                 feed_mm_s,
                 seconds,

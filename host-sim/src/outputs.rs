@@ -11,7 +11,7 @@ use burin::AXES;
 
 use crate::config::MachineConfig;
 use crate::plot::SvgPlot;
-use crate::record::{MoveKind, PinEvent, Recorder, RunInfo, Summary, Tee};
+use crate::record::{PathKind, PinEvent, Recorder, RunInfo, Summary, Tee};
 use crate::report::JsonReport;
 use crate::trace::TraceCsv;
 use crate::vcd::Vcd;
@@ -49,7 +49,7 @@ impl Recorder for Named<'_> {
     fn step_fall(&mut self, tick: u64, mask: u8) {
         self.rec.step_fall(tick, mask);
     }
-    fn commanded(&mut self, line: u32, kind: MoveKind, to_mm: [f32; AXES]) {
+    fn commanded(&mut self, line: u32, kind: PathKind, to_mm: [f32; AXES]) {
         self.rec.commanded(line, kind, to_mm);
     }
     fn velocity(&mut self, tick: u64, mm_per_min: f32) {

@@ -19,7 +19,7 @@ mod svg;
 use std::io::{self, Write};
 
 use crate::feed::FeedMeter;
-use crate::record::{MoveKind, PinEvent, Recorder, RunInfo, Summary};
+use crate::record::{PathKind, PinEvent, Recorder, RunInfo, Summary};
 
 /// Point budget per path; past it the tolerance doubles.
 const PATH_CAP: usize = 40_000;
@@ -211,14 +211,14 @@ pub(crate) fn fold_min_max(s: &[(u64, f32)], buckets: usize) -> Vec<(u64, f32)> 
     out
 }
 
-pub(crate) fn kind_tag(k: MoveKind) -> u8 {
+pub(crate) fn kind_tag(k: PathKind) -> u8 {
     match k {
-        MoveKind::Rapid => 0,
-        MoveKind::Feed => 1,
-        MoveKind::Arc => 2,
-        MoveKind::Spline => 3,
-        MoveKind::Probe => 4,
-        MoveKind::Home => 5,
+        PathKind::Rapid => 0,
+        PathKind::Feed => 1,
+        PathKind::Arc => 2,
+        PathKind::Spline => 3,
+        PathKind::Probe => 4,
+        PathKind::Home => 5,
     }
 }
 
@@ -320,7 +320,7 @@ impl<W: Write> Recorder for SvgPlot<W> {
         }
     }
 
-    fn commanded(&mut self, _line: u32, kind: MoveKind, to_mm: [f32; burin::AXES]) {
+    fn commanded(&mut self, _line: u32, kind: PathKind, to_mm: [f32; burin::AXES]) {
         let p = [f64::from(to_mm[0]), f64::from(to_mm[1])];
         self.commanded.push(p, kind_tag(kind));
     }

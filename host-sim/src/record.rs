@@ -23,16 +23,9 @@ pub struct PinEvent {
     pub pos: [i64; AXES],
 }
 
-/// What kind of commanded move a path vertex ends.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum MoveKind {
-    Rapid,
-    Feed,
-    Arc,
-    Spline,
-    Probe,
-    Home,
-}
+/// What kind of commanded move a path vertex ends: the executor's own
+/// type, so the recorders and the core cannot drift apart.
+pub use burin::executor::PathKind;
 
 /// The commanded path with its requested speeds, for references that
 /// replan the job independently of the planner (bench-motion's time bound).
@@ -42,7 +35,7 @@ pub enum PathEvent {
     /// `to_mm`, at most at `feed_mm_s` (infinite for rapids), or taking
     /// `seconds` when the feed is given as a time (G93).
     To {
-        kind: MoveKind,
+        kind: PathKind,
         to_mm: [f32; AXES],
         feed_mm_s: f32,
         seconds: Option<f32>,
@@ -105,7 +98,7 @@ pub trait Recorder {
     /// the step driver raised; at least `RunInfo::pulse_ticks` after them).
     fn step_fall(&mut self, _tick: u64, _mask: u8) {}
     /// A commanded path vertex (arcs and splines arrive as their chords).
-    fn commanded(&mut self, _line: u32, _kind: MoveKind, _to_mm: [f32; AXES]) {}
+    fn commanded(&mut self, _line: u32, _kind: PathKind, _to_mm: [f32; AXES]) {}
     /// The same path as [`commanded`](Self::commanded), with speeds and stops.
     fn path(&mut self, _ev: &PathEvent) {}
     /// The executor committed to a move from `start` (machine mm), before
@@ -138,7 +131,7 @@ impl Recorder for Tee<'_> {
     fn step_fall(&mut self, tick: u64, mask: u8) {
         self.0.iter_mut().for_each(|r| r.step_fall(tick, mask));
     }
-    fn commanded(&mut self, line: u32, kind: MoveKind, to_mm: [f32; AXES]) {
+    fn commanded(&mut self, line: u32, kind: PathKind, to_mm: [f32; AXES]) {
         self.0
             .iter_mut()
             .for_each(|r| r.commanded(line, kind, to_mm));

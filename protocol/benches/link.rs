@@ -11,7 +11,7 @@ use protocol::frame::{self, MAX_WIRE};
 use protocol::{FrameDecoder, HostMsg, LineText};
 use std::hint::black_box;
 
-#[path = "../tests/common/mod.rs"]
+#[path = "../tests/wire/common/mod.rs"]
 mod common;
 
 fn line() -> HostMsg {

@@ -87,6 +87,7 @@ pub mod frame;
 pub mod msg;
 pub mod rt;
 pub mod session;
+pub mod usb_ids;
 
 #[cfg(feature = "std")]
 pub mod client;

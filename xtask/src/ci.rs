@@ -1,4 +1,4 @@
-//! `cargo xtask ci`: every check, in the order the README promises. CI runs
+//! `cargo xtask ci`: every check, in the order docs/testing.md lists. CI runs
 //! exactly this (`.ci/run`), so a green local run means a green CI run.
 
 use crate::util::{cargo, ensure_target, run, TARGET};
@@ -53,6 +53,16 @@ pub fn run_all() -> Result<i32> {
                 .args(["--", "-D", "warnings"]))
         },
     )?;
+    // Docs are part of the product: a broken intra-doc link fails here.
+    step("cargo doc (-D warnings)", || {
+        run(cargo()
+            .args(["doc", "--workspace", "--no-deps"])
+            .env("RUSTDOCFLAGS", "-D warnings"))
+    })?;
+    step(
+        "minimum Rust version: no package used needs newer (cargo metadata)",
+        crate::msrv::check,
+    )?;
     // The corpus tests run in their own step below, visibly.
     step("host tests", || {
         run(cargo().args(["test", "--workspace", "--", "--skip", "corpus_"]))
@@ -79,6 +89,11 @@ pub fn run_all() -> Result<i32> {
             0 => Ok(()),
             code => anyhow::bail!("qemu test exited {code}"),
         },
+    )?;
+    // The on-target goals (issue 28): red when one is missed, naming it.
+    step(
+        "on-target goals under QEMU: cargo xtask bench-target",
+        crate::bench_target::ci_step,
     )?;
     step(
         "third-party senders on sim --pty: cargo xtask senders",
@@ -112,15 +127,18 @@ fn corpus() -> Result<()> {
         return Ok(());
     }
     // `--workspace`, as in the host-test step: the same features, so the
-    // test binaries built there are reused instead of rebuilt.
+    // test binaries built there are reused instead of rebuilt. The suites
+    // holding them: firmware/tests/gcode (conformance.rs) and
+    // host-sim/tests/sim (corpus.rs).
     run(cargo().args([
         "test",
         "--workspace",
         "--test",
-        "corpus_conformance",
+        "gcode",
         "--test",
-        "motion_corpus",
+        "sim",
         "--",
+        "corpus_",
         "--nocapture",
     ]))
 }

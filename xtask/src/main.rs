@@ -8,6 +8,7 @@ mod flash;
 mod fuzz;
 mod fuzz_seeds;
 mod image;
+mod msrv;
 mod qemu;
 mod rs274;
 mod senders;

@@ -159,7 +159,7 @@ fn expect(
     }
 }
 
-/// The job every path must agree on (`host-sim/tests/three_paths.rs` runs
+/// The job every path must agree on (`host-sim/tests/device/three_paths.rs` runs
 /// it offline and over the pty): lines, arcs in two planes, a dwell,
 /// tool/spindle/coolant words on one line and an `M2` mid-file.
 const JOB: &str = include_str!("../../host-sim/jobs/agree.gcode");

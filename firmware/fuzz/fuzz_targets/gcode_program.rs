@@ -1,5 +1,5 @@
 //! Thin wrapper: the checks live in `host_sim::fuzz::gcode_program` so the stable
-//! regression test (`host-sim/tests/fuzz_regressions.rs`) runs them too.
+//! regression test (`host-sim/tests/device/fuzz_regressions.rs`) runs them too.
 #![no_main]
 
 libfuzzer_sys::fuzz_target!(|data: &[u8]| host_sim::fuzz::gcode_program(data));

@@ -6,9 +6,9 @@
 //!    step interrupt runs: hard-limit trip / reset in the `RT` atomics, and
 //!    the stepper stops at its next event (`Realtime::hard_limit`,
 //!    `halt_stepper`). Above the step timer because acting late is the one
-//!    thing these must not do; each runs a few dozen instructions, once per
-//!    switch change (the line is masked until the contact settles), so the
-//!    step timing pays nothing in normal running. The step interrupt's own
+//!    thing these must not do; each runs about 250-300 instructions, once
+//!    per switch change (the line is masked until the contact settles), so
+//!    the step timing pays nothing in normal running. The step interrupt's own
 //!    IDR read at every event remains the guarantee that a closed limit
 //!    stops pulses within one step event;
 //! 3. `step` (TIM5): the core's step driver (`burin::stepper::driver`) on
@@ -32,9 +32,14 @@
 //!
 //! `idle` feeds the watchdog and sleeps. It runs only when every task is
 //! done, so a task that hogs the CPU starves the watchdog and the chip resets.
-//! No resource is shared between priorities: every task owns its state and
-//! the tasks meet only in lock-free spsc rings and the `RT`/`FLAGS` atomics,
-//! so nothing a higher task needs is ever behind a lower task's lock.
+//! No RTIC resource is shared between priorities: every task owns its state
+//! and the tasks meet only in lock-free spsc rings and atomic statics, so
+//! nothing a higher task needs is ever behind a lower task's lock. Those
+//! statics: `RT` and `FLAGS` here; `EDGES`, `INVERT`, `PINS` and `NOW_MS`
+//! (inputs.rs: the input interrupts, the heartbeat and the parse task);
+//! `PORT_OPENED` and `PORT_CLOSED` (usb.rs: USB interrupt to parse task);
+//! `OFF_WORD` (fault.rs: the parse task's `$4` for the fault handler) and
+//! `STEP_OFF` (pulse_end.rs: the step-off word DMA2 copies).
 #![cfg_attr(target_os = "none", no_std, no_main)]
 #![deny(unsafe_op_in_unsafe_fn)]
 
@@ -136,13 +141,13 @@ mod app {
     use burin::session::{Device, Identity};
     use burin::settings::Settings;
     use burin::stepper::{Segment, Stepper};
-    #[cfg(not(feature = "board-qemu"))]
-    use burin::usb_ids::{serial_from_uid, USB_SERIAL_LEN};
     use core::mem::MaybeUninit;
     #[cfg(not(feature = "board-qemu"))]
     use core::sync::atomic::Ordering;
     use cortex_m::peripheral::syst::SystClkSource;
     use heapless::spsc::{Consumer, Producer, Queue};
+    #[cfg(not(feature = "board-qemu"))]
+    use protocol::usb_ids::{serial_from_uid, USB_SERIAL_LEN};
     use rtic_sync::channel::{Receiver, Sender};
     #[cfg(not(feature = "board-qemu"))]
     use stm32f4xx_hal::otg_fs::{UsbBus, UsbBusType, USB};

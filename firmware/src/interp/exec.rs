@@ -29,8 +29,8 @@
 //!   the tool is (LinuxCNC); an explicit G2/G3 with neither is an error;
 //! - G80 may share a block with another motion code, which wins (LinuxCNC);
 //! - G8 (lathe radius mode) is a no-op: it is the only mode; G7 is refused;
-//! - M42 P<pin> S<0-255> sets an aux output at once; M62/M63 switch one
-//!   with motion, M64/M65 at once; M106 [P<fan>] [S<0-255>] / M107 drive
+//! - `M42 P<pin> S<0-255>` sets an aux output at once; M62/M63 switch one
+//!   with motion, M64/M65 at once; `M106 [P<fan>] [S<0-255>]` / M107 drive
 //!   aux output P (default 0) with motion;
 //! - the centre-format radius check is LinuxCNC 2.9's as measured (issue
 //!   14): error when the radii differ by more than 2.83 mm, or by more than

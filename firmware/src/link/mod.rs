@@ -23,7 +23,9 @@
 //! On a soft reset the task must call [`LineAssembler::flush_reset`] right
 //! after taking the flag: it drops the input that arrived before the reset.
 //!
-//! [`Link`] bundles both halves with a plain ring for host-sim and tests.
+//! [`Link`] bundles both halves with a plain ring for the tests. Both shells
+//! use the halves themselves: the interrupt (or host-sim's `receive`) feeds
+//! the splitter, the controller's task polls the assembler.
 
 mod assembler;
 mod backlog;
@@ -122,7 +124,7 @@ impl<const N: usize> TokenSource for Deque<RxToken, N> {
     }
 }
 
-/// Both halves and a ring in one value, for single-threaded users (host-sim,
+/// Both halves and a ring in one value, for single-threaded users (the
 /// tests). `feed` plays the interrupt, `poll` the task.
 #[derive(Debug)]
 pub struct Link {

@@ -70,8 +70,8 @@ pub fn sin_cos(x: f32) -> (f32, f32) {
 }
 
 /// (sin x, cos x), `x` in degrees (RS274NGC's SIN, COS and TAN). The
-/// reduction by 90° is exact, so SIN[180] is 0 and COS[90] is 0, not a few
-/// ulp off; TAN[90] is then a division by zero, which the expression
+/// reduction by 90° is exact, so `SIN[180]` is 0 and `COS[90]` is 0, not a
+/// few ulp off; `TAN[90]` is then a division by zero, which the expression
 /// evaluator reports as an error.
 pub fn sin_cos_deg(x: f32) -> (f32, f32) {
     if !x.is_finite() {

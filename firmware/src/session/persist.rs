@@ -32,6 +32,7 @@ use crate::link::FramedPort;
 use crate::persist::Report;
 use crate::persist::{Loaded, Persist};
 use crate::seams::Storage;
+use crate::settings::table::SettingError;
 use core::fmt::Write;
 use heapless::Deque;
 
@@ -70,6 +71,13 @@ impl Pending {
 pub(super) fn tell(report: &Report, o: &mut Out<'_, impl Tx>) {
     if !report.is_clean() {
         let _ = write!(o, "[MSG:{report}]\r\n");
+    }
+}
+
+/// A setting M501 or `$RST=$` could not apply: it keeps its old value.
+fn not_applied(r: Result<(), (u16, SettingError)>, o: &mut Out<'_, impl Tx>) {
+    if let Err((n, e)) = r {
+        let _ = write!(o, "[MSG:${n} not applied: error {}]\r\n", e.code().code());
     }
 }
 
@@ -157,7 +165,7 @@ impl<S: Storage> Device<S> {
         }
         if p.load {
             let loaded = self.persist.load();
-            m.replace_settings(&loaded.settings);
+            not_applied(m.replace_settings(&loaded.settings), o);
             self.interp.set_offsets(&loaded.offsets);
             tell(&loaded.report, o);
         }
@@ -186,7 +194,7 @@ impl<S: Storage> Device<S> {
         }
         if matches!(what, Restore::Settings | Restore::All) {
             let d = *self.persist.defaults();
-            m.replace_settings(&d);
+            not_applied(m.replace_settings(&d), o);
             self.save_settings(m, o);
         }
         if matches!(what, Restore::Offsets | Restore::All) {

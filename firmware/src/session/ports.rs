@@ -1,5 +1,7 @@
 //! The two seams of the device session: the link decoder and the motion
-//! core, as traits so the RTIC app and host-sim plug in their own halves.
+//! core. Each is implemented once, in `controller.rs`, which both shells
+//! drive; as traits they name exactly what the session may ask of the
+//! rest, and `session` needs none of the controller's types.
 
 use crate::command::{Command, Pos};
 use crate::executor::{self, MachineError};
@@ -62,16 +64,29 @@ pub trait MotionPort {
     fn set_setting(&mut self, n: u16, value: f32) -> Result<(), SettingError>;
     /// Replace every setting (M501, `$RST=$`; idle only): one
     /// [`MotionPort::set_setting`] per value that differs, so each is
-    /// validated as `$n=` would validate it.
-    fn replace_settings(&mut self, s: &Settings) {
-        for n in crate::settings::table::numbers() {
-            let (Some(new), old) = (s.get(n), self.settings().get(n)) else {
-                continue;
-            };
-            if old.map(f32::to_bits) != Some(new.to_bits()) {
-                let _ = self.set_setting(n, new);
+    /// validated as `$n=` would validate it. Two passes: a value checked
+    /// against one not yet replaced (`$0` against the old `$201`) gets a
+    /// second try. `Err`: the first setting still refused after both, which
+    /// keeps its old value; the caller tells the user.
+    fn replace_settings(&mut self, s: &Settings) -> Result<(), (u16, SettingError)> {
+        let mut refused = None;
+        for _pass in 0..2 {
+            refused = None;
+            for n in crate::settings::table::numbers() {
+                let (Some(new), old) = (s.get(n), self.settings().get(n)) else {
+                    continue;
+                };
+                if old.map(f32::to_bits) != Some(new.to_bits()) {
+                    if let Err(e) = self.set_setting(n, new) {
+                        refused = refused.or(Some((n, e)));
+                    }
+                }
+            }
+            if refused.is_none() {
+                break;
             }
         }
+        refused.map_or(Ok(()), Err)
     }
     /// Active input pins, `protocol::msg::pins` bits.
     fn pins(&self) -> u16 {

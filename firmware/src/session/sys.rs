@@ -16,6 +16,9 @@ use protocol::{Code, DeviceMsg};
 pub const RT_REPLY_ROOM: usize = 256;
 
 /// `ok` / `error:N` in text mode; nothing / `DeviceMsg::Error` in framed.
+/// The error is already the number the wire carries: by here the typed
+/// errors (the interpreter's, `SettingError`, the link's `Code`) have met
+/// in the one `u16` space `protocol::codes` describes.
 pub(super) fn reply(r: Result<(), u16>, seq: Option<u32>, o: &mut Out<'_, impl Tx>) {
     match (r, o.framed()) {
         (Ok(()), false) => {

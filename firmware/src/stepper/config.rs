@@ -37,7 +37,7 @@ pub struct StepConfig {
     /// `$207`: from driver enable to the first step edge.
     pub enable_ticks: u32,
     /// How close a target may be for the step interrupt to wait for it
-    /// rather than arm the compare: [`driver::SPIN_TICKS`] at 96 MHz,
+    /// rather than arm the compare: [`super::driver::SPIN_TICKS`] at 96 MHz,
     /// scaled to the timer's clock (0 below 12 MHz, where the compare
     /// write's latency is a fraction of a tick). A slow counter (a fuzzing
     /// clock of 48 kHz) spun 8 whole ticks per event, 167 µs each.

@@ -40,7 +40,7 @@
 use burin::settings::Settings;
 use burin::AXES;
 
-use crate::record::{MoveKind, PathEvent};
+use crate::record::{PathEvent, PathKind};
 
 /// One straight piece of the path.
 #[derive(Clone, Copy, Debug)]
@@ -58,7 +58,7 @@ struct Piece {
     /// Dwell time just before this piece, s.
     dwell_before: f64,
     end: [f64; AXES],
-    kind: MoveKind,
+    kind: PathKind,
 }
 
 /// One piece of the bound's profile, for locating where a run loses time
@@ -67,7 +67,7 @@ struct Piece {
 pub struct PieceProfile {
     pub end_mm: [f64; AXES],
     pub unit: [f64; AXES],
-    pub kind: MoveKind,
+    pub kind: PathKind,
     pub len: f64,
     /// Speeds at the piece's start and end, mm/s.
     pub v0: f64,
@@ -309,7 +309,7 @@ mod tests {
 
     fn to(x: f32, y: f32, f: f32) -> PathEvent {
         PathEvent::To {
-            kind: MoveKind::Feed,
+            kind: PathKind::Feed,
             to_mm: [x, y, 0.0, 0.0],
             feed_mm_s: f,
             seconds: None,

@@ -114,7 +114,7 @@ pub fn check(prof: &[PieceProfile], hit_s: &[Option<f64>], step_mm: [f64; AXES])
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::record::MoveKind;
+    use crate::record::PathKind;
 
     /// Chords of a circle of radius `r` run at `v`: each vertex reads
     /// `v²/r` on the axis its normal points along.
@@ -134,7 +134,7 @@ mod tests {
             prof.push(PieceProfile {
                 end_mm: q,
                 unit: d.map(|x| x / len),
-                kind: MoveKind::Arc,
+                kind: PathKind::Arc,
                 len,
                 v0: v,
                 v1: v,
@@ -185,7 +185,7 @@ mod tests {
                 prof.push(PieceProfile {
                     end_mm: q,
                     unit: d.map(|x| x / len),
-                    kind: MoveKind::Feed,
+                    kind: PathKind::Feed,
                     len,
                     v0: 8.0,
                     v1: 8.0,

@@ -14,7 +14,7 @@ use std::collections::BTreeMap;
 use burin::AXES;
 
 use super::bound::{Bound, PieceProfile};
-use crate::record::{MoveKind, PathEvent, PinEvent, Recorder, RunInfo};
+use crate::record::{PathEvent, PathKind, PinEvent, Recorder, RunInfo};
 
 /// How many vertices ahead of the last one hit a step may match.
 const LOOK: usize = 8;
@@ -28,7 +28,7 @@ pub struct LineLoss {
     pub bound_s: f64,
     /// Pieces (chords) of the line.
     pub pieces: u32,
-    pub kind: MoveKind,
+    pub kind: PathKind,
 }
 
 /// A [`Recorder`] that locates the losses (see the module doc).
@@ -122,7 +122,7 @@ impl Recorder for Locator {
     fn start(&mut self, info: &RunInfo) {
         self.tick_hz = f64::from(info.tick_hz);
     }
-    fn commanded(&mut self, line: u32, _kind: MoveKind, _to_mm: [f32; AXES]) {
+    fn commanded(&mut self, line: u32, _kind: PathKind, _to_mm: [f32; AXES]) {
         self.line = line;
     }
     fn path(&mut self, ev: &PathEvent) {

@@ -13,7 +13,7 @@ pub mod replay;
 use burin::AXES;
 
 use crate::config::MachineConfig;
-use crate::record::{MoveKind, PathEvent, PinEvent, Recorder, RunInfo, Summary};
+use crate::record::{PathEvent, PathKind, PinEvent, Recorder, RunInfo, Summary};
 use bound::Bound;
 use limits::{LimitMeter, TraceLimits};
 use losses::{LineLoss, Locator};
@@ -60,7 +60,7 @@ impl Recorder for Both {
         self.meter.step_event(ev);
         self.bound.step_event(ev);
     }
-    fn commanded(&mut self, line: u32, kind: MoveKind, to_mm: [f32; AXES]) {
+    fn commanded(&mut self, line: u32, kind: PathKind, to_mm: [f32; AXES]) {
         self.bound.commanded(line, kind, to_mm);
     }
     fn path(&mut self, ev: &PathEvent) {

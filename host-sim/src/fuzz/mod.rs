@@ -1,7 +1,7 @@
 //! Invariant checks for the coverage-guided fuzz targets (`firmware/fuzz/`,
 //! `cargo xtask fuzz`). Each target is one `pub fn NAME(data: &[u8])` that
 //! panics when an invariant breaks, so the libFuzzer targets are thin
-//! wrappers and the stable test `host-sim/tests/fuzz_regressions.rs` replays
+//! wrappers and the stable test `host-sim/tests/device/fuzz_regressions.rs` replays
 //! every saved failing input (`firmware/fuzz/regressions/<target>/*`) with
 //! no fuzzer.
 //!

@@ -7,7 +7,7 @@ use burin::settings::Settings;
 use burin::AXES;
 use host_sim::config::{LimitSwitch, MachineConfig, ProbeSurface};
 use host_sim::engine::{Input, Sim};
-use host_sim::record::{MoveKind, PinEvent, Recorder, RunInfo, Summary};
+use host_sim::record::{PathKind, PinEvent, Recorder, RunInfo, Summary};
 
 pub const TICK_HZ: u32 = 96_000_000;
 
@@ -80,7 +80,7 @@ pub fn config_with_switches() -> MachineConfig {
 pub struct Collect {
     pub info: Option<RunInfo>,
     pub events: Vec<PinEvent>,
-    pub path: Vec<(u32, MoveKind, [f32; AXES])>,
+    pub path: Vec<(u32, PathKind, [f32; AXES])>,
     pub velocity: Vec<(u64, f32)>,
     pub summary: Option<Summary>,
 }
@@ -92,7 +92,7 @@ impl Recorder for Collect {
     fn step_event(&mut self, ev: &PinEvent) {
         self.events.push(*ev);
     }
-    fn commanded(&mut self, line: u32, kind: MoveKind, to: [f32; AXES]) {
+    fn commanded(&mut self, line: u32, kind: PathKind, to: [f32; AXES]) {
         self.path.push((line, kind, to));
     }
     fn velocity(&mut self, tick: u64, v: f32) {
@@ -311,7 +311,7 @@ pub fn check_pin_timing(info: &RunInfo, events: &[PinEvent]) {
 pub fn check_path(
     info: &RunInfo,
     start: [f32; AXES],
-    path: &[(u32, MoveKind, [f32; AXES])],
+    path: &[(u32, PathKind, [f32; AXES])],
     events: &[PinEvent],
     extra_mm: f64,
 ) -> (f64, Vec<u64>) {
@@ -343,7 +343,7 @@ pub fn check_path(
             return false;
         }
         let (a, b) = (&path[k - 1], &path[k]);
-        let curve = |m: MoveKind| matches!(m, MoveKind::Arc | MoveKind::Spline);
+        let curve = |m: PathKind| matches!(m, PathKind::Arc | PathKind::Spline);
         !(curve(a.1) && curve(b.1) && a.0 == b.0)
     };
     let dist = |p: &[f64; AXES], a: &[f64; AXES], b: &[f64; AXES]| {

@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 
 /// The first tty whose USB device has burin's VID/PID.
 pub fn find_board() -> Result<String> {
-    let want = (burin::usb_ids::USB_VID, burin::usb_ids::USB_PID);
+    let want = (protocol::usb_ids::USB_VID, protocol::usb_ids::USB_PID);
     let mut found = Vec::new();
     for e in std::fs::read_dir("/sys/class/tty").context("listing /sys/class/tty")? {
         let e = e?;

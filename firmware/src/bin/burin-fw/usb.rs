@@ -3,9 +3,9 @@
 //! into the token ring (realtime bytes become flags at once); replies come
 //! from the TX byte ring and are fed to the port whenever it can take them.
 use burin::link::{RtFlags, RxBacklog, RxSplitter, RxToken};
-use burin::usb_ids::{USB_MANUFACTURER, USB_PID, USB_PRODUCT, USB_VID};
 use core::sync::atomic::{AtomicBool, Ordering};
 use heapless::spsc::{Consumer, Producer};
+use protocol::usb_ids::{USB_MANUFACTURER, USB_PID, USB_PRODUCT, USB_VID};
 use stm32f4xx_hal::otg_fs::UsbBusType;
 use usb_device::{bus::UsbBusAllocator, prelude::*};
 use usbd_serial::SerialPort;
