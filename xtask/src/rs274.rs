@@ -30,6 +30,9 @@ mod canon;
 
 use canon::{Canon, TOL};
 
+/// Agreement the cutter compensation files (`rs274/comp/`) need, mm.
+const COMP_TOL: f64 = 0.001;
+
 /// Files allowed to differ or to be refused by burin only:
 /// `path suffix<TAB>burin-rejects|differs<TAB>reason` per line.
 const KNOWN: &str = "host-sim/tests/data/rs274/known.tsv";
@@ -286,11 +289,23 @@ pub fn run(install: bool) -> Result<()> {
                 let probe_cut = src.to_ascii_uppercase().contains("G38");
                 let v = canon::compare(&theirs, &ours, probe_cut);
                 match (v.diff, listed_as("differs", &mut used)) {
+                    // Cutter compensation's own files (issue 33) must agree
+                    // within 0.001 mm on every end point and arc centre.
+                    (None, _) if short.contains("rs274/comp/") && v.worst > COMP_TOL => {
+                        println!(
+                            "DISAGREE  {short}: worst difference {:.4} mm, over {COMP_TOL} mm",
+                            v.worst
+                        );
+                        bad.push(short.clone());
+                    }
                     (None, _) => {
                         agree += 1;
                         moves += v.moves;
                         worst = worst.max(v.worst);
-                        println!("agree     {short}: {} moves", v.moves);
+                        println!(
+                            "agree     {short}: {} moves (worst {:.4} mm)",
+                            v.moves, v.worst
+                        );
                     }
                     (Some(d), Some(why)) => {
                         listed += 1;
