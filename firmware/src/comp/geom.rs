@@ -187,8 +187,8 @@ impl Comp {
         // and to that side (an inside corner) rather than looping round.
         let h_shape = beta > PI - SMALL
             && matches!(self.front(), Some(Item::Arc { arc, .. })
-                if !inside(on.side, turn(arc)) && self.queue.first().is_some());
-        let concave = beta < -SMALL || beta > PI + SMALL || h_shape;
+                if !inside(on.side, turn(arc)) && !self.queue.is_empty());
+        let concave = !(-SMALL..=PI + SMALL).contains(&beta) || h_shape;
         if !concave && beta > SMALL {
             // Outside corner: round it on an arc about the programmed
             // corner (a rapid has no arc: a straight traverse instead).
@@ -282,7 +282,7 @@ impl Comp {
             return self.arc_entry(on, line, a, out);
         }
         let op = self.prog;
-        let theta = angle(op, c) + side_turn(on.side) * -1.0;
+        let theta = angle(op, c) - side_turn(on.side);
         let mut delta = angle(op, centre);
         let alpha = if tn > 0 {
             delta - FRAC_PI_2
@@ -314,7 +314,7 @@ impl Comp {
             arc: cmd,
             sweep: sweep(op, centre, tn, p),
         };
-        let concave = beta < -SMALL || beta > PI + SMALL || ((beta - PI).abs() < SMALL && !ins);
+        let concave = !(-SMALL..=PI + SMALL).contains(&beta) || ((beta - PI).abs() < SMALL && !ins);
         if concave {
             let mid = match self.front() {
                 Some(Item::Arc { arc: prev, .. }) => {

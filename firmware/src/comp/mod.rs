@@ -201,7 +201,7 @@ impl Comp {
                 self.arc_not_allowed = false;
                 match self.active() {
                     Some(on) => self.straight(on, line, cmd, out),
-                    None => Ok(self.pass(line, cmd, out)),
+                    None => self.pass(line, cmd, out),
                 }
             }
             Command::Arc(a) => {
@@ -210,7 +210,7 @@ impl Comp {
                 }
                 match self.active() {
                     Some(on) => self.arc(on, line, a, out),
-                    None => Ok(self.pass(line, Command::Arc(a), out)),
+                    None => self.pass(line, Command::Arc(a), out),
                 }
             }
             Command::Dwell { seconds } if !self.queue.is_empty() => {
@@ -228,11 +228,11 @@ impl Comp {
                 self.on = None;
                 self.first = true;
                 self.arc_not_allowed = false;
-                Ok(self.pass(line, cmd, out))
+                self.pass(line, cmd, out)
             }
             other => {
                 self.dequeue(out);
-                Ok(self.pass(line, other, out))
+                self.pass(line, other, out)
             }
         }
     }
@@ -243,11 +243,17 @@ impl Comp {
     }
 
     /// Hands a command on unchanged, following the tool.
-    fn pass(&mut self, line: u32, cmd: Command, out: &mut dyn FnMut(u32, Command)) {
+    fn pass(
+        &mut self,
+        line: u32,
+        cmd: Command,
+        out: &mut dyn FnMut(u32, Command),
+    ) -> Result<(), ErrorKind> {
         if let Some(end) = cmd.end() {
             self.tool = *end;
         }
         out(line, cmd);
+        Ok(())
     }
 
     fn hold(&mut self, line: u32, item: Item) -> Result<(), ErrorKind> {

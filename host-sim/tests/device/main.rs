@@ -10,6 +10,7 @@ mod common;
 #[path = "../rig/mod.rs"]
 mod rig;
 
+mod cutter_comp;
 mod e2e;
 mod fuzz_regressions;
 mod late_error;
