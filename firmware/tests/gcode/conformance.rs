@@ -46,6 +46,11 @@ const KNOWN_FAULTS: &[(&str, u16, &str)] = &[
         "`G43 H1` with an empty tool table: LinuxCNC refuses an unknown tool too (issue 30)",
     ),
     (
+        "gcode-rs/program_2.gcode",
+        321,
+        "its profile lines are commented out, so `N90 G2 X15 Y62 I10 J0` ends 105 mm from a centre it starts 10 mm from (LinuxCNC refuses the radius too); with G41 supported (issue 33) the file now reaches that line",
+    ),
+    (
         "linuxcnc-tp/rgh.ngc",
         330,
         "`G43 H15` with an empty tool table: LinuxCNC refuses an unknown tool too (issue 30)",
