@@ -210,6 +210,13 @@ impl<S: Storage> Device<S> {
         self.cmds.is_empty() && self.slots.is_empty() && !self.sync && !self.flow.replaying()
     }
 
+    /// A line sent now runs as it is: no O-word block is being captured
+    /// or refused, and no streamed `if` skips it (a `$` command there is
+    /// part of the block, not run at once).
+    pub fn lines_run_directly(&self) -> bool {
+        self.flow.runs_directly()
+    }
+
     fn info(&self, m: &impl MotionPort) -> DeviceInfo {
         let mut s = protocol::ShortText::new();
         let _ = s.push_str(crate::VERSION);

@@ -84,10 +84,14 @@ impl Harness<'_, '_> {
     /// and leaves nothing in the line buffer, so a `$I` right behind it is
     /// answered. Only while the session takes lines at once (nothing received or
     /// queued ahead of the `$I`): behind a full queue in a hold, `$I`
-    /// waits its turn, as in GRBL.
+    /// waits its turn, as in GRBL; inside an O-word block being captured
+    /// or skipped it belongs to the block (issue 30).
     pub(super) fn utf8_realtime(&mut self, r: u8) {
-        let text =
-            self.text_mode() && self.dev.rx_pending() == 0 && self.dev.controller.session.drained();
+        let session = &self.dev.controller.session;
+        let text = self.text_mode()
+            && self.dev.rx_pending() == 0
+            && session.drained()
+            && session.lines_run_directly();
         if self.send(&[0xC2, r]) != 2 || !CHECK_UTF8_REALTIME || !text {
             return;
         }
