@@ -373,6 +373,19 @@ impl Interpreter {
         self.offsets = *o;
     }
 
+    /// [`new`](Self::new) with stored offsets: one struct literal, so a
+    /// caller's field can be built in place (the boot stack).
+    #[inline(always)]
+    pub fn with_offsets(o: Option<&Offsets>) -> Self {
+        match o {
+            Some(o) => Interpreter {
+                offsets: *o,
+                ..Self::new()
+            },
+            None => Self::new(),
+        }
+    }
+
     /// True once after G10 L2/L20, G28.1 or G30.1: the lines GRBL saves at
     /// once. Offsets changed through their parameters (`#5221=…`) wait
     /// for M500, like any other parameter.

@@ -91,12 +91,10 @@ impl<S: Storage> Device<S> {
     /// the interpreter, its report follows the first banner.
     #[inline(always)]
     pub fn with_storage(ident: Identity, persist: Persist<S>, boot: Option<&Loaded>) -> Self {
-        let mut interp = Interpreter::new();
-        if let Some(b) = boot {
-            interp.set_offsets(&b.offsets);
-        }
+        // The interpreter (4 KB) is built in its field, not beside it on
+        // the boot stack and moved in (the F401's stack headroom, issue 33).
         Device {
-            interp,
+            interp: Interpreter::with_offsets(boot.map(|b| &b.offsets)),
             flow: crate::flow::Flow::new(),
             replay_framed: false,
             port: FramedPort::new(),
