@@ -19,9 +19,9 @@ use crate::settings::Settings;
 /// hard limits on, the whole path: interrupt entry and exit, the TIM5
 /// handler, the masked TIM1 pulse-end arming, the switch read. From
 /// `cargo xtask bench-target` (`step_path_cycles_1axis_hard_limits_f401`,
-/// 303, modelled per executed instruction with every flash line cold),
+/// 305, modelled per executed instruction with every flash line cold),
 /// rounded up to the next 10. The slower board's figure holds for both:
-/// the library does not know its chip (the F411 at 96 MHz costs 315
+/// the library does not know its chip (the F411 at 96 MHz costs 319
 /// cycles, 3.3 µs, the F401 3.6 µs). bench-target fails when the step
 /// path outgrows it.
 pub const STEP_PATH_CYCLES: f32 = 310.0;

@@ -364,7 +364,7 @@ impl Stepper {
     /// `#[cold]` (and `attend`, `check_switches`, the driver's
     /// `poll_cold`): the compiler then lays the common step out as one
     /// straight run of flash lines, each line a cold one costs 3 wait
-    /// states (bench-target with hard limits: 322 -> 315 cycles).
+    /// states (bench-target with hard limits: 322 -> 315 cycles when made).
     #[inline(never)]
     #[cold]
     fn next_segment(
