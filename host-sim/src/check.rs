@@ -221,49 +221,6 @@ pub fn check_file(
     Ok(errors)
 }
 
-/// What a conformance comparison needs of a file: every motion end point
-/// (machine mm, A in degrees) up to the first M2/M30 (LinuxCNC reads no
-/// further), or the first error as `(line, "CODE message")`.
-pub fn motion_ends(
-    source: &str,
-    settings: &burin::settings::Settings,
-) -> Result<Vec<Pos>, (usize, String)> {
-    let mut interp = Interpreter::new();
-    interp.set_g28_homes(settings.g28_homes);
-    let mut flow = Flow::new();
-    let mut ends = Vec::new();
-    let mut ended = false;
-    for (i, line) in source.split('\n').enumerate() {
-        flow.feed_line(
-            line.as_bytes(),
-            i as u32 + 1,
-            &mut interp,
-            MAX_STEPS,
-            &mut |interp, text, _| {
-                if ended {
-                    return Ok(());
-                }
-                let mut cmds: Vec<Command> = Vec::new();
-                interp.execute_line(text, &mut |c| cmds.push(c))?;
-                for c in &cmds {
-                    if matches!(c, Command::ProgramEnd) {
-                        ended = true;
-                        return Ok(());
-                    }
-                    ends.extend(c.end().copied());
-                }
-                sync_after(interp, &cmds);
-                Ok(())
-            },
-        )
-        .map_err(|(l, e)| (l as usize, format!("error[{}]: {e}", e.code())))?;
-        if ended {
-            return Ok(ends);
-        }
-    }
-    Ok(ends)
-}
-
 /// What a move is, as LinuxCNC's canonical calls name it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MoveKind {

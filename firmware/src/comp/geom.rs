@@ -193,27 +193,11 @@ impl Comp {
             // Outside corner: round it on an arc about the programmed
             // corner (a rapid has no arc: a straight traverse instead).
             self.move_endpoint_and_flush(on, c, out)?;
-            let mut corner_end = self.tool;
-            set_uv(&mut corner_end, &on, mid);
-            for (i, x) in corner_end.iter_mut().enumerate() {
-                if !is_plane_or_helix(&on, i) {
-                    *x = end[i];
-                }
-            }
-            let corner = match &cmd {
-                Command::Line { feed, .. } => Command::Arc(corner_arc(
-                    &on,
-                    corner_end,
-                    op,
-                    corner_feed(*feed, dist(op, p)),
-                )),
-                _ => Command::Rapid { end: corner_end },
+            let feed = match &cmd {
+                Command::Line { feed, .. } => Some(corner_feed(*feed, dist(op, p))),
+                _ => None,
             };
-            out(
-                line,
-                super::lathe_origin(corner, super::lathe_orientation(&on), on.radius),
-            );
-            self.tool = corner_end;
+            self.corner(&on, line, op, mid, &end, feed, out);
             self.endpoint = Some(mid);
         } else if concave {
             let mid = match self.front() {
@@ -354,23 +338,8 @@ impl Comp {
             // Outside corner: roll around it, then the arc.
             let mid = at(op, r, delta);
             self.dequeue(out);
-            let mut corner_end = self.tool;
-            set_uv(&mut corner_end, &on, mid);
-            for (i, x) in corner_end.iter_mut().enumerate() {
-                if !is_plane_or_helix(&on, i) {
-                    *x = a.end[i];
-                }
-            }
-            let corner = corner_arc(&on, corner_end, op, corner_feed(a.feed, dist(op, p)));
-            out(
-                line,
-                super::lathe_origin(
-                    Command::Arc(corner),
-                    super::lathe_orientation(&on),
-                    on.radius,
-                ),
-            );
-            self.tool = corner_end;
+            let feed = Some(corner_feed(a.feed, dist(op, p)));
+            self.corner(&on, line, op, mid, &a.end, feed, out);
             self.endpoint = Some(mid);
         } else {
             self.dequeue(out);
@@ -426,6 +395,39 @@ impl Comp {
         self.first = false;
         self.finish(&Command::Arc(cmd), p);
         Ok(())
+    }
+
+    /// Hands on the move round an outside corner at `op`, to `mid` (the
+    /// next move's offset start): an arc at `feed`, or for a rapid (`None`)
+    /// a straight traverse. The plane and helix axes stay where the tool
+    /// is; the others go to the next move's `end` (LinuxCNC).
+    #[allow(clippy::too_many_arguments)]
+    fn corner(
+        &mut self,
+        on: &CompOn,
+        line: u32,
+        op: P,
+        mid: P,
+        end: &Pos,
+        feed: Option<crate::command::Feed>,
+        out: &mut dyn FnMut(u32, Command),
+    ) {
+        let mut to = self.tool;
+        set_uv(&mut to, on, mid);
+        for (i, x) in to.iter_mut().enumerate() {
+            if !is_plane_or_helix(on, i) {
+                *x = end[i];
+            }
+        }
+        let cmd = match feed {
+            Some(f) => Command::Arc(corner_arc(on, to, op, f)),
+            None => Command::Rapid { end: to },
+        };
+        out(
+            line,
+            super::lathe_origin(cmd, super::lathe_orientation(on), on.radius),
+        );
+        self.tool = to;
     }
 
     /// After a move was taken: the tool is at its (compensated) end, the
