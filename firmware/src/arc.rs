@@ -12,7 +12,7 @@ use crate::AXES;
 
 mod geom;
 use geom::hypot;
-pub use geom::{growth, plane_step, same_point, sweep, SAME_POINT};
+pub use geom::{growth, plane_step, radius_mismatch, same_point, sweep, SAME_POINT};
 
 /// More chords than this in one arc or spline is refused rather than run for hours.
 pub const MAX_CHORDS: u32 = 1 << 24;
@@ -24,7 +24,9 @@ pub enum ArcError {
     /// A point, the centre or the tolerance is not finite (or the tolerance
     /// is not positive), or the radius is beyond f32 (over 1e19 mm).
     InvalidNumber,
-    /// The start or end point sits on the centre: zero radius.
+    /// The start or end point sits on the centre (zero radius), or the
+    /// start is off the arc's circle by more than [`radius_mismatch`]
+    /// allows even in inches.
     InvalidArc,
     /// More than [`MAX_CHORDS`] chords.
     TooManySegments,
@@ -94,6 +96,9 @@ impl ArcChords {
         }
         let sweep = geom::sweep(s, r0, d, arc.dir, arc.turns, same_point(step));
         let grow = geom::growth(s, e, r0, r1, d);
+        if radius_mismatch(r0, r0 + grow, true) {
+            return Err(ArcError::InvalidArc);
+        }
         let phi = max_chord_angle(r0.max(r1), tol);
         let n = libm::ceilf(libm::fabsf(sweep) / phi).max(1.0);
         if n > MAX_CHORDS as f32 {

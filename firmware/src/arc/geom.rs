@@ -96,6 +96,23 @@ pub fn offset(s: [f32; 2], th: f32, k: f32) -> [f32; 2] {
     [oa + k * (s[0] + oa), ob + k * (s[1] + ob)]
 }
 
+/// LinuxCNC 2.9's tolerance for centre-format arcs, as measured with its
+/// `rs274` (issue 14): the start and end radii may differ by at most
+/// 100 × `tol`, and by more than `tol` only when that is within 0.1 % of
+/// the larger radius. `tol` is 0.0283 mm in G21 and 0.00283 in (0.0718 mm)
+/// in G20: LinuxCNC keeps one constant per unit, so the limits are 2.83 mm
+/// and 7.18 mm. Looser than one might pick, but files LinuxCNC runs must run.
+///
+/// The executor holds every arc to the looser (inch) form of it, against
+/// its own start: the interpreter checked the arc against where it
+/// believed the machine was, and a command refused before it (a soft
+/// limit on the first command of a line) leaves that belief wrong.
+pub fn radius_mismatch(rs: f32, re: f32, inch: bool) -> bool {
+    let tol = if inch { 0.002_828 * 25.4 } else { 0.028_28 };
+    let d = (rs - re).abs();
+    d > 100.0 * tol || (d > tol && d > 0.001 * rs.max(re))
+}
+
 /// `r1 − r0`, the radius the arc gains from start to end, from the chord:
 /// `(|e|² − |s|²) / (r0 + r1) = d · (s + e) / (r0 + r1)`, without the
 /// cancellation of two radii near 1e9 that differ by a few µm.

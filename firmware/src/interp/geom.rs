@@ -16,17 +16,7 @@ fn len(a: P2) -> f32 {
 /// (the segmenter's threshold never exceeds it, see `arc::same_point`).
 pub(crate) use crate::arc::SAME_POINT;
 
-/// LinuxCNC 2.9's tolerance for centre-format arcs, as measured with its
-/// `rs274` (issue 14): the start and end radii may differ by at most
-/// 100 × `tol`, and by more than `tol` only when that is within 0.1 % of
-/// the larger radius. `tol` is 0.0283 mm in G21 and 0.00283 in (0.0718 mm)
-/// in G20: LinuxCNC keeps one constant per unit, so the limits are 2.83 mm
-/// and 7.18 mm. Looser than one might pick, but files LinuxCNC runs must run.
-pub(crate) fn radius_mismatch(rs: f32, re: f32, inch: bool) -> bool {
-    let tol = if inch { 0.002_828 * 25.4 } else { 0.028_28 };
-    let d = (rs - re).abs();
-    d > 100.0 * tol || (d > tol && d > 0.001 * rs.max(re))
-}
+pub(crate) use crate::arc::radius_mismatch;
 
 /// How far (mm) an R-format radius may fall short of half the chord: the
 /// arc is then the semicircle on the chord (LinuxCNC 2.9, measured).

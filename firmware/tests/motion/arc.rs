@@ -167,6 +167,42 @@ fn bad_arcs_are_errors_not_panics() {
     );
 }
 
+/// The executor's own start is the arc's start: an arc whose centre was
+/// found from another start (the interpreter's, after the executor refused
+/// the line's first command) is refused, not run as a spiral (the executor
+/// fuzz target's `refused-rapid-then-arc`). The inch tolerance is the most
+/// the interpreter lets through, so that much still runs.
+#[test]
+fn an_arc_off_its_start_is_refused() {
+    let a = arc(
+        [-10.0, -1.07, -1.0, 0.0],
+        [-11.0, -1.0],
+        Plane::XY,
+        ArcDir::Ccw,
+        0,
+    );
+    let believed = [-10.0, -1.0, 2.0, 0.0];
+    assert!(ArcChords::new(&believed, &a, TOL, STEP).is_ok());
+    let actual = [-10.0, -10.0, -1.0, 0.0];
+    assert_eq!(
+        ArcChords::new(&actual, &a, TOL, STEP).err(),
+        Some(ArcError::InvalidArc)
+    );
+    // 0.07 mm off on a 10 mm radius: within G20's 0.0718 mm, runs.
+    let c = arc(
+        [-10.0, 0.0, 0.0, 0.0],
+        [0.0, 0.0],
+        Plane::XY,
+        ArcDir::Ccw,
+        0,
+    );
+    assert!(ArcChords::new(&[10.07, 0.0, 0.0, 0.0], &c, TOL, STEP).is_ok());
+    assert_eq!(
+        ArcChords::new(&[10.08, 0.0, 0.0, 0.0], &c, TOL, STEP).err(),
+        Some(ArcError::InvalidArc)
+    );
+}
+
 #[test]
 fn spline_flattened_within_tolerance() {
     let s = [0.0, 0.0, 0.0, 0.0];
