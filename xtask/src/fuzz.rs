@@ -8,6 +8,7 @@
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::Instant;
@@ -120,11 +121,31 @@ fn fuzz_all(targets: &[&str], secs: u64, runs: Option<u64>) -> Result<Vec<Outcom
     let t0 = Instant::now();
     build(targets)?;
     eprintln!("fuzz: built in {:.0} s", t0.elapsed().as_secs_f64());
-    let mut outs = Vec::new();
+    let mut seeds = Vec::new();
     for t in targets {
-        let seeds = crate::fuzz_seeds::write(t)?;
-        outs.push(fuzz_one(t, &seeds, secs, runs)?);
+        seeds.push(crate::fuzz_seeds::write(t)?);
     }
+    // libFuzzer runs on one core: as many targets at once as there are
+    // cores, each for its full time (CI's 2 cores: 3 rounds, not 6).
+    let width = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let done = std::sync::Mutex::new(Vec::new());
+    std::thread::scope(|s| {
+        for _ in 0..width.min(targets.len()) {
+            s.spawn(|| loop {
+                let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                let Some(t) = targets.get(i) else { break };
+                let o = fuzz_one(t, &seeds[i], secs, runs);
+                done.lock().unwrap_or_else(|e| e.into_inner()).push((i, o));
+            });
+        }
+    });
+    let mut done = done.into_inner().unwrap_or_else(|e| e.into_inner());
+    done.sort_by_key(|d| d.0);
+    let outs = done
+        .into_iter()
+        .map(|d| d.1)
+        .collect::<Result<Vec<Outcome>>>()?;
     eprintln!(
         "\n{:<16} {:>12} {:>9} {:>8} {:>7}  finding",
         "target", "execs", "exec/s", "cov", "secs"
@@ -198,8 +219,10 @@ fn fuzz_one(target: &str, seeds: &Path, secs: u64, runs: Option<u64>) -> Result<
     let finding = if out.status.success() {
         None
     } else {
+        // One lock for the whole tail: another target may be printing.
+        let mut err = std::io::stderr().lock();
         for l in tail.iter().rev() {
-            eprintln!("{l}");
+            let _ = writeln!(err, "{l}");
         }
         let art = log
             .lines()

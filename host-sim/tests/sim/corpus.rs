@@ -3,6 +3,8 @@
 //! pin-timing properties.
 use crate::common;
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
 
 use burin::command::Command;
 use burin::interp::Interpreter;
@@ -57,6 +59,43 @@ fn expected_end(src: &str) -> Option<([f32; 4], usize)> {
 /// 50 ms windows (163 % before the issue-12 planner changes).
 const KNOWN_ACCEL: &[(&str, f64)] = &[("linuxcnc-tp/Cereal.ngc", 1.7)];
 
+/// One job: its summary line, or `None` when it was skipped.
+fn check_job(cfg: &host_sim::config::MachineConfig, rel: &str, src: &str) -> Option<String> {
+    let (end, moves) = expected_end(src)?;
+    if moves == 0 {
+        return None;
+    }
+    let mut rec = Collect::default();
+    let s = run_job(cfg, src, &mut rec);
+    let info = rec.info.clone().unwrap();
+    assert!(
+        s.errors.is_empty(),
+        "{rel}: {:?}",
+        &s.errors[..s.errors.len().min(3)]
+    );
+    assert_eq!(s.final_position_steps, expected_steps(&info, end), "{rel}");
+    assert_eq!(s.planner_underruns, 0, "{rel}");
+    let rate = check_max_rate(&info, &rec.events);
+    let (dev, corners) = check_path(&info, cfg.start_position_mm, &rec.path, &rec.events, 0.0);
+    let slack = KNOWN_ACCEL.iter().find(|k| k.0 == rel).map_or(1.0, |k| k.1);
+    let acc = check_max_accel_within(
+        &info,
+        &rec.events,
+        &corners,
+        cfg.settings.junction_deviation as f64,
+        slack,
+    );
+    check_pin_timing(&info, &rec.events);
+    Some(format!(
+        "{rel}: {} moves, {} step events, {:.1} s simulated, rate {rate:.3}, accel {acc:.3}, path dev {dev:.4} mm",
+        s.moves,
+        rec.events.len(),
+        s.job_time_s
+    ))
+}
+
+/// The jobs are independent: one worker per core takes the next (CI's
+/// step runs alone on 2 cores, and this test is most of it).
 #[test]
 fn corpus_jobs_end_exactly_and_keep_limits() {
     let Some(dir) = corpus_dir() else {
@@ -65,50 +104,43 @@ fn corpus_jobs_end_exactly_and_keep_limits() {
     };
     let manifest = std::fs::read_to_string(dir.join("MANIFEST.tsv")).unwrap();
     let cfg = config();
-    let (mut ran, mut skipped) = (0, 0);
-    for row in manifest.lines().skip(1) {
-        let Some(rel) = row.split('\t').next() else {
-            continue;
-        };
-        let Ok(src) = std::fs::read_to_string(dir.join(rel)) else {
-            continue;
-        };
-        let Some((end, moves)) = expected_end(&src) else {
-            skipped += 1;
-            continue;
-        };
-        if moves == 0 {
-            skipped += 1;
-            continue;
+    let jobs: Vec<(String, String)> = manifest
+        .lines()
+        .skip(1)
+        .filter_map(|row| {
+            let rel = row.split('\t').next()?;
+            let src = std::fs::read_to_string(dir.join(rel)).ok()?;
+            Some((rel.to_string(), src))
+        })
+        .collect();
+    // Longest first, so the last job to start is a short one.
+    let mut order: Vec<usize> = (0..jobs.len()).collect();
+    order.sort_by_key(|&i| std::cmp::Reverse(jobs[i].1.len()));
+    let next = AtomicUsize::new(0);
+    let results = Mutex::new(Vec::new());
+    let width = std::thread::available_parallelism().map_or(1, |n| n.get());
+    std::thread::scope(|s| {
+        for _ in 0..width {
+            s.spawn(|| loop {
+                let k = next.fetch_add(1, Ordering::Relaxed);
+                let Some(&i) = order.get(k) else { break };
+                let (rel, src) = &jobs[i];
+                let line = check_job(&cfg, rel, src);
+                results.lock().unwrap().push((i, line));
+            });
         }
-        let mut rec = Collect::default();
-        let s = run_job(&cfg, &src, &mut rec);
-        let info = rec.info.clone().unwrap();
-        assert!(
-            s.errors.is_empty(),
-            "{rel}: {:?}",
-            &s.errors[..s.errors.len().min(3)]
-        );
-        assert_eq!(s.final_position_steps, expected_steps(&info, end), "{rel}");
-        assert_eq!(s.planner_underruns, 0, "{rel}");
-        let rate = check_max_rate(&info, &rec.events);
-        let (dev, corners) = check_path(&info, cfg.start_position_mm, &rec.path, &rec.events, 0.0);
-        let slack = KNOWN_ACCEL.iter().find(|k| k.0 == rel).map_or(1.0, |k| k.1);
-        let acc = check_max_accel_within(
-            &info,
-            &rec.events,
-            &corners,
-            cfg.settings.junction_deviation as f64,
-            slack,
-        );
-        check_pin_timing(&info, &rec.events);
-        println!(
-            "{rel}: {} moves, {} step events, {:.1} s simulated, rate {rate:.3}, accel {acc:.3}, path dev {dev:.4} mm",
-            s.moves,
-            rec.events.len(),
-            s.job_time_s
-        );
-        ran += 1;
+    });
+    let mut results = results.into_inner().unwrap();
+    results.sort_by_key(|r| r.0);
+    let (mut ran, mut skipped) = (0, 0);
+    for (_, line) in results {
+        match line {
+            Some(l) => {
+                println!("{l}");
+                ran += 1;
+            }
+            None => skipped += 1,
+        }
     }
     println!("corpus: {ran} jobs simulated, {skipped} skipped (interpreter errors or machine-dependent end)");
     assert!(ran > 0);
