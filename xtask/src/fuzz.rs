@@ -17,7 +17,7 @@ use crate::util::root;
 
 #[derive(Args)]
 pub struct FuzzArgs {
-    /// One target (default: all, one after another).
+    /// One target (default: all, as many at once as there are cores).
     target: Option<String>,
     /// Seconds per target.
     #[arg(long, default_value_t = 60)]
