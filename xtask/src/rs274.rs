@@ -13,7 +13,7 @@
 //! says "skipped".
 //!
 //! Both sides start from the same tool table: every tool number the file
-//! names after T or H (or M61 Q), with no offsets, or the list in a
+//! names after T, H or D (or M61 Q), with no offsets or diameter, or the list in a
 //! `(rs274-tools: 1 3)` comment (`(rs274-tools:)`: none). rs274 reads it
 //! with `-t`, burin runs `G10 L1 P<n> Z0` for each first.
 //!
@@ -122,10 +122,29 @@ fn install(base: &Path) -> Result<(), String> {
 }
 
 /// rs274's canonical output for `file`, from a fresh, empty parameter
-/// file and a tool table of `tools` with no offsets.
+/// file and a tool table of `tools` with no offsets, started in G98 as
+/// burin starts (rs274 alone starts in G99; a LinuxCNC machine starts as
+/// its ini's `RS274NGC_STARTUP_CODE` says): the file runs after a line
+/// `G98`, inserted first (or after an opening `%` line).
 fn run_rs274(bin: &Path, libs: &str, file: &Path, tools: &[u32]) -> std::io::Result<String> {
     let dir = std::env::temp_dir().join(format!("burin-rs274-{}", std::process::id()));
     std::fs::create_dir_all(&dir)?;
+    let src = std::fs::read(file)?;
+    // After a `%` line: a program delimited by `%` must open with it.
+    let first = src
+        .iter()
+        .position(|&b| b == b'\n')
+        .map_or(src.len(), |i| i + 1);
+    let at = if src.trim_ascii_start().starts_with(b"%") {
+        first
+    } else {
+        0
+    };
+    let mut text = src[..at].to_vec();
+    text.extend(b"G98\n");
+    text.extend(&src[at..]);
+    let file = &dir.join("program.ngc");
+    std::fs::write(file, text)?;
     let var = dir.join("sim.var");
     std::fs::write(&var, "")?;
     let tbl = dir.join("tool.tbl");
@@ -165,7 +184,7 @@ fn tools_of(src: &str) -> Vec<u32> {
     let mut out: Vec<u32> = Vec::new();
     for (i, &c) in b.iter().enumerate() {
         let m61 = c == b'Q' && up[..i].trim_end().ends_with("M61");
-        if c != b'T' && c != b'H' && !m61 {
+        if c != b'T' && c != b'H' && c != b'D' && !m61 {
             continue;
         }
         // A word letter, not a letter inside a name (`PATH`, `#<tool>`).
@@ -185,6 +204,44 @@ fn tools_of(src: &str) -> Vec<u32> {
     }
     out.truncate(burin::interp::TOOLS);
     out
+}
+
+/// A listed refusal's check: the lines before line `l`, then `M2`, run
+/// through both and compared whole. `Err` says how they differ.
+fn before_line(
+    bin: &Path,
+    libs: &str,
+    src: &str,
+    l: usize,
+    tools: &[u32],
+    prelude: &str,
+    settings: &burin::settings::Settings,
+) -> Result<std::result::Result<canon::Verdict, String>> {
+    let head: String = src
+        .split('\n')
+        .take(l.saturating_sub(1))
+        .flat_map(|line| [line, "\n"])
+        .chain(["M2\n"])
+        .collect();
+    let dir = std::env::temp_dir().join(format!("burin-rs274-{}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
+    let f = dir.join("before.ngc");
+    std::fs::write(&f, &head)?;
+    let theirs = canon::parse(&run_rs274(bin, libs, &f, tools)?);
+    let ours = host_sim::check::canon_moves(&head, prelude, settings);
+    Ok(match (theirs, ours) {
+        (Canon::Ok(theirs), Ok(ours)) => {
+            let theirs = canon::dedup(theirs);
+            let ours = canon::dedup(canon::ours(&ours));
+            let mut v = canon::compare(&theirs, &ours, head.to_ascii_uppercase().contains("G38"));
+            match v.diff.take() {
+                Some(d) => Err(d),
+                None => Ok(v),
+            }
+        }
+        (Canon::Rejected(r), _) => Err(format!("rs274 rejects the lines before it: {r}")),
+        (_, Err((l, e))) => Err(format!("burin rejects line {l} before it: {e}")),
+    })
 }
 
 /// The known list: (path suffix, verdict, reason).
@@ -322,7 +379,18 @@ pub fn run(install: bool) -> Result<()> {
                 match listed_as("burin-rejects", &mut used) {
                     Some(why) => {
                         listed += 1;
-                        println!("listed    {short}:{l}: burin rejects: {e} ({why})");
+                        // What comes before the refused line must still agree.
+                        match before_line(&bin, &libs, &src, l, &tools, &prelude, &settings)? {
+                            Ok(v) => println!(
+                                "listed    {short}:{l}: burin rejects: {e} ({why}); the {} moves \
+                                 before it agree (worst {:.4} mm)",
+                                v.moves, v.worst
+                            ),
+                            Err(d) => {
+                                println!("DISAGREE  {short}: before line {l}: {d}");
+                                bad.push(short.clone());
+                            }
+                        }
                     }
                     None => {
                         println!("BURIN REJECTS {short}:{l}: {e}");

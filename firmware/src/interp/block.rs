@@ -137,6 +137,9 @@ pub(crate) struct Block<'a> {
     pub first_col: u16,
     /// Column of the first axis letter given without a number, if any.
     pub bare_col: u16,
+    /// The source line: a tool number past `f32`'s exact integers is read
+    /// again from its digits ([`super::exec::Ctx::tool`]).
+    pub line: &'a [u8],
 }
 
 /// Letters that carry values: the axes and F H I J K L P Q R S T.

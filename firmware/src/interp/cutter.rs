@@ -115,7 +115,7 @@ pub(super) fn cutter(
         (d * st.unit() / 2.0, l)
     } else {
         let n = if cx.b.has(b'D') {
-            cx.int(b'D', 0.0, super::tools::TOOL_MAX as f32)?
+            cx.tool(b'D', 0)?
         } else {
             st.loaded
         };

@@ -40,6 +40,7 @@
 
 use super::block::{bit, Block, GGroup, MGroup, AXIS_LETTERS, MODE_GROUPS};
 use super::state::{Motion, State, Tables};
+use super::tools::TOOL_MAX;
 use crate::command::{Command, Plane, SpindleDir};
 use crate::gcode::{ErrorKind, GcodeError};
 use crate::AXES;
@@ -81,6 +82,60 @@ impl Ctx<'_, '_> {
         }
         Ok(v as u32)
     }
+    /// A tool number (T, H, D, M61 Q, G10 L1 P) in `lo..=`[`TOOL_MAX`],
+    /// exactly. An `f32` holds every integer below 2^24; a larger word is
+    /// read again from its digits in the line, as LinuxCNC's tool numbers
+    /// go to 2^31 − 1. One that came from a parameter or an expression is
+    /// refused as out of range: its `f32` cannot tell neighbours apart,
+    /// and a neighbouring tool's offsets are worse than an error.
+    pub(super) fn tool(&mut self, l: u8, lo: u32) -> Result<u32, GcodeError> {
+        let v = self.int(l, lo as f32, TOOL_MAX as f32)?;
+        if v < 1 << 24 {
+            return Ok(v);
+        }
+        let col = usize::from(self.b.col_of(l));
+        match literal_int(self.b.line.get(col..).unwrap_or(&[])) {
+            Ok(n) if n <= u64::from(TOOL_MAX) => Ok(n as u32),
+            Err(Literal::Fraction) => Err(self.err(ErrorKind::NotInteger(l), l)),
+            _ => Err(self.err(ErrorKind::ValueOutOfRange(l), l)),
+        }
+    }
+}
+
+/// Why a word's text is not a tool number's digits.
+enum Literal {
+    /// Digits after the point that are not all zeros (`f32` rounded them).
+    Fraction,
+    /// A parameter or an expression, or more than `u32` holds.
+    Other,
+}
+
+/// The integer a word's digits spell (blanks inside, leading zeros, a `+`
+/// and a fraction of zeros allowed).
+fn literal_int(text: &[u8]) -> Result<u64, Literal> {
+    let mut n: u64 = 0;
+    let (mut digits, mut dot, mut sign) = (0u32, false, false);
+    for &c in text {
+        match c {
+            b' ' | b'\t' => {}
+            b'+' if digits == 0 && !sign && !dot => sign = true,
+            b'.' if !dot => dot = true,
+            b'0' if dot => {}
+            b'1'..=b'9' if dot => return Err(Literal::Fraction),
+            b'0'..=b'9' => {
+                n = n * 10 + u64::from(c - b'0');
+                digits += 1;
+                if n > u64::from(u32::MAX) {
+                    return Err(Literal::Other);
+                }
+            }
+            _ => break,
+        }
+    }
+    if digits == 0 {
+        return Err(Literal::Other);
+    }
+    Ok(n)
 }
 
 pub(super) fn push(out: &mut Out, c: Command, col: u16) -> Result<(), GcodeError> {

@@ -269,7 +269,10 @@ impl Interpreter {
         if lx.block_delete && self.state.block_delete || self.state.percent == 2 {
             return Ok(());
         }
-        let mut block = Block::default();
+        let mut block = Block {
+            line,
+            ..Block::default()
+        };
         let mut split = false;
         loop {
             let tok = {
@@ -299,7 +302,10 @@ impl Interpreter {
                 Some(Token::Word(w)) => {
                     if block.splits_on(&w) {
                         self.run_block(&block, buf, saved)?;
-                        block = Block::default();
+                        block = Block {
+                            line,
+                            ..Block::default()
+                        };
                         split = true;
                     }
                     block.add(&w)?;

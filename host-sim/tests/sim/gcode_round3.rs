@@ -162,14 +162,17 @@ fn g0_x1_g80_moves() {
 }
 
 /// Tool numbers beyond the old limit (`G10 L1 P10000000 Z1`) and a 17th
-/// entry (both were error 324): numbers to 2^24 - 1, 64 entries.
+/// entry (both were error 324): numbers to 2^31 - 1 (LinuxCNC's), 64 entries.
 #[test]
 fn large_tool_numbers_and_a_64_tool_table() {
     let mut it = mm();
     run(&mut it, "G10 L1 P10000000 Z1");
     run(&mut it, "G43 H10000000");
     assert_eq!(it.state().tlo[2], 1.0);
-    for t in 1..=63 {
+    run(&mut it, "G10 L1 P2147483646 Z7");
+    run(&mut it, "G43 H2147483646");
+    assert_eq!(it.state().tlo[2], 7.0);
+    for t in 1..=62 {
         run(&mut it, &format!("G10 L1 P{t} Z{t}"));
     }
     run(&mut it, "G43 H17");

@@ -5,9 +5,9 @@
 //! Choices (LinuxCNC 2.9's semantics, measured with its `rs274`, unless said):
 //! - the table is keyed by tool number, not pocket: CAM output numbers
 //!   tools freely (Carbide Create's `M6 T102`); it holds [`TOOLS`] entries,
-//!   numbers 1..=[`TOOL_MAX`] (words are `f32`: every number up to 2^24 − 1
-//!   is exact, so no tool is ever read as its neighbour; LinuxCNC goes to
-//!   2^31 − 1);
+//!   numbers 1..=[`TOOL_MAX`], 2^31 − 1 as in LinuxCNC (words are `f32`,
+//!   exact below 2^24: a larger tool number is read again from its digits,
+//!   so no tool is ever read as its neighbour, see `Ctx::tool`);
 //! - an entry holds offsets along X, Y and Z (G10 L1 X Y Z; a mill's
 //!   length is Z, a lathe's tools use X too; LinuxCNC also holds the
 //!   rotary and UVW axes, which burin refuses in G10 L1) and the diameter
@@ -47,11 +47,8 @@ pub const TOOLS: usize = 64;
 /// no tool offset on a mill; each copy of the table the stack holds at
 /// boot costs 256 B more per axis, and the F401's stack is tight).
 pub const TOOL_AXES: usize = 3;
-/// Highest tool number a table entry may have: every integer up to it is
-/// exact in the `f32` a word carries.
-pub const TOOL_MAX: u32 = (1 << 24) - 1;
-/// Highest T word (GRBL accepts any 8-digit T).
-const T_MAX: f32 = 99_999_999.0;
+/// Highest tool number (T, H, D, M61 Q, G10 L1 P): LinuxCNC's, an `int`.
+pub const TOOL_MAX: u32 = i32::MAX as u32;
 
 /// One tool: `number` 0 is an empty entry. Offsets along X, Y, Z and the
 /// diameter, mm.
@@ -129,7 +126,7 @@ pub(super) fn tool_words(
 ) -> Result<(), GcodeError> {
     let b = cx.b;
     if b.has(b'T') {
-        let t = cx.int(b'T', 0.0, T_MAX)?;
+        let t = cx.tool(b'T', 0)?;
         st.tool = t;
         push(out, Command::Tool { number: t }, b.col_of(b'T'))?;
     }
@@ -144,7 +141,7 @@ pub(super) fn tool_words(
                 st.tool_warning = Some(t);
             }
         } else {
-            let q = cx.int(b'Q', 0.0, T_MAX)?;
+            let q = cx.tool(b'Q', 0)?;
             st.loaded = q;
             st.tool = q;
             push(out, Command::Tool { number: q }, col)?;
@@ -154,7 +151,7 @@ pub(super) fn tool_words(
         return Ok(());
     };
     let h = if b.has(b'H') {
-        Some(cx.int(b'H', 0.0, TOOL_MAX as f32)?)
+        Some(cx.tool(b'H', 0)?)
     } else {
         None
     };
@@ -212,7 +209,7 @@ pub(super) fn g10_tool(
     l: u32,
     col: u16,
 ) -> Result<(), GcodeError> {
-    let n = cx.int(b'P', 1.0, TOOL_MAX as f32)?;
+    let n = cx.tool(b'P', 1)?;
     let u = st.unit();
     let mut words = [None; TOOL_AXES];
     for (l, w) in AXIS_LETTERS.iter().zip(words.iter_mut()) {

@@ -149,9 +149,10 @@ fn the_table_has_sixty_four_entries_keyed_by_number() {
     );
 }
 
-/// Tool numbers up to 2^24 - 1 (every one exact in a word's f32; the
-/// issue's `P10000000` among them); beyond, refused rather than rounded
-/// onto a neighbour.
+/// Tool numbers up to 2^31 - 1, LinuxCNC's limit, each exact: a word's
+/// f32 holds integers below 2^24 only, so 16777217 and 16777216 (the same
+/// f32) are told apart from their digits; from an expression such a number
+/// is refused rather than rounded onto a neighbour, as is 2^31.
 #[test]
 fn large_tool_numbers() {
     let mut it = Interpreter::new();
@@ -161,10 +162,28 @@ fn large_tool_numbers() {
     assert_eq!(it.wco()[2], 2.0);
     run(&mut it, "G43 H10000000");
     assert_eq!(it.wco()[2], 1.0);
+    run(&mut it, "G10 L1 P16777217 Z3");
+    run(&mut it, "G10 L1 P 1677 7216.000 Z4");
+    run(&mut it, "G10 L1 P2147483647 Z5");
+    run(&mut it, "G43 H16777217");
+    assert_eq!(it.wco()[2], 3.0);
+    run(&mut it, "G43 H16777216");
+    assert_eq!(it.wco()[2], 4.0);
+    run(&mut it, "G43 H+2147483647");
+    assert_eq!(it.wco()[2], 5.0);
+    run(&mut it, "T2147483647 M6");
+    assert_eq!(it.state().tool, 2147483647);
+    run(&mut it, "M61 Q16777217");
+    assert_eq!(it.state().tool, 16777217);
     assert_eq!(
-        err(&mut it, "G10 L1 P16777217 Z1"),
+        err(&mut it, "G10 L1 P2147483648 Z1"),
         ErrorKind::ValueOutOfRange(b'P')
     );
+    assert_eq!(
+        err(&mut it, "G43 H[16777216 + 1]"),
+        ErrorKind::ValueOutOfRange(b'H')
+    );
+    assert_eq!(err(&mut it, "T16777217.5"), ErrorKind::NotInteger(b'T'));
 }
 
 /// G10 L1 writes every axis the table holds, R as the radius (stored as
