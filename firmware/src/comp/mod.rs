@@ -24,6 +24,7 @@
 //! (`Interpreter::execute_line_at`), so a refused line leaves nothing queued.
 
 mod geom;
+mod plane;
 #[cfg(test)]
 mod tests;
 
@@ -316,9 +317,9 @@ impl Comp {
         for h in self.queue.iter_mut() {
             match &mut h.item {
                 Item::Arc { arc, sweep } => {
-                    let c = geom::wide(arc.center);
-                    let r1 = geom::dist(geom::wide([arc.end[u], arc.end[v]]), c);
-                    let r2 = geom::dist(to, c);
+                    let c = plane::wide(arc.center);
+                    let r1 = plane::dist(plane::wide([arc.end[u], arc.end[v]]), c);
+                    let r2 = plane::dist(to, c);
                     if (r1 - r2).abs() > 0.01 {
                         return Err(ErrorKind::CompGouge);
                     }
@@ -329,7 +330,7 @@ impl Comp {
                     // ends at its start and stays one).
                     let was = [arc.end[u], arc.end[v]];
                     let onto_start = |s: [f32; 2]| {
-                        geom::dist(s, to) <= COLLAPSED && geom::dist(s, was) > COLLAPSED
+                        plane::dist(s, to) <= COLLAPSED && plane::dist(s, was) > COLLAPSED
                     };
                     if start.is_some_and(onto_start) {
                         let mut end = arc.end;
@@ -345,8 +346,8 @@ impl Comp {
                     if let Some(s) = start {
                         if *sweep != 0.0 {
                             let sweep = *sweep;
-                            let turn = geom::turn(arc);
-                            let l2 = geom::sweep(s, c, turn, to);
+                            let turn = plane::turn(arc);
+                            let l2 = plane::sweep(s, c, turn, to);
                             if l2.abs() > sweep.abs() + 0.001 {
                                 return Err(ErrorKind::CompGouge);
                             }
