@@ -24,8 +24,6 @@
 //! (`Interpreter::execute_line_at`), so a refused line leaves nothing queued.
 
 mod geom;
-#[cfg(test)]
-mod tests;
 
 use crate::command::{Arc, ArcDir, Command, Feed, Plane, Pos};
 use crate::gcode::ErrorKind;
