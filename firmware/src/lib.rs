@@ -10,17 +10,22 @@
 //! -> `interp` (modal state) -> [`command`] -> `executor` -> `arc`
 //! (segmenter) -> `planner` (look-ahead) -> `stepper` (segments, pulses).
 //! [`controller`] is the whole parse/plan task, which both shells drive.
+//!
+//! Import rule: the modules are declared below bottom up, and each imports
+//! only modules declared above it, so no two modules import each other,
+//! directly or round a loop. A type two layers share lives in the lower
+//! one: the step pins' configuration and switch levels in [`seams`], the
+//! step-rate ceiling in [`settings::ceiling`], the step event's attention
+//! bits in [`realtime`], the canned cycle in [`command::cycle`]. The
+//! compiler accepts cycles within a crate, so `cargo xtask imports` checks
+//! the rule (and `cargo test -p xtask`, as
+//! `imports::tests::burin_imports_follow_lib_rs_order`, so CI does).
 #![cfg_attr(not(test), no_std)]
 #![deny(unsafe_code)]
 #![warn(missing_debug_implementations)]
 
-// Bottom up: each module imports only modules declared above it, so the
-// imports form no cycle; `cargo xtask imports` checks both (and `cargo test
-// -p xtask`, as `imports::tests::burin_imports_follow_lib_rs_order`). A type
-// two layers share lives in the lower one: the step pins' configuration
-// and switch levels in `seams`, the step-rate ceiling in `settings`, the
-// attention bits in `realtime`, the canned cycle in `command`. rustfmt sorts
-// the declarations between two comment lines, hence one per layer.
+// Bottom up (the import rule above). rustfmt sorts the declarations
+// between two comment lines, hence a comment per layer.
 //
 // foundations
 pub mod chip;
