@@ -3,10 +3,9 @@
 //! reference for every end point; see the tests).
 //!
 //! A cycle block resolves its words here into one [`Cycle`] command in
-//! machine mm; `command::cycle` ([`CycleSteps`]) expands it into moves (the
-//! executor runs the same expansion).
-//!
-//! [`CycleSteps`]: crate::command::CycleSteps The plane decides the axes: G17 drills along Z at X/Y
+//! machine mm; `command::cycle` ([`CycleSteps`](crate::command::CycleSteps))
+//! expands it into moves (the executor runs the same expansion). The plane
+//! decides the axes: G17 drills along Z at X/Y
 //! holes, G18 along Y at Z/X holes, G19 along X at Y/Z holes; the depth
 //! word is that axis's letter.
 //!
