@@ -39,6 +39,10 @@ pub struct Graph {
     pub modules: Vec<String>,
     /// from -> to -> every site.
     pub edges: BTreeMap<String, BTreeMap<String, Vec<Site>>>,
+    /// Globs of the crate root in a module (`use super::*;` at its top):
+    /// they bring every module's name into scope, so the paths below them
+    /// no longer say which modules the file uses.
+    pub root_globs: Vec<Site>,
 }
 
 /// Reads the crate whose root is `lib`.
@@ -92,6 +96,14 @@ pub fn scan(lib: &Path) -> Result<Graph> {
         }
         if let Some(from) = module.first() {
             for (to, line, path) in found.roots {
+                if to == "*" {
+                    g.root_globs.push(Site {
+                        file: file.clone(),
+                        line,
+                        path,
+                    });
+                    continue;
+                }
                 g.edges
                     .entry(from.clone())
                     .or_default()
@@ -238,10 +250,13 @@ fn climb(toks: &[Token], mut i: usize) -> (usize, usize) {
 }
 
 /// The names a path continues with at `i`: one identifier, or the first
-/// identifier of each item of a `{ … }` use group.
+/// identifier of each item of a `{ … }` use group; `*` for a glob.
 fn first_segments(toks: &[Token], i: usize) -> Vec<(String, usize)> {
     if let Some(name) = ident(toks.get(i)) {
         return vec![(name.to_string(), toks[i].line)];
+    }
+    if is(toks.get(i), &Kind::Punct('*')) {
+        return vec![("*".to_string(), toks[i].line)];
     }
     let mut out = Vec::new();
     if !is(toks.get(i), &Kind::Punct('{')) {
@@ -266,6 +281,10 @@ fn first_segments(toks: &[Token], i: usize) -> Vec<(String, usize)> {
             Kind::Punct(',') if depth == 1 => item_start = true,
             Kind::Ident(name) if depth == 1 && item_start => {
                 out.push((name.clone(), t.line));
+                item_start = false;
+            }
+            Kind::Punct('*') if depth == 1 && item_start => {
+                out.push(("*".to_string(), t.line));
                 item_start = false;
             }
             _ if depth == 1 => item_start = false,
@@ -295,6 +314,10 @@ fn written(toks: &[Token], i: usize) -> String {
             (Kind::PathSep, false) => s.push_str("::"),
             (Kind::Punct('{'), true) => {
                 s.push_str("{…}");
+                break;
+            }
+            (Kind::Punct('*'), true) => {
+                s.push('*');
                 break;
             }
             _ => break,
@@ -396,6 +419,16 @@ impl Graph {
                 let (a, b) = (&c[k], &c[(k + 1) % c.len()]);
                 let _ = writeln!(s, "    {a} -> {b}: {}", self.site(a, b, base));
             }
+        }
+        for glob in &self.root_globs {
+            let f = glob.file.strip_prefix(base).unwrap_or(&glob.file);
+            let _ = writeln!(
+                s,
+                "glob: {}:{} {} imports every module's name; name the ones it uses",
+                f.display(),
+                glob.line,
+                glob.path
+            );
         }
         for (a, b) in self.upward() {
             let _ = writeln!(

@@ -198,3 +198,26 @@ fn a_missing_module_file_is_an_error() {
     let err = scan(&t.0.join("lib.rs")).unwrap_err().to_string();
     assert!(err.contains("`mod gone;` has no file"), "{err}");
 }
+
+#[test]
+fn a_glob_of_the_crate_root_is_reported() {
+    let t = Tree::new(
+        "glob",
+        &[
+            ("lib.rs", "pub mod a;\npub mod b;\n"),
+            ("a.rs", "pub fn f() {}\n"),
+            // the root glob hides `a::f()`; the test module's glob is b's own
+            (
+                "b.rs",
+                "use super::*;\npub fn g() { a::f() }\n#[cfg(test)]\nmod tests { use super::*; }\n",
+            ),
+        ],
+    );
+    let g = t.graph();
+    assert_eq!(g.root_globs.len(), 1);
+    let report = g.report(&t.0);
+    assert!(
+        report.contains("glob: b.rs:1 super::* imports every module's name"),
+        "{report}"
+    );
+}
