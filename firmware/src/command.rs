@@ -5,6 +5,10 @@
 //! `interp`) and the motion half (`arc`, `planner`, `stepper`). Nothing after
 //! this point knows about inches, G54 or G91.
 
+pub mod cycle;
+
+pub use cycle::{Cycle, CycleKind, CycleSteps};
+
 use crate::AXES;
 
 /// A position or displacement in machine millimetres (A in degrees), X Y Z A.
@@ -212,7 +216,7 @@ pub enum Command {
         tool: u32,
     },
     /// G73, G81-G89: one canned-cycle block, expanded by the executor.
-    Cycle(crate::interp::Cycle),
+    Cycle(Cycle),
     /// M500 / M501.
     SaveSettings,
     LoadSettings,

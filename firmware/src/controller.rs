@@ -19,11 +19,10 @@ use crate::executor::{Machine, Note, State};
 use crate::link::{LineAssembler, LinkMode, RtFlags, TokenSource};
 use crate::outputs::{Enable, LaserQueue, Motion, Outputs, Spindle};
 use crate::realtime::Realtime;
-use crate::seams::Storage;
+use crate::seams::{Storage, Switches};
 use crate::session::{Device, Tx};
 use crate::settings::Settings;
 use crate::stepper::prep::SegmentSink;
-use crate::stepper::Switches;
 use crate::suspend::Suspend;
 
 #[path = "controller_ports.rs"]

@@ -8,11 +8,11 @@ use crate::executor::{self, Machine, MachineError, Note};
 use crate::link::{LineAssembler, LinkEvent, LinkMode, RtFlags, RtSet, TokenSource};
 use crate::outputs::{LaserQueue, Outputs};
 use crate::realtime::Realtime;
+use crate::seams::Switches;
 use crate::session::{LinkPort, MotionPort};
 use crate::settings::table::SettingError;
 use crate::settings::Settings;
 use crate::stepper::prep::SegmentSink;
-use crate::stepper::Switches;
 use crate::suspend::Suspend;
 
 /// The link decoder's task half: the assembler on the ring's consumer end.

@@ -10,45 +10,56 @@
 //! -> `interp` (modal state) -> [`command`] -> `executor` -> `arc`
 //! (segmenter) -> `planner` (look-ahead) -> `stepper` (segments, pulses).
 //! [`controller`] is the whole parse/plan task, which both shells drive.
+//!
+//! Import rule: the modules are declared below bottom up, and each imports
+//! only modules declared above it, so no two modules import each other,
+//! directly or round a loop. A type two layers share lives in the lower
+//! one: the step pins' configuration and switch levels in [`seams`], the
+//! step-rate ceiling in [`settings::ceiling`], the step event's attention
+//! bits in [`realtime`], the canned cycle in [`command::cycle`]. The
+//! compiler accepts cycles within a crate, so `cargo xtask imports` checks
+//! the rule (and `cargo test -p xtask`, as
+//! `imports::tests::burin_imports_follow_lib_rs_order`, so CI does).
 #![cfg_attr(not(test), no_std)]
 #![deny(unsafe_code)]
 #![warn(missing_debug_implementations)]
 
-// In pipeline order. From `executor` on, a module imports only from modules
-// above it. Above that line imports run both ways: `stepper` owns types the
-// earlier modules use (`StepConfig`, `Switches` in `seams`; the step-rate
-// ceiling in `settings`; the step-config cell in `realtime`; `planner`'s
-// intervals), `command` uses `interp::Cycle`, and `interp` -> `arc` ->
-// `planner`; so `seams`, `settings`, `command`, `interp`, `arc`, `planner`,
-// `realtime` and `stepper` form one import cycle. The order is the reading
-// order, not a layering the compiler checks.
+// Bottom up (the import rule above). rustfmt sorts the declarations
+// between two comment lines, hence a comment per layer.
+//
+// foundations
 pub mod chip;
 pub mod num;
-pub mod seams;
 pub mod settings;
-
+// the hardware traits and the values they exchange
+pub mod seams;
+// what a program asks of the machine, in machine mm
 pub mod command;
-pub mod comp;
-pub mod flow;
-pub mod gcode;
-pub mod interp;
-
-pub mod arc;
+// motion geometry: the planner, then arcs and splines as its chords
 pub mod planner;
-
+// (arcs describe their curve to the planner; the interpreter checks radii here)
+pub mod arc;
+// the language: lexer/parser, cutter compensation, interpreter, O-words
+pub mod gcode;
+// (compensation takes the interpreter's commands and knows nothing of it)
+pub mod comp;
+pub mod interp;
+// (O-word flow drives the interpreter)
+pub mod flow;
+// step generation: the interrupts' shared flags, then segments and pulses
 pub mod realtime;
 pub mod stepper;
-
+// the machine: soft limits, homing, probing, scripts, alarms
 pub mod executor;
-
+// the periphery: switches, link, outputs, persistence, suspend
 pub mod inputs;
 pub mod link;
 pub mod outputs;
 pub mod persist;
 pub mod suspend;
-
+// the device session: lines and frames in, replies out
 pub mod session;
-
+// one pass of the parse/plan task, which both shells drive
 pub mod controller;
 
 /// Number of axes the core drives: X, Y, Z and A.

@@ -9,7 +9,17 @@
 
 use core::sync::atomic::{AtomicBool, AtomicI32, AtomicU32, AtomicU8, Ordering::Relaxed};
 
+use crate::seams::StepConfigCell;
 use crate::AXES;
+
+// The bits of `Realtime::attention`, which the step event tests against
+// its segment's own (`stepper::Running::sense`).
+/// Read the switches: the segment watches one (homing, probing).
+pub(crate) const SENSE_WATCH: u8 = 1;
+/// Read the switches: hard limits (while armed).
+pub(crate) const SENSE_HARD: u8 = 2;
+/// A new generation the stepper has not looked at yet.
+pub(crate) const SENSE_FLUSH: u8 = 4;
 
 /// Why the stepper stopped on its own.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -71,7 +81,7 @@ pub struct Realtime {
     running_line: AtomicU32,
     running_cut: AtomicU32,
     /// What makes the step event leave its plain Bresenham path
-    /// (`stepper::SENSE_*`), against the running segment's own reasons:
+    /// ([`SENSE_WATCH`], [`SENSE_HARD`], [`SENSE_FLUSH`]), against the running segment's own reasons:
     /// reading the switches for the segment's watch (always) and for hard
     /// limits (while armed: `$21` on, not homing, not in alarm, decided by
     /// the controller each pass), and a flush (a new generation, until the
@@ -79,8 +89,8 @@ pub struct Realtime {
     /// one load and one AND; the board's limit interrupts read it too.
     attention: AtomicU8,
     /// The step interrupt's configuration after a `$n=`, taken by the step
-    /// driver while it is stopped (`stepper::config`).
-    step_config: crate::stepper::StepConfigCell,
+    /// driver while it is stopped (`seams::StepConfigCell`).
+    step_config: StepConfigCell,
 }
 
 impl Default for Realtime {
@@ -114,8 +124,8 @@ impl Realtime {
             running_speed: AtomicU32::new(0),
             running_line: AtomicU32::new(0),
             running_cut: AtomicU32::new(0),
-            attention: AtomicU8::new(crate::stepper::SENSE_WATCH),
-            step_config: crate::stepper::StepConfigCell::new(),
+            attention: AtomicU8::new(SENSE_WATCH),
+            step_config: StepConfigCell::new(),
         }
     }
 
@@ -216,17 +226,13 @@ impl Realtime {
     /// the new generation).
     pub(crate) fn bump_generation(&self) -> u32 {
         let g = self.generation.fetch_add(1, Relaxed).wrapping_add(1);
-        self.attention
-            .fetch_or(crate::stepper::SENSE_FLUSH, Relaxed);
+        self.attention.fetch_or(SENSE_FLUSH, Relaxed);
         g
     }
     /// The stepper looked at the generation: clears the flush flag
     /// *before* it compares, so a bump after the clear raises it again.
     pub(crate) fn take_flush(&self) -> bool {
-        self.attention
-            .fetch_and(!crate::stepper::SENSE_FLUSH, Relaxed)
-            & crate::stepper::SENSE_FLUSH
-            != 0
+        self.attention.fetch_and(!SENSE_FLUSH, Relaxed) & SENSE_FLUSH != 0
     }
 
     /// Times the stepper ran dry while motion was still going (the planner
@@ -348,11 +354,10 @@ impl Realtime {
     }
     /// Whether a closed limit switch trips now (see the field).
     pub fn limits_armed(&self) -> bool {
-        self.attention() & crate::stepper::SENSE_HARD != 0
+        self.attention() & SENSE_HARD != 0
     }
     /// Read-modify-write, not a store: the flush flag shares the byte.
     pub fn set_limits_armed(&self, armed: bool) {
-        use crate::stepper::SENSE_HARD;
         if armed != self.limits_armed() {
             if armed {
                 self.attention.fetch_or(SENSE_HARD, Relaxed);
@@ -368,9 +373,15 @@ impl Realtime {
         self.attention.load(Relaxed)
     }
 
+    /// Tests: the flush flag raised without a new generation (a stale one).
+    #[cfg(test)]
+    pub(crate) fn raise_stale_flush(&self) {
+        self.attention.fetch_or(SENSE_FLUSH, Relaxed);
+    }
+
     /// Where the parse task publishes a new step configuration and the
     /// step driver takes it.
-    pub fn step_config(&self) -> &crate::stepper::StepConfigCell {
+    pub fn step_config(&self) -> &StepConfigCell {
         &self.step_config
     }
 
@@ -386,51 +397,6 @@ impl Realtime {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::planner::Watch;
-    use crate::settings::Settings;
-    use crate::stepper::{Segment, StepConfig, Stepper, Switches};
-
-    fn segment(generation: u32) -> Segment {
-        Segment {
-            events: 100,
-            period: 1000,
-            amass: 0,
-            new_block: true,
-            steps: [100, 0, 0, 0],
-            count: 100,
-            dir_mask: 0,
-            watch: Watch::default(),
-            end_of_motion: true,
-            generation,
-            speed_mm_min: 600.0,
-            cut: 0.0,
-            line: 7,
-        }
-    }
-
-    #[test]
-    fn hard_limit_from_an_interrupt_stops_the_next_event() {
-        let rt = Realtime::new();
-        let mut st = Stepper::new(StepConfig::new(&Settings::default(), 1_000_000));
-        let mut queue = [
-            Some(segment(rt.generation())),
-            Some(segment(rt.generation())),
-        ];
-        let mut pop = || queue.iter_mut().find_map(Option::take);
-        let open = Switches::default();
-        assert!(st.on_event(&rt, &mut pop, || open).ticks > 0);
-        assert!(st.on_event(&rt, &mut pop, || open).ticks > 0);
-        let pos = rt.position();
-        // The switch closed and bounced open again before the next event.
-        rt.hard_limit(0b001);
-        assert_eq!(rt.trip(), Trip::HardLimit);
-        assert_eq!(rt.trip_mask(), 0b001);
-        assert_eq!(rt.trip_position(), pos);
-        let ev = st.on_event(&rt, &mut pop, || open);
-        assert_eq!((ev.ticks, ev.step_mask), (0, 0), "no step after the trip");
-        assert!(rt.stepper_idle());
-        assert_eq!(rt.position(), pos);
-    }
 
     #[test]
     fn hard_limit_keeps_an_earlier_trip() {
@@ -441,31 +407,5 @@ mod tests {
         assert_eq!(rt.trip(), Trip::Probe);
         assert_eq!(rt.trip_position(), [5; AXES]);
         assert_ne!(rt.generation(), g, "the stepper still stops");
-    }
-
-    #[test]
-    fn a_flush_stops_the_next_event_whatever_the_limits_setting_does() {
-        let rt = Realtime::new();
-        let mut st = Stepper::new(StepConfig::new(&Settings::default(), 1_000_000));
-        let mut queue = [Some(segment(rt.generation()))];
-        let mut pop = || queue.iter_mut().find_map(Option::take);
-        let open = Switches::default();
-        assert!(st.on_event(&rt, &mut pop, || open).ticks > 0);
-        // A stale flag (no new generation) costs a look, not a stop, and
-        // the look clears it.
-        rt.attention.fetch_or(crate::stepper::SENSE_FLUSH, Relaxed);
-        assert!(st.on_event(&rt, &mut pop, || open).ticks > 0);
-        assert_eq!(rt.attention() & crate::stepper::SENSE_FLUSH, 0);
-        let pos = rt.position();
-        // A flush, then the controller arms and disarms hard limits before
-        // the next event: both only touch their own bit of the byte.
-        rt.halt_stepper();
-        rt.set_limits_armed(true);
-        assert!(rt.limits_armed());
-        rt.set_limits_armed(false);
-        assert!(!rt.limits_armed());
-        let ev = st.on_event(&rt, &mut pop, || open);
-        assert_eq!((ev.ticks, ev.step_mask), (0, 0), "no step after the flush");
-        assert_eq!(rt.position(), pos);
     }
 }

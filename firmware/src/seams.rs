@@ -7,6 +7,17 @@
 //! (switch levels, bytes, the millisecond clock) in
 //! `controller::Inputs`.
 
+mod config;
+
+pub use config::{StepConfig, StepConfigCell, SPIN_TICKS};
+
+/// Switch inputs as pin levels (before the invert settings).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct Switches {
+    pub limits: u8,
+    pub probe: bool,
+}
+
 /// Step, direction and enable outputs. Bit n of each mask is axis n
 /// (X, Y, Z, A); masks are logical (bit set: negative direction, or
 /// "this axis steps"), implementations apply the `$2`/`$3`/`$4` inverts.
@@ -64,7 +75,7 @@ pub trait StepPins {
     /// Hardware that ends pulses by itself takes the new step-off level
     /// here too (the width comes at every start:
     /// [`StepPins::set_pulse_width`]).
-    fn apply_config(&mut self, _cfg: &crate::stepper::StepConfig, _dir_mask: u8) {}
+    fn apply_config(&mut self, _cfg: &StepConfig, _dir_mask: u8) {}
     /// Limit and probe pin levels (before the `$5`/`$6` inverts). The
     /// driver reads them right after each rising edge of a move that
     /// watches a switch (homing, probing) or while hard limits are armed
@@ -72,7 +83,7 @@ pub trait StepPins {
     /// judges a switch with every step so far taken and a trip position
     /// is exact; it is the step interrupt's own read, a closed limit stops
     /// pulses within one event even if its edge interrupt was missed.
-    fn switches(&self) -> crate::stepper::Switches;
+    fn switches(&self) -> Switches;
 }
 
 /// The step timer: a free-running 32-bit tick counter with one compare that

@@ -287,13 +287,13 @@ impl MachineConfig {
         }
         // The firmware's own rule (`$0`/`$201` refused beyond the one
         // step-rate ceiling, `error:114`).
-        if !burin::stepper::ceiling::settings_fit(s) {
+        if !burin::settings::ceiling::settings_fit(s) {
             return Err(ConfigError::invalid(
                 "pulses.step_pulse_us",
                 format!(
                     "a {} µs pulse allows at most {:.0} Hz, motion.max_step_rate_hz is {} Hz",
                     s.step_pulse_us,
-                    burin::stepper::ceiling::ceiling_hz(s.step_pulse_us),
+                    burin::settings::ceiling::ceiling_hz(s.step_pulse_us),
                     s.max_step_rate_hz
                 ),
             ));

@@ -108,7 +108,7 @@ fn measure(ci: bool) -> Result<i32> {
         let verdict = match (name, goal) {
             // The library's step-rate ceiling is built on this figure.
             ("step_path_cycles_1axis_hard_limits_f401", _) => {
-                let lib = f64::from(burin::stepper::ceiling::STEP_PATH_CYCLES);
+                let lib = f64::from(burin::settings::ceiling::STEP_PATH_CYCLES);
                 judge(
                     value <= lib,
                     &format!("<= {lib}, ceiling::STEP_PATH_CYCLES"),

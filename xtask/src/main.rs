@@ -8,6 +8,7 @@ mod flash;
 mod fuzz;
 mod fuzz_seeds;
 mod image;
+mod imports;
 mod msrv;
 mod qemu;
 mod rs274;
@@ -51,6 +52,8 @@ enum Cmd {
     /// Coverage-guided fuzzing (cargo-fuzz, nightly): all targets or one.
     Fuzz(fuzz::FuzzArgs),
     /// Compare the interpreter's end points with LinuxCNC's rs274 (corpus + own programs).
+    /// Check the burin library's import rule: no module cycle, lib.rs order.
+    Imports,
     Rs274 {
         /// Fetch rs274 from Debian into target/rs274 if it is not there.
         #[arg(long)]
@@ -71,6 +74,7 @@ fn main() {
         Cmd::BenchMotion(a) => bench_motion::run(a),
         Cmd::Senders => senders::run(),
         Cmd::Fuzz(a) => fuzz::run(&a),
+        Cmd::Imports => imports::run(),
         Cmd::Rs274 { install } => rs274::run(install).map(|()| 0),
     };
     match result {

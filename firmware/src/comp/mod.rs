@@ -25,8 +25,6 @@
 
 mod geom;
 mod plane;
-#[cfg(test)]
-mod tests;
 
 use crate::command::{Arc, ArcDir, Command, Feed, Plane, Pos};
 use crate::gcode::ErrorKind;

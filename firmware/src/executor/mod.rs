@@ -19,9 +19,9 @@ use crate::arc::{ArcChords, SplineChords};
 use crate::command::{Arc, AxisMask, Command, Feed, Pos, ProbeKind, Spline};
 use crate::planner::{Curve, Planner, Speed, Watch};
 use crate::realtime::{Realtime, Trip};
+use crate::seams::{StepConfig, Switches};
 use crate::settings::{RapidMode, Settings};
 use crate::stepper::prep::{Preparer, SegmentSink};
-use crate::stepper::{StepConfig, Switches};
 use crate::AXES;
 
 /// Chords (arc, spline or rapid legs) the executor plans in one call: a

@@ -21,8 +21,8 @@
 //! program's next move starts there.
 
 use super::*;
+use crate::command::CycleSteps;
 use crate::command::SpindleDir;
-use crate::interp::CycleSteps;
 
 /// What the session tells the operator, or the interpreter, about M6.
 #[derive(Clone, Copy, Debug, PartialEq)]

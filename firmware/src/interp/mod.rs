@@ -16,6 +16,10 @@
 
 mod block;
 mod codes;
+// `comp`'s paths through the whole interpreter (here: `comp` sits below
+// `interp` and imports nothing of it)
+#[cfg(test)]
+mod comp_tests;
 mod cutter;
 pub mod cycles;
 mod exec;
@@ -28,7 +32,6 @@ mod motion;
 mod state;
 pub mod tools;
 
-pub use cycles::{Cycle, CycleKind, CycleSteps};
 pub use exec::{G30_PROBE_TRAVEL, LINE_COMMANDS};
 pub use state::{Motion, Offsets, State, WCS_COUNT};
 pub use tools::{ToolEntry, TOOLS};

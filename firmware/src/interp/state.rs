@@ -7,8 +7,9 @@
 //! [`State::param`]). All of them stay in mm whatever G20/G21 say, like
 //! LinuxCNC's parameters in a metric machine's units.
 
-use super::cycles::{CycleKind, Sticky};
+use super::cycles::Sticky;
 use super::tools::{ToolEntry, TOOLS};
+use crate::command::CycleKind;
 use crate::command::{Plane, Pos, ProbeKind, SpindleDir};
 use crate::gcode::ErrorKind;
 use crate::AXES;

@@ -234,7 +234,7 @@ impl<S: Storage> Persist<S> {
                 // drivers need the pulse width, a lower rate is only
                 // slower, so `$201` comes down to the ceiling (and is
                 // written back as a changed item).
-                let ceiling = libm::floorf(crate::stepper::ceiling::ceiling_hz(v));
+                let ceiling = libm::floorf(crate::settings::ceiling::ceiling_hz(v));
                 if settings
                     .set(201, ceiling.min(settings.max_step_rate_hz))
                     .is_ok()

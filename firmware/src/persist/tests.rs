@@ -325,7 +325,7 @@ fn the_index_reads_what_a_scan_reads() {
 /// its ceiling, written back.
 #[test]
 fn a_wide_pulse_survives_the_step_rate_ceiling_on_load() {
-    use crate::stepper::ceiling::ceiling_hz;
+    use crate::settings::ceiling::ceiling_hz;
     let mut p = persist(Board::new());
     let mut s = p.load().settings;
     s.set(201, 90_000.0).expect("valid");

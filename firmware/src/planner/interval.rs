@@ -43,7 +43,7 @@ pub fn level(dominant: f32, tick_hz: u32, minor: bool) -> u8 {
 /// events per dominant step.
 pub fn floor_ticks(s: &Settings, tick_hz: u32, steps: &[u32; AXES], count: u32, amass: u8) -> u32 {
     // The one ceiling (`$201`, the pins, the CPU), as the driver spaces rises.
-    let ceiling = crate::stepper::ceiling::min_period_ticks(s, tick_hz) as f32;
+    let ceiling = crate::settings::ceiling::min_period_ticks(s, tick_hz) as f32;
     let tick_hz = tick_hz as f32;
     let events = (count as u64) << amass;
     let mut floor = 0u32;

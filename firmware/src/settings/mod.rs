@@ -6,6 +6,7 @@
 
 use crate::AXES;
 
+pub mod ceiling;
 pub mod table;
 
 /// How rapids (G0) move.

@@ -22,7 +22,7 @@ pub enum SettingError {
     /// A mask with bits for axes that do not exist.
     BadMask,
     /// `$201` above the step-rate ceiling that `$0` and the step path's
-    /// cost allow ([`crate::stepper::ceiling::ceiling_hz`]), or a `$0`
+    /// cost allow ([`super::ceiling::ceiling_hz`]), or a `$0`
     /// that makes the current `$201` impossible.
     StepRateCeiling,
 }
@@ -137,9 +137,9 @@ const AXIS_GROUPS: [(u16, Kind); 4] = [
 ];
 
 /// `$201`'s maximum, Hz: what the CPU sustains whatever `$0` is
-/// ([`crate::stepper::ceiling::CPU_RATE_HZ`]); `$0` may lower it further
+/// ([`super::ceiling::CPU_RATE_HZ`]); `$0` may lower it further
 /// ([`Settings::set`] refuses a pair beyond it).
-pub const MAX_STEP_RATE_HZ: f32 = crate::stepper::ceiling::CPU_RATE_HZ;
+pub const MAX_STEP_RATE_HZ: f32 = super::ceiling::CPU_RATE_HZ;
 
 /// burin's own, `$200`–`$208` and `$210` (documented on the [`Settings`]
 /// fields).
@@ -368,7 +368,7 @@ impl Settings {
         if n == 0 || n == 201 {
             let mut next = *self;
             next.set_checked(n, v)?;
-            if !crate::stepper::ceiling::settings_fit(&next) {
+            if !super::ceiling::settings_fit(&next) {
                 return Err(SettingError::StepRateCeiling);
             }
         }

@@ -41,15 +41,9 @@
 //! it stops (which it does then even if more was queued: the task's next
 //! kick starts that on the new configuration).
 
-use super::{Segment, StepConfig, StepEvent, Stepper, SENSE_FLUSH};
-use crate::realtime::Realtime;
-use crate::seams::{StepPins, StepTimer};
-
-/// A target this close (or past) is not left to the compare: the handler
-/// waits for it in a short loop. Covers the compare write's latency
-/// (a few timer clocks) so a just-missed match cannot cost a 2^32 wrap.
-/// At a 96 MHz count; `StepConfig::spin_ticks` scales it to the timer.
-pub const SPIN_TICKS: u32 = 8;
+use super::{Segment, StepConfig, StepEvent, Stepper};
+use crate::realtime::{Realtime, SENSE_FLUSH};
+use crate::seams::{StepPins, StepTimer, SPIN_TICKS};
 
 /// The later of two counter values (wrapping: valid within 2^31 ticks).
 #[inline(always)]
@@ -246,7 +240,7 @@ impl StepDriver {
         stepper: &mut Stepper,
         rt: &Realtime,
         pop: &mut impl FnMut() -> Option<Segment>,
-        sw: impl FnOnce() -> crate::stepper::Switches,
+        sw: impl FnOnce() -> crate::seams::Switches,
     ) -> StepEvent {
         stepper.on_event(rt, pop, sw)
     }

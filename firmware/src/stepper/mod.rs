@@ -24,15 +24,17 @@
 //!   ([`Realtime::stepping`]), the task pends the step interrupt, which
 //!   starts it (this also lets the stepper drop flushed segments).
 
-pub mod ceiling;
-mod config;
 pub mod driver;
 pub mod prep;
 pub mod sink;
+#[cfg(test)]
+mod tests;
 
-pub use config::{StepConfig, StepConfigCell};
+// Defined in `seams`, where the step pins' trait takes them; here too
+// because the board app and bench-target name them from the stepper.
+pub use crate::seams::{StepConfig, Switches};
 
-use crate::realtime::{Realtime, Trip};
+use crate::realtime::{Realtime, Trip, SENSE_FLUSH, SENSE_HARD, SENSE_WATCH};
 use crate::AXES;
 
 /// Highest smoothing level: at low step rates the Bresenham runs at up to
@@ -71,13 +73,6 @@ pub struct Segment {
     pub cut: f32,
 }
 
-/// Switch inputs as pin levels (before the invert settings).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub struct Switches {
-    pub limits: u8,
-    pub probe: bool,
-}
-
 /// What one timer event does to the pins.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct StepEvent {
@@ -112,13 +107,6 @@ struct Running {
     /// [`SENSE_FLUSH`] (always: a flush stops any segment).
     sense: u8,
 }
-
-/// Read the switches: the segment watches one (homing, probing).
-pub(crate) const SENSE_WATCH: u8 = 1;
-/// Read the switches: hard limits (while armed).
-pub(crate) const SENSE_HARD: u8 = 2;
-/// A new generation the stepper has not looked at yet.
-pub(crate) const SENSE_FLUSH: u8 = 4;
 
 impl Running {
     fn sense(&self) -> u8 {

@@ -251,7 +251,7 @@ fn enable_delay_is_checked() {
 /// within the ceiling of the new `$0` makes that `$0` acceptable.
 #[test]
 fn step_rate_beyond_the_ceiling_is_refused() {
-    use burin::stepper::ceiling;
+    use burin::settings::ceiling;
     let mut s = Settings::default();
     let before = s;
     assert_eq!(s.set(201, 450_000.0), Err(SettingError::StepRateCeiling));

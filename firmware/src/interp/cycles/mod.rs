@@ -3,8 +3,9 @@
 //! reference for every end point; see the tests).
 //!
 //! A cycle block resolves its words here into one [`Cycle`] command in
-//! machine mm; `steps` ([`CycleSteps`]) expands it into moves (the executor runs the
-//! same expansion). The plane decides the axes: G17 drills along Z at X/Y
+//! machine mm; `command::cycle` ([`CycleSteps`](crate::command::CycleSteps))
+//! expands it into moves (the executor runs the same expansion). The plane
+//! decides the axes: G17 drills along Z at X/Y
 //! holes, G18 along Y at Z/X holes, G19 along X at Y/Z holes; the depth
 //! word is that axis's letter.
 //!
@@ -28,14 +29,11 @@
 //!   still stopped, and restarts it: the machine ends where LinuxCNC's
 //!   interpreter believes it is.
 
-mod steps;
-
-pub use steps::{Cycle, CycleKind, CycleSteps, MAX_MOVES, MAX_PECKS, PECK_CLEARANCE};
-
 use super::block::AXIS_LETTERS;
 use super::exec::{push, Ctx, Out};
 use super::state::State;
-use crate::command::{Command, SpindleDir};
+use crate::command::cycle::{MAX_MOVES, MAX_PECKS};
+use crate::command::{Command, Cycle, CycleKind, SpindleDir};
 use crate::gcode::{ErrorKind, GcodeError};
 
 /// Cycle words that carry over to the next block of the same cycle.

@@ -2,8 +2,8 @@
 //! a chosen amount, and every store is logged with its time.
 use super::*;
 use crate::planner::Watch;
+use crate::seams::Switches;
 use crate::settings::Settings;
-use crate::stepper::Switches;
 
 /// The clock advances one tick per counter read, so the driver's short
 /// wait for a near target ends. `HW`: the hardware ends pulses (logged as

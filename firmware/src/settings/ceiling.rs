@@ -1,7 +1,7 @@
 //! The one step-rate ceiling (issue 28). The planner's rate cap
 //! ([`crate::planner::interval::floor_ticks`]), the preparer's segment
 //! periods and the step driver's spacing of rises all read
-//! [`min_period_ticks`], through [`super::StepConfig::min_period`] or
+//! [`min_period_ticks`], through [`crate::seams::StepConfig::min_period`] or
 //! directly, so the planner never plans a step sooner than the driver
 //! will make it; `$0` and `$201` values beyond [`ceiling_hz`] are refused
 //! (`error:114`).
@@ -9,7 +9,7 @@
 //! A step after a step needs, rise to rise, the longest of:
 //! - the pins: the pulse (`$0`), an allowance for the pulse end's and
 //!   the rise's lateness ([`PIN_ALLOWANCE_US`]) and the minimum low time
-//!   (`$0`, at least 1 µs: [`super::StepConfig::min_low_ticks`]);
+//!   (`$0`, at least 1 µs: [`crate::seams::StepConfig::min_low_ticks`]);
 //! - `$201`'s period;
 //! - the CPU: [`STEP_PATH_CYCLES`] of the slower board at most
 //!   [`STEP_PATH_SHARE`] of its time ([`CPU_RATE_HZ`]).

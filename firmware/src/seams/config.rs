@@ -17,7 +17,14 @@
 
 use core::sync::atomic::{fence, AtomicU32, Ordering};
 
+use crate::settings::ceiling;
 use crate::settings::Settings;
+
+/// A target this close (or past) is not left to the compare: the step
+/// driver waits for it in a short loop. Covers the compare write's latency
+/// (a few timer clocks) so a just-missed match cannot cost a 2^32 wrap.
+/// At a 96 MHz count; [`StepConfig::spin_ticks`] scales it to the timer.
+pub const SPIN_TICKS: u32 = 8;
 
 /// Pin timing in timer ticks and the invert masks.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -26,7 +33,7 @@ pub struct StepConfig {
     pub pulse_ticks: u32,
     pub dir_setup_ticks: u32,
     /// Shortest time between two step events: the one step-rate ceiling
-    /// ([`super::ceiling::min_period_ticks`]: `$201`, the pins and the
+    /// ([`ceiling::min_period_ticks`]: `$201`, the pins and the
     /// CPU), which the preparer plans with and the driver spaces rises by.
     pub min_period: u32,
     /// Shortest low time between two pulses the step driver guarantees,
@@ -37,7 +44,7 @@ pub struct StepConfig {
     /// `$207`: from driver enable to the first step edge.
     pub enable_ticks: u32,
     /// How close a target may be for the step interrupt to wait for it
-    /// rather than arm the compare: [`super::driver::SPIN_TICKS`] at 96 MHz,
+    /// rather than arm the compare: [`SPIN_TICKS`] at 96 MHz,
     /// scaled to the timer's clock (0 below 12 MHz, where the compare
     /// write's latency is a fraction of a tick). A slow counter (a fuzzing
     /// clock of 48 kHz) spun 8 whole ticks per event, 167 µs each.
@@ -70,16 +77,16 @@ impl StepConfig {
     };
 
     pub fn new(s: &Settings, tick_hz: u32) -> Self {
-        let exact = |us: f32| super::ceiling::ticks(us, tick_hz);
+        let exact = |us: f32| ceiling::ticks(us, tick_hz);
         StepConfig {
             tick_hz,
-            pulse_ticks: super::ceiling::pulse_ticks(s.step_pulse_us, tick_hz),
+            pulse_ticks: ceiling::pulse_ticks(s.step_pulse_us, tick_hz),
             dir_setup_ticks: exact(s.dir_setup_us).max(1),
-            min_period: super::ceiling::min_period_ticks(s, tick_hz),
-            min_low_ticks: super::ceiling::min_low_ticks(s.step_pulse_us, tick_hz),
+            min_period: ceiling::min_period_ticks(s, tick_hz),
+            min_low_ticks: ceiling::min_low_ticks(s.step_pulse_us, tick_hz),
             enable_ticks: exact(s.enable_delay_us),
-            spin_ticks: (super::driver::SPIN_TICKS as u64 * tick_hz as u64 / 96_000_000)
-                .min(super::driver::SPIN_TICKS as u64) as u32,
+            spin_ticks: (SPIN_TICKS as u64 * tick_hz as u64 / 96_000_000).min(SPIN_TICKS as u64)
+                as u32,
             step_invert: s.step_invert,
             dir_invert: s.dir_invert,
             limit_invert: s.limit_invert,

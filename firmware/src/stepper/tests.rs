@@ -1,0 +1,75 @@
+//! The step event against the realtime flags the interrupts and the task
+//! raise between two events.
+
+use super::{Segment, StepConfig, Stepper, Switches};
+use crate::planner::Watch;
+use crate::realtime::{Realtime, Trip, SENSE_FLUSH};
+use crate::settings::Settings;
+
+fn segment(generation: u32) -> Segment {
+    Segment {
+        events: 100,
+        period: 1000,
+        amass: 0,
+        new_block: true,
+        steps: [100, 0, 0, 0],
+        count: 100,
+        dir_mask: 0,
+        watch: Watch::default(),
+        end_of_motion: true,
+        generation,
+        speed_mm_min: 600.0,
+        cut: 0.0,
+        line: 7,
+    }
+}
+
+#[test]
+fn hard_limit_from_an_interrupt_stops_the_next_event() {
+    let rt = Realtime::new();
+    let mut st = Stepper::new(StepConfig::new(&Settings::default(), 1_000_000));
+    let mut queue = [
+        Some(segment(rt.generation())),
+        Some(segment(rt.generation())),
+    ];
+    let mut pop = || queue.iter_mut().find_map(Option::take);
+    let open = Switches::default();
+    assert!(st.on_event(&rt, &mut pop, || open).ticks > 0);
+    assert!(st.on_event(&rt, &mut pop, || open).ticks > 0);
+    let pos = rt.position();
+    // The switch closed and bounced open again before the next event.
+    rt.hard_limit(0b001);
+    assert_eq!(rt.trip(), Trip::HardLimit);
+    assert_eq!(rt.trip_mask(), 0b001);
+    assert_eq!(rt.trip_position(), pos);
+    let ev = st.on_event(&rt, &mut pop, || open);
+    assert_eq!((ev.ticks, ev.step_mask), (0, 0), "no step after the trip");
+    assert!(rt.stepper_idle());
+    assert_eq!(rt.position(), pos);
+}
+
+#[test]
+fn a_flush_stops_the_next_event_whatever_the_limits_setting_does() {
+    let rt = Realtime::new();
+    let mut st = Stepper::new(StepConfig::new(&Settings::default(), 1_000_000));
+    let mut queue = [Some(segment(rt.generation()))];
+    let mut pop = || queue.iter_mut().find_map(Option::take);
+    let open = Switches::default();
+    assert!(st.on_event(&rt, &mut pop, || open).ticks > 0);
+    // A stale flag (no new generation) costs a look, not a stop, and
+    // the look clears it.
+    rt.raise_stale_flush();
+    assert!(st.on_event(&rt, &mut pop, || open).ticks > 0);
+    assert_eq!(rt.attention() & SENSE_FLUSH, 0);
+    let pos = rt.position();
+    // A flush, then the controller arms and disarms hard limits before
+    // the next event: both only touch their own bit of the byte.
+    rt.halt_stepper();
+    rt.set_limits_armed(true);
+    assert!(rt.limits_armed());
+    rt.set_limits_armed(false);
+    assert!(!rt.limits_armed());
+    let ev = st.on_event(&rt, &mut pop, || open);
+    assert_eq!((ev.ticks, ev.step_mask), (0, 0), "no step after the flush");
+    assert_eq!(rt.position(), pos);
+}
