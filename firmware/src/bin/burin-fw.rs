@@ -15,7 +15,7 @@
 //!    the segment queue's consumer: a rise (one BSRR write, next event
 //!    computed while the pulse is high) and a fall per step, each at an
 //!    absolute CC1 target of the free-running counter;
-//! 2. `usb` (OTG_FS, or `usart` on QEMU): bytes through the link's
+//! 2. `usb` (OTG_FS) or `usart` (USART1 on QEMU): bytes through the link's
 //!    `RxSplitter` into the token ring (realtime bytes flag at once), reply
 //!    bytes out of the TX ring;
 //!    `cycle_start`, `feed_hold`, `probe` (EXTI0, EXTI1, EXTI3) share this
@@ -48,10 +48,14 @@ fn main() {
     eprintln!("burin-fw is firmware: build it with `cargo xtask build`");
 }
 
-// The app's modules live in `burin-fw/` beside this file.
+// The app's modules live in `burin-fw/` beside this file; what differs per
+// board is in `boards/` (one module per board, chosen by the Cargo feature).
 #[cfg(target_os = "none")]
 #[path = "burin-fw/boards/mod.rs"]
 mod boards;
+#[cfg(target_os = "none")]
+#[path = "burin-fw/boot.rs"]
+mod boot;
 #[cfg(target_os = "none")]
 #[path = "burin-fw/fault.rs"]
 mod fault;
@@ -61,28 +65,15 @@ mod inputs;
 #[cfg(target_os = "none")]
 #[path = "burin-fw/outputs.rs"]
 mod outputs;
-#[cfg(all(target_os = "none", not(feature = "board-qemu")))]
-#[path = "burin-fw/pulse_end.rs"]
-mod pulse_end;
 #[cfg(target_os = "none")]
 #[path = "burin-fw/rings.rs"]
 mod rings;
-#[cfg(all(target_os = "none", not(feature = "board-qemu")))]
-#[path = "burin-fw/selfcheck.rs"]
-mod selfcheck;
 #[cfg(target_os = "none")]
 #[path = "burin-fw/step.rs"]
 mod step;
 #[cfg(target_os = "none")]
 #[path = "burin-fw/storage.rs"]
 mod storage;
-// The link: USB-CDC on the real boards, USART1 on QEMU (no OTG model).
-#[cfg(all(target_os = "none", feature = "board-qemu"))]
-#[path = "burin-fw/usart.rs"]
-mod usart;
-#[cfg(all(target_os = "none", not(feature = "board-qemu")))]
-#[path = "burin-fw/usb.rs"]
-mod usb;
 
 #[cfg(target_os = "none")]
 use defmt_rtt as _;
@@ -128,66 +119,41 @@ mod app {
     use crate::boards::board;
     use crate::outputs::Io;
     use crate::rings::{TxRing, PLANNER_BLOCKS, SEGMENT_SLOTS, TX_RING};
-    use crate::step::{StepHw, StepTask, Tim5};
-    #[cfg(feature = "board-qemu")]
-    use crate::usart::UsartLink as Link;
-    #[cfg(not(feature = "board-qemu"))]
-    use crate::usb::UsbLink as Link;
+    use crate::step::StepTask;
     use burin::controller::{Controller, Inputs};
     use burin::executor::Machine;
     use burin::inputs::{self as inp, Debounce};
     use burin::link::{RxToken, RX_RING};
-    use burin::persist::Persist;
-    use burin::session::{Device, Identity};
     use burin::settings::Settings;
-    use burin::stepper::{Segment, Stepper};
+    use burin::stepper::Segment;
     use core::mem::MaybeUninit;
-    #[cfg(not(feature = "board-qemu"))]
-    use core::sync::atomic::Ordering;
-    use cortex_m::peripheral::syst::SystClkSource;
     use heapless::spsc::{Consumer, Producer, Queue};
-    #[cfg(not(feature = "board-qemu"))]
-    use protocol::usb_ids::{serial_from_uid, USB_SERIAL_LEN};
     use rtic_sync::channel::{Receiver, Sender};
-    #[cfg(not(feature = "board-qemu"))]
-    use stm32f4xx_hal::otg_fs::{UsbBus, UsbBusType, USB};
     use stm32f4xx_hal::{
         gpio::{Output, PC13},
         pac,
-        prelude::*,
-        syscfg::SysCfgExt,
         watchdog::IndependentWatchdog,
     };
-    #[cfg(not(feature = "board-qemu"))]
-    use usb_device::bus::UsbBusAllocator;
-
-    /// The link's interrupt, pended by `parse` after it queues a reply.
-    #[cfg(not(feature = "board-qemu"))]
-    const LINK_IRQ: pac::Interrupt = pac::Interrupt::OTG_FS;
-    #[cfg(feature = "board-qemu")]
-    const LINK_IRQ: pac::Interrupt = crate::usart::IRQ;
 
     /// "Something changed, run the session": a one-slot channel, so any
     /// number of signals before the task runs cost one pass.
     type Wake = Sender<'static, (), 1>;
 
     #[shared]
-    struct Shared {}
+    struct Shared {
+        /// The host link (`board::Link`: USB-CDC, or USART1 on QEMU) and
+        /// its wake-up, for `usb` and `usart` alike (one priority, so no
+        /// lock).
+        #[lock_free]
+        link: board::Link,
+        #[lock_free]
+        wake_link: Wake,
+    }
 
     #[local]
     struct Local {
         driver: StepTask,
         wake_step: Wake,
-        /// USB-CDC (`usb.rs`), or USART1 on QEMU (`usart.rs`). Two names
-        /// because RTIC checks task locals before cfg removes a task.
-        #[cfg(not(feature = "board-qemu"))]
-        link: Link,
-        #[cfg(not(feature = "board-qemu"))]
-        wake_usb: Wake,
-        #[cfg(feature = "board-qemu")]
-        uart: Link,
-        #[cfg(feature = "board-qemu")]
-        wake_uart: Wake,
         wake: Receiver<'static, (), 1>,
         rx_tokens: Consumer<'static, RxToken>,
         tx_bytes: Producer<'static, u8>,
@@ -217,227 +183,91 @@ mod app {
         seg_ring: Queue<Segment, SEGMENT_SLOTS> = Queue::new(),
         machine_slot: Machine<PLANNER_BLOCKS> = Machine::placeholder(),
         controller_slot: MaybeUninit<Controller<crate::storage::Store>> = MaybeUninit::uninit(),
-        #[cfg(not(feature = "board-qemu"))]
-        ep_memory: [u32; 1024] = [0; 1024],
-        #[cfg(not(feature = "board-qemu"))]
-        usb_bus: Option<UsbBusAllocator<UsbBusType>> = None,
-        #[cfg(not(feature = "board-qemu"))]
-        serial: [u8; USB_SERIAL_LEN] = [0; USB_SERIAL_LEN],
-        #[cfg(feature = "board-qemu")]
-        ram_store: crate::storage::Mem = crate::storage::Mem::new(),
-        #[cfg(not(feature = "board-qemu"))]
-        backlog: burin::link::RxBacklog<{ crate::usb::BACKLOG }> = burin::link::RxBacklog::new(),
+        link_mem: board::LinkMem = board::LinkMem::new(),
+        store_mem: board::StoreMem = board::StoreMem::new(),
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
-        let dp = cx.device;
+        let p = board::take(cx.device);
         let mut core = cx.core;
-
-        // Clocks: HSE + PLL as the board file says (96 MHz on the F411),
-        // from the reset state (a DFU `:leave` jumps here with the ROM
-        // bootloader's PLL still running), after the regulator scale they
-        // need (set while the PLL is off).
-        #[cfg(not(feature = "board-qemu"))]
-        clocks_to_reset_state(&dp.RCC);
-        board::regulator(&dp.PWR, &dp.RCC);
-        #[cfg(not(feature = "board-qemu"))]
-        if !board::start_hse(&dp.RCC) {
-            defmt::error!("the 25 MHz crystal did not start: blinking the LED on HSI");
-            board::blink_no_crystal(dp.RCC, dp.GPIOC);
-        }
-        let mut rcc = dp.RCC.freeze(board::clocks());
-        #[cfg(not(feature = "board-qemu"))]
-        if !rcc.clocks.is_pll48clk_valid() {
-            defmt::error!("USB clock is not 48 MHz: the port will not enumerate");
-        }
-
-        // Keep the debug probe (RTT logs) working through WFI, and stop the
-        // watchdog while the core is halted at a breakpoint.
-        dp.DBGMCU.cr().modify(|_, w| w.dbg_sleep().set_bit());
-        let watchdog = IndependentWatchdog::new(dp.IWDG);
-        watchdog.stop_on_debug(&dp.DBGMCU, true);
-
-        // Settings and offsets first: the pins' idle levels depend on them.
-        #[cfg(not(feature = "board-qemu"))]
-        let store = crate::storage::open(dp.FLASH);
-        #[cfg(feature = "board-qemu")]
-        let store = crate::storage::open(dp.FLASH, cx.local.ram_store);
-        #[allow(unused_mut)]
-        let (persist, mut boot) = load_settings(store);
-        #[cfg(feature = "board-qemu")]
-        board::boot_overrides(&mut boot.settings);
+        // Clocks and regulator as the board says (a dead crystal blinks).
+        let (mut rcc, gpioc) = board::start_clocks(p.rcc, &p.pwr, p.gpioc);
+        let watchdog = crate::boot::debug_and_watchdog(&p.dbgmcu, p.iwdg);
+        // Settings first: the pins' idle levels depend on them.
+        let store = board::open_store(p.flash, cx.local.store_mem);
+        let (persist, boot) = crate::boot::load_settings(store);
         let settings = boot.settings;
-        crate::fault::publish(settings.enable_invert);
-
-        // Pins: the board's map, everything in its safe state (outputs off,
-        // drivers disabled): the step/dir/enable pins at their idle levels
-        // under the stored `$2`/`$3`/`$4` from the store that makes them
-        // outputs (`board::split`); `set_invert` below keeps them there.
-        let gpioa = dp.GPIOA.split(&mut rcc);
-        let gpiob = dp.GPIOB.split(&mut rcc);
-        let gpioc = dp.GPIOC.split(&mut rcc);
-        let idle = board::Idle {
-            step_invert: settings.step_invert,
-            dir_invert: settings.dir_invert,
-            enable_active_high: settings.enable_invert,
-        };
-        let mut pins = board::split(gpioa, gpiob, gpioc, dp.TIM1, &mut rcc, idle);
-        pins.steppers.set_invert(
-            settings.step_invert,
-            settings.dir_invert,
-            settings.enable_invert,
-        );
-        pins.aux.all_off();
-
-        // Rings between the tasks, split once: producer and consumer each
-        // go to the one task that uses that end.
+        // Pins, all in their safe state.
+        let pins = crate::boot::pins((p.gpioa, p.gpiob, gpioc), p.tim1, &mut rcc, &settings);
+        // Rings between the tasks, split once: each end goes to its task.
         let (rx_send, rx_tokens) = cx.local.rx_ring.split();
         let (tx_bytes, tx_recv) = cx.local.tx_ring.split();
         let (segments, seg_recv) = cx.local.seg_ring.split();
-        // USB: serial number from the 96-bit unique ID, then the CDC port.
-        #[cfg(not(feature = "board-qemu"))]
-        let serial = serial_from_uid(read_uid(), cx.local.serial);
-        #[cfg(not(feature = "board-qemu"))]
-        let usb = USB::new(
-            (dp.OTG_FS_GLOBAL, dp.OTG_FS_DEVICE, dp.OTG_FS_PWRCLK),
-            pins.usb_pins,
-            &rcc.clocks,
+        // The host link (USB serial number, or "-" on QEMU).
+        let (link, serial) = board::open_link(
+            p.link,
+            pins.link_pins,
+            &mut rcc,
+            cx.local.link_mem,
+            rx_send,
+            tx_recv,
         );
-        #[cfg(not(feature = "board-qemu"))]
-        let bus = &*cx
-            .local
-            .usb_bus
-            .insert(UsbBus::new(usb, cx.local.ep_memory));
-        #[cfg(not(feature = "board-qemu"))]
-        let link = Link::new(bus, serial, rx_send, tx_recv, cx.local.backlog);
-        // QEMU: USART1 at BAUD 8N1 (the first `-serial` of the machine).
-        // Early in init: QEMU drops what the host sends before UE is set.
-        #[cfg(feature = "board-qemu")]
-        let uart = match dp
-            .USART1
-            .serial(pins.usart_pins, crate::usart::BAUD.bps(), &mut rcc)
-        {
-            Ok(serial) => Link::new(serial, rx_send, tx_recv),
-            Err(_) => defmt::panic!("USART1 cannot run at {} baud", crate::usart::BAUD),
-        };
-        #[cfg(feature = "board-qemu")]
-        let serial = "-";
-
-        // Motion core: executor on the default settings, stepper with the
-        // same pin timing, the step port with the same inverts.
-        let timer = Tim5::new(dp.TIM5, &mut rcc);
-        let tick_hz = burin::seams::StepTimer::tick_hz(&timer);
-        // The step pulses end by TIM1 compare 2 and DMA2, at the idle
-        // levels `set_invert` chose; the path is checked against the
-        // chip's bus matrix and by one zero-effect transfer.
-        #[cfg(not(feature = "board-qemu"))]
-        let pulse = {
-            let (word, bsrr) = pins.steppers.step_off_store();
-            let tim1_clk = rcc.clocks.timclk2().raw();
-            let (pulse, check) = crate::pulse_end::PulseEnd::new(
-                dp.DMA2,
-                &mut rcc,
-                board::CHIP,
-                bsrr,
-                word,
-                tim1_clk,
-                tick_hz,
-            );
-            if let Err(fault) = check {
-                defmt::error!("boot check: {}", fault.message());
-                crate::RT.set_hw_fault(fault);
-            }
-            pulse
-        };
-        #[cfg(not(feature = "board-qemu"))]
-        crate::selfcheck::clocks_and_timers(&mut core.DCB, &mut core.DWT, &rcc.clocks, &crate::RT);
-        let cfg = burin::stepper::StepConfig::new(&settings, tick_hz);
-        let steppers = pins.steppers;
-        // Outputs: spindle, coolant, and the enable pin for the idle timer
-        // (same `$4` polarity as the step port; both follow a `$4=` at once,
-        // the step port in the step interrupt, this one in `Io::write`).
-        let io = Io::new(pins.aux, board::enable_pin(settings.enable_invert));
-        // Inputs: EXTI on both edges; the levels at power-up are settled.
-        crate::inputs::publish(&settings);
-        let mut syscfg = dp.SYSCFG.constrain(&mut rcc);
-        let mut exti = dp.EXTI;
-        let mut inputs = pins.inputs;
-        board::enable_exti(&mut inputs, &mut syscfg, &mut exti);
-        let debounce = Debounce::new(crate::inputs::SETTLE_MS, crate::inputs::active_now());
-        // An e-stop already pressed at power-up latches the alarm too.
-        crate::RT.set_estop(debounce.stable() & inp::ESTOP != 0);
-
-        // The step timer stays stopped until `parse` queues segments.
-        let driver = StepTask::new(
-            StepHw {
-                port: steppers,
-                timer,
-                #[cfg(not(feature = "board-qemu"))]
-                pulse,
-            },
-            Stepper::new(cfg),
+        // Motion: the step task on TIM5 and the board's pulse end.
+        let dcb_dwt = (&mut core.DCB, &mut core.DWT);
+        let (driver, tick_hz) = crate::boot::step_task(
+            p.tim5,
+            p.dma2,
+            pins.steppers,
+            dcb_dwt,
+            &mut rcc,
+            &settings,
             seg_recv,
         );
+        // Outputs and inputs.
+        let io = crate::boot::outputs(pins.aux, &settings);
+        let debounce = crate::boot::inputs(pins.inputs, p.syscfg, p.exti, &mut rcc, &settings);
         let (wake_step, wake) = rtic_sync::make_channel!((), 1);
-
         // Heartbeat: SysTick at HEARTBEAT_HZ from the core clock.
         let sysclk = rcc.clocks.sysclk().raw();
-        start_heartbeat(&mut core.SYST, sysclk);
-
-        // The session on the loaded settings; it tells the boot report
-        // after the banner.
-        let identity = Identity {
-            board: board::NAME,
-            caps: 0,
-        };
-        let controller = build_controller(cx.local.controller_slot, identity, persist, &boot);
-
-        // The parse task prints the banner, then waits for a wake-up.
+        crate::boot::start_heartbeat(&mut core.SYST, sysclk);
+        // The session; the parse task prints the banner, then waits.
+        let controller = crate::boot::build_controller(cx.local.controller_slot, persist, &boot);
         if parse::spawn().is_err() {
             defmt::error!("parse task already running");
         }
-
-        // Watchdog last, so the slow setup above cannot trip it.
-        let mut watchdog = watchdog;
-        watchdog.start(crate::WATCHDOG_MS.millis());
-
+        let watchdog = crate::boot::start_watchdog(watchdog);
+        let (name, version) = (board::NAME, burin::VERSION);
         defmt::info!(
             "burin {} on {} at {} Hz, USB serial {}",
-            burin::VERSION,
-            board::NAME,
+            version,
+            name,
             sysclk,
             serial
         );
-        (
-            Shared {},
-            Local {
-                driver,
-                wake_step: wake_step.clone(),
-                #[cfg(not(feature = "board-qemu"))]
-                link,
-                #[cfg(not(feature = "board-qemu"))]
-                wake_usb: wake_step.clone(),
-                #[cfg(feature = "board-qemu")]
-                uart,
-                #[cfg(feature = "board-qemu")]
-                wake_uart: wake_step.clone(),
-                wake,
-                rx_tokens,
-                tx_bytes,
-                segments,
-                machine: cx.local.machine_slot,
-                boot: (settings, tick_hz),
-                controller,
-                led: pins.led,
-                debounce,
-                io,
-                wake_limit_x: wake_step.clone(),
-                wake_limit_yz: wake_step.clone(),
-                wake_estop: wake_step.clone(),
-                wake_hold: wake_step.clone(),
-                wake_beat: wake_step,
-                watchdog,
-            },
-        )
+        let shared = Shared {
+            link,
+            wake_link: wake_step.clone(),
+        };
+        let local = Local {
+            driver,
+            wake_step: wake_step.clone(),
+            wake,
+            rx_tokens,
+            tx_bytes,
+            segments,
+            machine: cx.local.machine_slot,
+            boot: (settings, tick_hz),
+            controller,
+            led: pins.led,
+            debounce,
+            io,
+            wake_limit_x: wake_step.clone(),
+            wake_limit_yz: wake_step.clone(),
+            wake_estop: wake_step.clone(),
+            wake_hold: wake_step.clone(),
+            wake_beat: wake_step,
+            watchdog,
+        };
+        (shared, local)
     }
 
     /// Sleep until an interrupt; feed the watchdog every time through. (A
@@ -506,21 +336,23 @@ mod app {
         crate::inputs::take_edges(pac::Interrupt::EXTI3, inp::PROBE);
     }
 
-    /// The USB port: enumeration, bytes to the splitter, replies out.
-    #[cfg(not(feature = "board-qemu"))]
-    #[task(binds = OTG_FS, priority = 2, local = [link, wake_usb])]
+    /// The host link's interrupt: OTG_FS on the Black Pills (`usb`),
+    /// USART1 on QEMU (`usart`); each board's peripheral raises only its
+    /// own, the other vector stays silent. Bytes to the splitter, replies
+    /// out.
+    #[task(binds = OTG_FS, priority = 2, shared = [link, wake_link])]
     fn usb(cx: usb::Context) {
-        if cx.local.link.service(&crate::FLAGS) {
-            let _ = cx.local.wake_usb.try_send(());
-        }
+        serve_link(cx.shared.link, cx.shared.wake_link);
     }
 
-    /// The same for the USART link (QEMU).
-    #[cfg(feature = "board-qemu")]
-    #[task(binds = USART1, priority = 2, local = [uart, wake_uart])]
+    #[task(binds = USART1, priority = 2, shared = [link, wake_link])]
     fn usart(cx: usart::Context) {
-        if cx.local.uart.service(&crate::FLAGS) {
-            let _ = cx.local.wake_uart.try_send(());
+        serve_link(cx.shared.link, cx.shared.wake_link);
+    }
+
+    fn serve_link(link: &mut board::Link, wake: &mut Wake) {
+        if link.service(&crate::FLAGS) {
+            let _ = wake.try_send(());
         }
     }
 
@@ -546,20 +378,12 @@ mod app {
             dropped: 0,
         };
         controller.hello(&mut tx);
-        #[cfg(feature = "board-qemu")]
         board::fault_drill();
         loop {
-            #[cfg(not(feature = "board-qemu"))]
-            let port_closed = crate::usb::PORT_CLOSED.swap(false, Ordering::AcqRel);
-            #[cfg(feature = "board-qemu")]
-            let port_closed = false;
             // A port open: the session decides (a reset with its banner
             // when nothing runs, before this pass answers any line of the
             // new client; nothing while a job runs).
-            #[cfg(not(feature = "board-qemu"))]
-            let port_opened = crate::usb::PORT_OPENED.swap(false, Ordering::AcqRel);
-            #[cfg(feature = "board-qemu")]
-            let port_opened = false;
+            let (port_closed, port_opened) = board::port_events();
             let input = Inputs {
                 now_ms: crate::inputs::now_ms(),
                 switches: board::switches(),
@@ -582,7 +406,7 @@ mod app {
                 rtic::pend(pac::Interrupt::TIM5);
             }
             // Replies out (an idle port raises no interrupt by itself).
-            rtic::pend(LINK_IRQ);
+            rtic::pend(board::LINK_IRQ);
             if tx.dropped > 0 {
                 defmt::error!("{} reply bytes dropped", core::mem::take(&mut tx.dropped));
             }
@@ -638,82 +462,5 @@ mod app {
             );
         }
         let _ = wake_beat.try_send(());
-    }
-
-    /// The session and controller, built straight into its static slot in
-    /// a frame of its own.
-    #[inline(never)]
-    fn build_controller(
-        slot: &'static mut MaybeUninit<Controller<crate::storage::Store>>,
-        identity: Identity,
-        persist: Persist<crate::storage::Store>,
-        boot: &burin::persist::Loaded,
-    ) -> &'static mut Controller<crate::storage::Store> {
-        // One expression, both constructors inlined: the session (with the
-        // O-word stage's 2 KiB capture buffer) is built in the slot, not
-        // built on the stack and copied there.
-        slot.write(Controller::new(
-            Device::with_storage(identity, persist, Some(boot)),
-            &boot.settings,
-            crate::outputs::WAKE_MS,
-        ))
-    }
-
-    /// HSI as the system clock and the PLL off, as after a reset (where
-    /// this changes nothing). The HAL's clock setup writes PLLCFGR, which
-    /// the chip ignores while the PLL runs, and the ROM bootloader that a
-    /// DFU `:leave` comes from leaves its PLL on. HSI is the reset clock, so
-    /// the waits end within its start-up time. (Not on QEMU: its RCC model
-    /// never reports a clock ready, and nothing runs before the app there.)
-    #[cfg(not(feature = "board-qemu"))]
-    fn clocks_to_reset_state(rcc: &pac::RCC) {
-        rcc.cr().modify(|_, w| w.hsion().set_bit());
-        while rcc.cr().read().hsirdy().bit_is_clear() {}
-        rcc.cfgr().modify(|_, w| w.sw().hsi());
-        while !rcc.cfgr().read().sws().is_hsi() {}
-        rcc.cr().modify(|_, w| w.pllon().clear_bit());
-        while rcc.cr().read().pllrdy().bit_is_set() {}
-    }
-
-    /// SysTick at [`crate::HEARTBEAT_HZ`] from the core clock `sysclk`.
-    fn start_heartbeat(syst: &mut cortex_m::peripheral::SYST, sysclk: u32) {
-        syst.set_clock_source(SystClkSource::Core);
-        // The reload register has 24 bits (16.7 M cycles, 0.17 s at 96 MHz).
-        syst.set_reload((sysclk / crate::HEARTBEAT_HZ - 1).min(0x00FF_FFFF));
-        syst.clear_current();
-        syst.enable_interrupt();
-        syst.enable_counter();
-    }
-
-    /// Settings and offsets from the store, before the machine is built on
-    /// them (flash sectors 1-2; RAM on QEMU, see storage.rs).
-    fn load_settings(
-        store: crate::storage::Store,
-    ) -> (Persist<crate::storage::Store>, burin::persist::Loaded) {
-        let mut persist = Persist::new(store, Settings::default());
-        let boot = persist.load();
-        if !boot.report.is_clean() {
-            defmt::warn!(
-                "settings: {} items defaulted, storage error: {}",
-                boot.report.defaulted,
-                boot.report.failed
-            );
-        }
-        (persist, boot)
-    }
-
-    /// The chip's 96-bit unique ID, lowest address first.
-    #[cfg(not(feature = "board-qemu"))]
-    fn read_uid() -> [u32; 3] {
-        const UID: *const u32 = 0x1FFF_7A10 as *const u32;
-        // SAFETY: 0x1FFF_7A10..0x1FFF_7A1C is the factory-programmed,
-        // always-readable unique device ID of every STM32F4 (RM0383 §24.1).
-        unsafe {
-            [
-                UID.read_volatile(),
-                UID.add(1).read_volatile(),
-                UID.add(2).read_volatile(),
-            ]
-        }
     }
 }
