@@ -13,11 +13,20 @@ use burin::settings::Settings;
 use burin::stepper::{Segment, Stepper};
 use core::mem::MaybeUninit;
 use cortex_m::peripheral::syst::SystClkSource;
-use cortex_m::peripheral::{DCB, DWT, SYST};
+use cortex_m::peripheral::SYST;
 use heapless::spsc::Consumer;
 use stm32f4xx_hal::{pac, prelude::*, rcc::Rcc, syscfg::SysCfgExt, watchdog::IndependentWatchdog};
 
 type Store = crate::storage::Store;
+
+/// SysTick rate; the watchdog timeout must be several of these periods.
+pub const HEARTBEAT_HZ: u32 = 100;
+/// Watchdog timeout, counted on the nominal 32 kHz LSI. Idle feeds it at
+/// least every heartbeat (10 ms), but not while a settings write erases
+/// flash with the CPU stalled: a migration erases both 16 KiB sectors back
+/// to back, up to 0.8 s each (1.6 s). The LSI may run at 47 kHz (datasheet
+/// maximum), which makes 4 s nominal at least 2.7 s real.
+const WATCHDOG_MS: u32 = 4000;
 
 /// Keeps the debug probe (RTT logs) working through WFI, and stops the
 /// watchdog while the core is halted at a breakpoint. The watchdog is
@@ -80,10 +89,8 @@ pub fn pins(
 /// same inverts. The timer stays stopped until `parse` queues segments.
 /// Returns the task and the step timer's tick rate.
 pub fn step_task(
-    tim5: pac::TIM5,
-    dma2: pac::DMA2,
-    port: crate::step::StepPort,
-    core: (&mut DCB, &mut DWT),
+    (tim5, dma2, port): (pac::TIM5, pac::DMA2, crate::step::StepPort),
+    core: &mut cortex_m::Peripherals,
     rcc: &mut Rcc,
     settings: &Settings,
     segments: Consumer<'static, Segment>,
@@ -91,7 +98,7 @@ pub fn step_task(
     let timer = Tim5::new(tim5, rcc);
     let tick_hz = burin::seams::StepTimer::tick_hz(&timer);
     let hw = board::step_hw(port, timer, dma2, rcc);
-    board::self_check(core.0, core.1, &rcc.clocks);
+    board::self_check(&mut core.DCB, &mut core.DWT, &rcc.clocks);
     let cfg = burin::stepper::StepConfig::new(settings, tick_hz);
     (StepTask::new(hw, Stepper::new(cfg), segments), tick_hz)
 }
@@ -120,11 +127,11 @@ pub fn inputs(
     debounce
 }
 
-/// SysTick at [`crate::HEARTBEAT_HZ`] from the core clock `sysclk`.
+/// SysTick at [`HEARTBEAT_HZ`] from the core clock `sysclk`.
 pub fn start_heartbeat(syst: &mut SYST, sysclk: u32) {
     syst.set_clock_source(SystClkSource::Core);
     // The reload register has 24 bits (16.7 M cycles, 0.17 s at 96 MHz).
-    syst.set_reload((sysclk / crate::HEARTBEAT_HZ - 1).min(0x00FF_FFFF));
+    syst.set_reload((sysclk / HEARTBEAT_HZ - 1).min(0x00FF_FFFF));
     syst.clear_current();
     syst.enable_interrupt();
     syst.enable_counter();
@@ -153,8 +160,20 @@ pub fn build_controller(
     ))
 }
 
-/// The watchdog, last, so the slow setup before it cannot trip it.
-pub fn start_watchdog(mut watchdog: IndependentWatchdog) -> IndependentWatchdog {
-    watchdog.start(crate::WATCHDOG_MS.millis());
+/// The watchdog, last, so the slow setup before it cannot trip it; then
+/// the boot line in the log.
+pub fn start_watchdog(
+    mut watchdog: IndependentWatchdog,
+    sysclk: u32,
+    serial: &str,
+) -> IndependentWatchdog {
+    watchdog.start(WATCHDOG_MS.millis());
+    defmt::info!(
+        "burin {} on {} at {} Hz, USB serial {}",
+        burin::VERSION,
+        board::NAME,
+        sysclk,
+        serial
+    );
     watchdog
 }
