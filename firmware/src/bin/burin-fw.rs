@@ -109,7 +109,6 @@ mod app {
         led: PC13<Output>,
         debounce: Debounce,
         watchdog: IndependentWatchdog,
-        // The tasks' ends of the wake channel.
         wake_step: Wake,
         wake_beat: Wake,
         wake_limit_x: Wake,
@@ -289,10 +288,11 @@ mod app {
     fn heartbeat(cx: heartbeat::Context) {
         let ticks = cx.local.ticks;
         *ticks = ticks.wrapping_add(1);
+        let now = ticks.wrapping_mul(1000 / HEARTBEAT_HZ);
+        crate::inputs::set_now(now);
         if ticks.is_multiple_of(HEARTBEAT_HZ / 2) {
             cx.local.led.toggle();
         }
-        let now = ticks.wrapping_mul(1000 / HEARTBEAT_HZ);
         crate::inputs::heartbeat(cx.local.debounce, now);
         let _ = cx.local.wake_beat.try_send(());
     }

@@ -207,7 +207,6 @@ pub fn poll(deb: &mut Debounce, now: u32) -> Change {
 /// from the host, and instant inputs whose interrupt read them open (a
 /// bounce) but that settled closed act now, late rather than never.
 pub fn heartbeat(debounce: &mut Debounce, now: u32) {
-    set_now(now);
     let change = poll(debounce, now);
     if change.pressed & inp::FEED_HOLD != 0 {
         crate::FLAGS.raise(protocol::Rt::FeedHold);
