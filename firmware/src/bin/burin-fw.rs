@@ -51,7 +51,6 @@ mod fw {
     pub mod pass;
     pub mod rings;
     pub mod step;
-    pub mod storage;
 }
 #[cfg(target_os = "none")]
 use fw::*;
@@ -89,7 +88,7 @@ mod app {
     /// "Something changed, run the session": a one-slot channel, so any
     /// number of signals before the task runs cost one pass.
     type Wake = Sender<'static, (), 1>;
-    type Store = crate::storage::Store;
+    type Store = board::Store;
 
     #[shared]
     struct Shared {

@@ -17,7 +17,7 @@ use cortex_m::peripheral::SYST;
 use heapless::spsc::Consumer;
 use stm32f4xx_hal::{pac, prelude::*, rcc::Rcc, syscfg::SysCfgExt, watchdog::IndependentWatchdog};
 
-type Store = crate::storage::Store;
+type Store = board::Store;
 
 /// SysTick rate; the watchdog timeout must be several of these periods.
 pub const HEARTBEAT_HZ: u32 = 100;

@@ -62,10 +62,7 @@ pub fn outputs_off() {
 fn stop(sp: u32) -> ! {
     outputs_off();
     board::stop_step_timer();
-    #[cfg(feature = "board-qemu")]
     board::report_fault(sp);
-    #[cfg(not(feature = "board-qemu"))]
-    let _ = sp;
     loop {
         cortex_m::asm::wfi();
     }

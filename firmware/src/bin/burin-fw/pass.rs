@@ -14,7 +14,7 @@ use heapless::spsc::{Consumer, Producer};
 use rtic_sync::channel::Receiver;
 use stm32f4xx_hal::pac;
 
-type Store = crate::storage::Store;
+type Store = board::Store;
 
 /// The parse task's state, built by init.
 pub struct Parse {

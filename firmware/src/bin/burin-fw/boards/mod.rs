@@ -3,8 +3,8 @@
 //! Cargo feature:
 //! - `f411` / `f401`: the WeAct Black Pill (`blackpill.rs`: pin map and
 //!   register-level fault stores; `blackpill_init.rs`: clocks, USB link,
-//!   flash store, pulse-end DMA, boot self-check), each file adding only
-//!   its chip's constants (name, clock tree, regulator);
+//!   flash store (`storage.rs`), pulse-end DMA, boot self-check), each
+//!   file adding only its chip's constants (name, clock tree, regulator);
 //! - `qemu`: QEMU's netduinoplus2 (`qemu.rs`): the same pin map on HSI,
 //!   the link on USART1, settings in RAM.
 //!
@@ -15,14 +15,14 @@
 //! | `NAME` | the board's name for the log and `$I` |
 //! | `take(pac::Peripherals) -> Periph<LinkHw>` | the peripherals init hands out |
 //! | `start_clocks(rcc, &pwr, gpioc) -> (Rcc, gpioc)` | clock tree and regulator |
-//! | `StoreMem`, `open_store`, `boot_overrides` | the settings store |
-//! | `split(gpioa, gpiob, gpioc, tim1, rcc, Idle) -> Board` | the pin map, outputs safe |
+//! | `Store`, `StoreMem`, `open_store`, `boot_overrides` | the settings store |
+//! | `split(gpioa, gpiob, gpioc, tim1, rcc, Idle) -> Board` | the pin map, outputs safe (`Board`: `steppers`, `inputs`, `aux`, `led`, `link_pins`) |
 //! | `Link`, `LINK_IRQ`, `LinkMem`, `open_link`, `port_events` | the host link |
 //! | `step_hw(StepPort, Tim5, dma2, rcc) -> StepHw` | the step hardware |
 //! | `self_check(dcb, dwt, clocks)` | boot checks of clocks and timers |
 //! | `enable_exti`, `switches`, `closed_now` | the switch inputs |
 //! | `enable_pin`, `kill_aux`, `outputs_off`, `outputs_off_word`, `stop_step_timer` | outputs, and the fault path's register stores |
-//! | `fault_drill`, `report_fault` | QEMU's fault drills (no-ops on the boards) |
+//! | `fault_drill`, `report_fault` | QEMU's fault drills and fault report (no-ops on the boards) |
 //!
 //! Adding a board is a new module here, a feature and a `memory-<board>.x`.
 #[cfg(any(
@@ -94,6 +94,9 @@ pub mod pulse_end;
 #[cfg(not(feature = "board-qemu"))]
 #[path = "../selfcheck.rs"]
 mod selfcheck;
+#[cfg(not(feature = "board-qemu"))]
+#[path = "../storage.rs"]
+mod storage;
 #[cfg(not(feature = "board-qemu"))]
 #[path = "../usb.rs"]
 mod usb;

@@ -15,6 +15,7 @@ use super::usart::{UsartLink, BAUD};
 use super::Periph;
 use crate::step::{StepHw, StepPort, Tim5};
 use burin::link::RxToken;
+use burin::persist::{FlashMap, RamFlash};
 use burin::seams::StepPins;
 use cortex_m::peripheral::{DCB, DWT};
 use heapless::spsc::{Consumer, Producer};
@@ -140,13 +141,18 @@ pub fn start_clocks(rcc: pac::RCC, _pwr: &pac::PWR, gpioc: pac::GPIOC) -> (Rcc, 
     (rcc.freeze(clocks()), gpioc)
 }
 
-/// The settings map's two RAM pages (`storage.rs`): nothing survives a
+/// The settings map's pages: two 4 KiB pages of RAM, the map's code path
+/// (`storage.rs` on the boards) without persistence: nothing survives a
 /// restart of QEMU.
-pub type StoreMem = crate::storage::Mem;
+pub type StoreMem = RamFlash<8192, 4096>;
+/// The pages stay in init's static, lent to the map: held by value they
+/// were 8 KB that init and the session moved on the stack, which the
+/// board's flash handle is not.
+pub type Store = FlashMap<&'static mut StoreMem>;
 
-/// Settings in RAM (QEMU models no flash controller).
-pub fn open_store(flash: pac::FLASH, mem: &'static mut StoreMem) -> crate::storage::Store {
-    crate::storage::open(flash, mem)
+/// Settings in RAM: the flash controller stays unused (QEMU ignores it).
+pub fn open_store(_flash: pac::FLASH, mem: &'static mut StoreMem) -> Store {
+    FlashMap::new(mem)
 }
 
 /// The host link: USART1 (`usart.rs`), the machine's first `-serial`.
