@@ -71,7 +71,7 @@ static FLAGS: burin::link::RtFlags = burin::link::RtFlags::new();
 mod app {
     use crate::boards::board;
     use crate::boot::{self as steps, HEARTBEAT_HZ};
-    use crate::pass::Parse;
+    use crate::pass::{parse, Parse};
     use crate::rings::{PLANNER_BLOCKS, SEGMENT_SLOTS, TX_RING};
     use crate::step::StepTask;
     use burin::controller::Controller;
@@ -273,11 +273,12 @@ mod app {
         }
     }
 
-    /// Parser -> interpreter -> planner -> segment preparer: one pass of
-    /// `burin::controller` per wake-up (`pass.rs`).
-    #[task(priority = 1, local = [parse, wake])]
-    async fn parse(cx: parse::Context) {
-        cx.local.parse.run(cx.local.wake).await;
+    // Parser -> interpreter -> planner -> segment preparer: one pass of
+    // `burin::controller` per wake-up. The body is `pass::parse` (RTIC's
+    // extern task).
+    extern "Rust" {
+        #[task(priority = 1, local = [parse, wake])]
+        async fn parse(cx: parse::Context);
     }
 
     /// 100 Hz housekeeping: blink the LED at 1 Hz (alive), re-check the

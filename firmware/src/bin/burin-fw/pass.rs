@@ -11,7 +11,6 @@ use burin::link::RxToken;
 use burin::settings::Settings;
 use burin::stepper::Segment;
 use heapless::spsc::{Consumer, Producer};
-use rtic_sync::channel::Receiver;
 use stm32f4xx_hal::pac;
 
 type Store = board::Store;
@@ -22,7 +21,7 @@ pub struct Parse {
     pub tx_bytes: Producer<'static, u8>,
     pub segments: Producer<'static, Segment>,
     /// A static built at compile time (`Machine::placeholder`), which
-    /// [`Parse::run`] rebuilds in place on the loaded settings when it
+    /// `parse` rebuilds in place on the loaded settings when it
     /// starts: `Machine::new` at run time built the whole machine (19.8 KB)
     /// as a temporary on the stack (the F401 has 20 KiB).
     pub machine: &'static mut Machine<PLANNER_BLOCKS>,
@@ -33,75 +32,63 @@ pub struct Parse {
     pub io: Io,
 }
 
-impl Parse {
-    /// The task: the machine built on the loaded settings, the banner,
-    /// then one [`one_pass`] per wake-up, for good.
-    pub async fn run(&mut self, wake: &mut Receiver<'static, (), 1>) {
-        let Parse {
-            rx_tokens,
-            tx_bytes,
-            segments,
-            machine,
-            boot,
-            controller,
-            io,
-        } = self;
-        machine.rebuild(boot.0, boot.1);
-        let mut tx = TxRing {
-            ring: tx_bytes,
-            dropped: 0,
-        };
-        controller.hello(&mut tx);
-        board::fault_drill();
-        loop {
-            one_pass(controller, machine, rx_tokens, segments, &mut tx, io);
-            if wake.recv().await.is_err() {
-                break;
-            }
-        }
-        defmt::error!("wake channel closed; parse task ends");
-    }
-}
-
-/// One pass, then the step interrupt kicked if it has segments to start
-/// and the link's interrupt pended for the replies (an idle port raises
-/// no interrupt by itself).
-#[inline(always)]
-pub fn one_pass(
-    controller: &mut Controller<Store>,
-    machine: &mut Machine<PLANNER_BLOCKS>,
-    rx: &mut Consumer<'static, RxToken>,
-    segments: &mut Producer<'static, Segment>,
-    tx: &mut TxRing,
-    io: &mut Io,
-) {
-    // A port open: the session decides (a reset with its banner when
-    // nothing runs, before this pass answers any line of the new client;
-    // nothing while a job runs).
-    let (port_closed, port_opened) = board::port_events();
-    let input = Inputs {
-        now_ms: crate::inputs::now_ms(),
-        switches: board::switches(),
-        pins: crate::inputs::report_pins(),
-        port_closed,
-        port_opened,
-    };
-    let io_rings = burin::controller::Io {
-        rt: &crate::RT,
-        flags: &crate::FLAGS,
-        rx,
+/// The parse task (declared in the app, `burin-fw.rs`): the machine built
+/// on the loaded settings, the banner, then one pass per wake-up, for
+/// good. One pass runs `burin::controller` with the board's inputs, writes
+/// its pin levels, kicks the step interrupt if it has segments to start,
+/// and pends the link's interrupt for the replies.
+pub async fn parse(cx: crate::app::parse::Context<'_>) {
+    let Parse {
+        rx_tokens,
+        tx_bytes,
         segments,
-        tx: &mut *tx,
+        machine,
+        boot,
+        controller,
+        io,
+    } = cx.local.parse;
+    let wake = cx.local.wake;
+    machine.rebuild(boot.0, boot.1);
+    let mut tx = TxRing {
+        ring: tx_bytes,
+        dropped: 0,
     };
-    let pass = controller.pass(machine, io_rings, input, &mut |_| {});
-    crate::inputs::publish(machine.settings());
-    crate::fault::publish(machine.settings().enable_invert);
-    io.write(&pass.pins);
-    if pass.kick {
-        rtic::pend(pac::Interrupt::TIM5);
+    controller.hello(&mut tx);
+    board::fault_drill();
+    loop {
+        // A port open: the session decides (a reset with its banner
+        // when nothing runs, before this pass answers any line of the
+        // new client; nothing while a job runs).
+        let (port_closed, port_opened) = board::port_events();
+        let input = Inputs {
+            now_ms: crate::inputs::now_ms(),
+            switches: board::switches(),
+            pins: crate::inputs::report_pins(),
+            port_closed,
+            port_opened,
+        };
+        let io_rings = burin::controller::Io {
+            rt: &crate::RT,
+            flags: &crate::FLAGS,
+            rx: &mut *rx_tokens,
+            segments: &mut *segments,
+            tx: &mut tx,
+        };
+        let pass = controller.pass(machine, io_rings, input, &mut |_| {});
+        crate::inputs::publish(machine.settings());
+        crate::fault::publish(machine.settings().enable_invert);
+        io.write(&pass.pins);
+        if pass.kick {
+            rtic::pend(pac::Interrupt::TIM5);
+        }
+        // Replies out (an idle port raises no interrupt by itself).
+        rtic::pend(board::LINK_IRQ);
+        if tx.dropped > 0 {
+            defmt::error!("{} reply bytes dropped", core::mem::take(&mut tx.dropped));
+        }
+        if wake.recv().await.is_err() {
+            break;
+        }
     }
-    rtic::pend(board::LINK_IRQ);
-    if tx.dropped > 0 {
-        defmt::error!("{} reply bytes dropped", core::mem::take(&mut tx.dropped));
-    }
+    defmt::error!("wake channel closed; parse task ends");
 }
