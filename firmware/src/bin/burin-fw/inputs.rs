@@ -201,3 +201,32 @@ pub fn poll(deb: &mut Debounce, now: u32) -> Change {
     PINS.store(inp::report_pins(deb.stable()), Relaxed);
     change
 }
+
+/// The heartbeat's input work at `now` (ms): [`poll`], then settled button
+/// presses become realtime commands through the same flags as `!` and `~`
+/// from the host, and instant inputs whose interrupt read them open (a
+/// bounce) but that settled closed act now, late rather than never.
+pub fn heartbeat(debounce: &mut Debounce, now: u32) {
+    let change = poll(debounce, now);
+    if change.pressed & inp::FEED_HOLD != 0 {
+        crate::FLAGS.raise(protocol::Rt::FeedHold);
+    }
+    if change.pressed & inp::CYCLE_START != 0 {
+        crate::FLAGS.raise(protocol::Rt::CycleStart);
+    }
+    if change.pressed & inp::ESTOP != 0 {
+        estop();
+    }
+    limits_closed(change.pressed);
+    // The e-stop level for the machine's alarm latch, once settled (its
+    // edge interrupt set it already on the first edge).
+    if debounce.masked() & inp::ESTOP == 0 {
+        crate::RT.set_estop(debounce.stable() & inp::ESTOP != 0);
+    }
+    if change.pressed | change.released != 0 {
+        defmt::info!(
+            "inputs active: {=u8:07b} (bit 0 X limit .. 6 e-stop)",
+            debounce.stable()
+        );
+    }
+}

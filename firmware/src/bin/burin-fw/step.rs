@@ -309,7 +309,7 @@ pub struct StepHw {
     pub timer: Tim5,
     /// TIM1 compare 2 and DMA2: the pulse's end (`pulse_end.rs`).
     #[cfg(not(feature = "board-qemu"))]
-    pub pulse: crate::pulse_end::PulseEnd,
+    pub pulse: crate::boards::pulse_end::PulseEnd,
 }
 
 impl StepPins for StepHw {
@@ -327,7 +327,7 @@ impl StepPins for StepHw {
         let (bsrr, word) = self.port.rise_store(step_mask);
         let (width, arr) = self.pulse.params();
         cortex_m::interrupt::disable();
-        crate::pulse_end::PulseEnd::arm_end(width, arr);
+        crate::boards::pulse_end::PulseEnd::arm_end(width, arr);
         // SAFETY: register level: `bsrr` is the step port's BSRR and `word`
         // one of `StepPort`'s precomputed words (see `StepPort::write`).
         unsafe { core::ptr::write_volatile(bsrr as *mut u32, word) };

@@ -8,16 +8,12 @@
 //! which would take the code with it, so [`SectorFlash`] implements the
 //! traits with 16 KiB pages on the HAL's sector erase and byte programming.
 //!
-//! QEMU does not model the flash controller: the `board-qemu` build keeps
-//! the map in RAM, so the same code runs there but nothing survives a
-//! restart of QEMU.
+//! QEMU does not model the flash controller: its board (`boards/qemu.rs`)
+//! keeps the same map in RAM instead, so the same code runs there but
+//! nothing survives a restart of QEMU.
 
-#[cfg(not(feature = "board-qemu"))]
 pub use board_flash::{open, Store};
-#[cfg(feature = "board-qemu")]
-pub use ram::{open, Mem, Store};
 
-#[cfg(not(feature = "board-qemu"))]
 mod board_flash {
     use burin::persist::FlashMap;
     use embedded_storage::nor_flash::{
@@ -146,23 +142,5 @@ mod board_flash {
             self.flush_data_cache();
             Ok(result?)
         }
-    }
-}
-
-#[cfg(feature = "board-qemu")]
-mod ram {
-    use burin::persist::{FlashMap, RamFlash};
-    use stm32f4xx_hal::pac;
-
-    /// Two 4 KiB pages of RAM: the map's code path, without persistence.
-    pub type Mem = RamFlash<8192, 4096>;
-    /// The pages stay in init's static (`mem`), lent to the map: held by
-    /// value they were 8 KB that init and the session moved on the stack,
-    /// which the board's flash handle is not.
-    pub type Store = FlashMap<&'static mut Mem>;
-
-    /// The flash controller stays unused (QEMU ignores it).
-    pub fn open(_flash: pac::FLASH, mem: &'static mut Mem) -> Store {
-        FlashMap::new(mem)
     }
 }

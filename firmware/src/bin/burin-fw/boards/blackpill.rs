@@ -223,7 +223,8 @@ pub struct Board {
     pub inputs: Inputs,
     pub aux: Aux,
     pub led: PC13<Output>,
-    pub usb_pins: (PA11, PA12),
+    /// USB (OTG_FS DM/DP).
+    pub link_pins: (PA11, PA12),
 }
 
 /// Idle levels of the motion outputs under the stored `$2`, `$3`, `$4`,
@@ -354,7 +355,7 @@ pub fn split(
         inputs,
         aux,
         led: gpioc.pc13.into_push_pull_output(),
-        usb_pins: (gpioa.pa11, gpioa.pa12),
+        link_pins: (gpioa.pa11, gpioa.pa12),
     }
 }
 

@@ -1,12 +1,10 @@
 //! WeAct Black Pill V1.3/V3 with an STM32F401CCU6. Same package and board
 //! as the F411 one, so it shares the Black Pill pin map; only the clock
-//! tree and the memory sizes differ.
+//! tree and the memory sizes differ (the setup is `blackpill_init.rs`).
 use stm32f4xx_hal::{prelude::*, rcc::Config};
 
-pub use super::blackpill::{
-    blink_no_crystal, closed_now, enable_exti, enable_pin, kill_aux, outputs_off, outputs_off_word,
-    split, start_hse, stop_step_timer, switches, Aux, Idle,
-};
+pub use super::blackpill::*;
+pub use super::blackpill_init::*;
 
 /// Human-readable board name for the startup log and `$I`.
 pub const NAME: &str = "WeAct Black Pill STM32F401CCU6";

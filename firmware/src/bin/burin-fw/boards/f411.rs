@@ -1,10 +1,10 @@
-//! WeAct Black Pill V3 with an STM32F411CEU6 (the default board).
+//! WeAct Black Pill V3 with an STM32F411CEU6 (the default board): the
+//! Black Pill's map and setup (`blackpill.rs`, `blackpill_init.rs`) with
+//! this chip's constants.
 use stm32f4xx_hal::{pac, prelude::*, rcc::Config};
 
-pub use super::blackpill::{
-    blink_no_crystal, closed_now, enable_exti, enable_pin, kill_aux, outputs_off, outputs_off_word,
-    split, start_hse, stop_step_timer, switches, Aux, Idle,
-};
+pub use super::blackpill::*;
+pub use super::blackpill_init::*;
 
 /// Human-readable board name for the startup log and `$I`.
 pub const NAME: &str = "WeAct Black Pill STM32F411CEU6";

@@ -10,14 +10,20 @@
 //!   0, writes ignored); TIM2–5, the USARTs and the NVIC are real.
 //!
 //! Everything else is the Black Pill's pin map, so the same code paths run.
-use super::super::step::StepPort;
 use super::blackpill::PORT_PINS;
+use super::usart::{UsartLink, BAUD};
+use super::Periph;
+use crate::step::{StepHw, StepPort, Tim5};
+use burin::link::RxToken;
+use burin::persist::{FlashMap, RamFlash};
 use burin::seams::StepPins;
+use cortex_m::peripheral::{DCB, DWT};
+use heapless::spsc::{Consumer, Producer};
 use stm32f4xx_hal::{
     gpio::{gpioa, gpiob, gpioc, Output, PA10, PA9, PC13},
     pac,
     prelude::*,
-    rcc::{Config, Rcc},
+    rcc::{Clocks, Config, Rcc},
 };
 
 pub use super::blackpill::{
@@ -59,7 +65,7 @@ pub struct Board {
     pub aux: Aux,
     pub led: PC13<Output>,
     /// USART1 TX/RX.
-    pub usart_pins: (PA9, PA10),
+    pub link_pins: (PA9, PA10),
 }
 
 /// The Black Pill's map (see `blackpill.rs`), with USART1 in place of USB;
@@ -125,12 +131,80 @@ pub fn split(
         inputs,
         aux,
         led: gpioc.pc13.into_push_pull_output(),
-        usart_pins: (gpioa.pa9, gpioa.pa10),
+        link_pins: (gpioa.pa9, gpioa.pa10),
     }
 }
 
-/// The regulator as the clocks need it: nothing to do (QEMU models no regulator).
-pub fn regulator(_pwr: &stm32f4xx_hal::pac::PWR, _rcc: &stm32f4xx_hal::pac::RCC) {}
+/// Clocks: HSI only (QEMU models no regulator, and its RCC never reports
+/// a clock ready).
+pub fn start_clocks(rcc: pac::RCC, _pwr: &pac::PWR, gpioc: pac::GPIOC) -> (Rcc, pac::GPIOC) {
+    (rcc.freeze(clocks()), gpioc)
+}
+
+/// The settings map's pages: two 4 KiB pages of RAM, the map's code path
+/// (`storage.rs` on the boards) without persistence: nothing survives a
+/// restart of QEMU.
+pub type StoreMem = RamFlash<8192, 4096>;
+/// The pages stay in init's static, lent to the map: held by value they
+/// were 8 KB that init and the session moved on the stack, which the
+/// board's flash handle is not.
+pub type Store = FlashMap<&'static mut StoreMem>;
+
+/// Settings in RAM: the flash controller stays unused (QEMU ignores it).
+pub fn open_store(_flash: pac::FLASH, mem: &'static mut StoreMem) -> Store {
+    FlashMap::new(mem)
+}
+
+/// The host link: USART1 (`usart.rs`), the machine's first `-serial`.
+pub type Link = UsartLink;
+/// The link's interrupt, pended by `parse` after it queues a reply.
+pub const LINK_IRQ: pac::Interrupt = super::usart::IRQ;
+/// USART1's registers.
+pub type LinkHw = pac::USART1;
+
+/// The peripherals init hands out, the link's being USART1.
+pub fn take(dp: pac::Peripherals) -> Periph<LinkHw> {
+    take_periph!(dp, dp.USART1)
+}
+
+/// The USART link needs no static of init's.
+pub struct LinkMem;
+
+impl LinkMem {
+    pub const fn new() -> Self {
+        LinkMem
+    }
+}
+
+/// USART1 at `BAUD` 8N1. Early in init: QEMU drops what the host sends
+/// before UE is set. No serial number: "-".
+pub fn open_link(
+    hw: LinkHw,
+    pins: (PA9, PA10),
+    rcc: &mut Rcc,
+    _mem: &'static mut LinkMem,
+    rx: Producer<'static, RxToken>,
+    tx: Consumer<'static, u8>,
+) -> (Link, &'static str) {
+    match hw.serial(pins, BAUD.bps(), rcc) {
+        Ok(serial) => (Link::new(serial, rx, tx), "-"),
+        Err(_) => defmt::panic!("USART1 cannot run at {} baud", BAUD),
+    }
+}
+
+/// A USART has no port to open or close.
+pub fn port_events() -> (bool, bool) {
+    (false, false)
+}
+
+/// The step hardware: pins and TIM5 alone (QEMU's timer model has neither
+/// compare channels nor DMA, so the step interrupt ends the pulses).
+pub fn step_hw(port: StepPort, timer: Tim5, _dma2: pac::DMA2, _rcc: &mut Rcc) -> StepHw {
+    StepHw { port, timer }
+}
+
+/// No boot checks: QEMU's clocks and timers are not the chip's.
+pub fn self_check(_: &mut DCB, _: &mut DWT, _: &Clocks) {}
 
 /// Fault drills (QEMU only): `cargo xtask qemu` sets this word with QEMU's
 /// generic loader (`-device loader,addr=...,data=...`) to make the app
