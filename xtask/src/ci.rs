@@ -67,9 +67,6 @@ pub fn run_all() -> Result<i32> {
     step("host tests", || {
         run(cargo().args(["test", "--workspace", "--", "--skip", "corpus_"]))
     })?;
-    // From here on the steps leave a core idle for long stretches (fat-LTO
-    // links, single-threaded test runs): the fuzz targets build there.
-    let fuzz_built = std::thread::spawn(crate::fuzz::prebuild);
     for board in crate::image::Board::ALL {
         step(&format!("firmware image + size budget ({board})"), || {
             crate::image::ci_check(board)
@@ -84,17 +81,7 @@ pub fn run_all() -> Result<i32> {
     // Skipped (not failed) without nightly or cargo-fuzz; fails on a finding.
     step(
         &format!("fuzz: every target {FUZZ_CI_SECS} s (cargo xtask fuzz)"),
-        || {
-            match fuzz_built.join() {
-                Ok(Ok(took)) => eprintln!(
-                    "fuzz: targets built beside the steps before in {:.0} s",
-                    took.as_secs_f64()
-                ),
-                Ok(Err(why)) => eprintln!("fuzz: build beside the steps before: {why}"),
-                Err(_) => eprintln!("fuzz: the build beside the steps before panicked"),
-            }
-            crate::fuzz::ci_step(FUZZ_CI_SECS)
-        },
+        || crate::fuzz::ci_step(FUZZ_CI_SECS),
     )?;
     step(
         "firmware under QEMU (netduinoplus2): cargo xtask qemu",

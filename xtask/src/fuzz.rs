@@ -164,25 +164,6 @@ fn fuzz_all(targets: &[&str], secs: u64, runs: Option<u64>) -> Result<Vec<Outcom
     Ok(outs)
 }
 
-/// CI: builds every target beside the steps before the fuzz step (the
-/// images' fat-LTO links use one core; this fills the other), into the
-/// fuzz workspace's own target directory, so no lock is shared. Quiet: the
-/// fuzz step's own build (then a no-op) reports any error. Returns how
-/// long it took, or why it did not run.
-pub fn prebuild() -> std::result::Result<std::time::Duration, String> {
-    if let Some(why) = missing_tools(false) {
-        return Err(why);
-    }
-    let t = Instant::now();
-    let mut c = nightly_cargo();
-    c.args(["fuzz", "build", "--sanitizer", "none"]);
-    if quiet_ok(&mut c) {
-        Ok(t.elapsed())
-    } else {
-        Err("failed (the fuzz step builds again and shows why)".into())
-    }
-}
-
 fn build(targets: &[&str]) -> Result<()> {
     let mut c = nightly_cargo();
     c.args(["fuzz", "build", "--sanitizer", "none"]);
