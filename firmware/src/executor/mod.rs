@@ -334,9 +334,13 @@ impl<const N: usize> Machine<N> {
     }
 
     /// No motion left: nothing planned, prepared, queued for the step
-    /// interrupt or being stepped.
+    /// interrupt or being stepped ([`Self::drained`] and an empty queue).
+    /// The queue is read before the step interrupt's idle flag: the
+    /// interrupt pops and loads a segment in one go, so one it takes
+    /// between the two reads has cleared the flag by then and is not
+    /// missed (the other order could see both idle).
     pub fn motion_idle(&self, rt: &Realtime, sink: &impl SegmentSink) -> bool {
-        self.drained(rt) && sink.is_empty()
+        self.planner.is_empty() && self.prep.is_idle() && sink.is_empty() && rt.stepper_idle()
     }
 
     /// [`Self::motion_idle`] as far as the machine sees without the segment
