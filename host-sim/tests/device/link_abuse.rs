@@ -59,6 +59,21 @@ fn reset_after_a_flood_voids_the_flood() {
     assert!(!r.lines().iter().any(|l| l == "ok"));
 }
 
+/// Issue 32: the virtual board takes what the board takes before it
+/// pushes back (its token ring and `burin::link::RX_BACKLOG`), so the
+/// flood tests here see the board's flow control.
+#[test]
+fn receive_window_is_the_boards() {
+    use burin::link::{RX_BACKLOG, RX_RING, SNIFF};
+    let cfg = origin();
+    let mut rec = Discard;
+    let r = Rig::new(&cfg, &mut rec);
+    // The backlog's room keeps 2 + SNIFF for markers and a held frame
+    // start. (The board's spsc ring holds RX_RING - 1 of its slots, this
+    // Deque all RX_RING.)
+    assert_eq!(r.dev.room(), RX_RING + RX_BACKLOG - 2 - SNIFF);
+}
+
 /// Issue 15 item 7: `!` behind 400 queued lines holds within one pass.
 #[test]
 fn hold_behind_queued_text_acts_at_once() {
