@@ -29,7 +29,19 @@ use crate::suspend::Suspend;
 mod ports;
 use ports::{Core, TaskLink};
 
+pub use crate::link::{RX_BACKLOG, RX_RING};
 pub use crate::session::TX_HEADROOM;
+
+/// Planner ring size (blocks of look-ahead), the same in both shells.
+pub const PLANNER_BLOCKS: usize = 64;
+/// Prepared segments between the parse task and the step interrupt
+/// (`heapless::spsc` keeps one slot free), the same in both shells.
+pub const SEGMENT_SLOTS: usize = 16;
+/// Reply bytes waiting for the link interrupt: the board's TX ring, and
+/// the room host-sim's tests give their reply buffer to see a full ring.
+/// A pass reads new input only with [`TX_HEADROOM`] of it free.
+pub const TX_RING: usize = 1024;
+const _: () = assert!(TX_HEADROOM < TX_RING);
 
 /// What the shell reports at the start of a pass.
 #[derive(Clone, Copy, Debug, Default)]

@@ -114,11 +114,7 @@ impl<Q: SegmentSink, const N: usize> MotionPort for Core<'_, Q, N> {
         self.machine.alarm()
     }
     fn motion_idle(&self) -> bool {
-        self.machine.ready()
-            && self.machine.planner.is_empty()
-            && self.machine.prep.is_idle()
-            && self.segments.is_empty()
-            && self.rt.stepper_idle()
+        self.machine.idle(self.rt, &*self.segments)
     }
     fn commanded_position(&self) -> Pos {
         self.machine.commanded_position()

@@ -38,10 +38,8 @@ pub use pins::{Edge, VirtualHw};
 pub use task::DeviceTask;
 pub use world::World;
 
-/// Planner ring size (the F411 build uses the same).
-pub const PLANNER_BLOCKS: usize = 64;
-/// Segment queue slots (heapless 0.9 holds one less).
-pub const SEGMENT_SLOTS: usize = 16;
+/// The board's queue sizes (the library's, so both shells use the same).
+pub use burin::controller::{PLANNER_BLOCKS, SEGMENT_SLOTS};
 
 /// Realtime input, delivered at a tick as the USB interrupt would.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -237,14 +235,13 @@ impl<'r> Sim<'r> {
         }
     }
 
-    /// True when nothing is moving, queued or pending.
+    /// True when nothing is moving, queued or pending: the machine is
+    /// idle as the library defines it (`Machine::idle`), no host line waits
+    /// and neither the task nor the step timer is due.
     pub fn idle(&self) -> bool {
         self.lines.is_empty()
             && self.task.wake.is_none()
-            && self.machine.ready()
-            && self.machine.planner.is_empty()
-            && self.machine.prep.is_idle()
-            && self.queue.is_empty()
+            && self.machine.idle(&self.rt, &self.queue)
             && self.next_step.is_none()
     }
 

@@ -297,7 +297,7 @@ impl<const N: usize> Machine<N> {
             || rt.hold_requested()
         {
             State::Hold
-        } else if self.planner.is_empty() && self.prep.is_idle() && rt.stepper_idle() {
+        } else if self.drained(rt) {
             State::Idle
         } else {
             State::Run
@@ -325,8 +325,29 @@ impl<const N: usize> Machine<N> {
         core::array::from_fn(|i| steps[i] as f32 / self.planner.settings.axes[i].steps_per_mm)
     }
 
-    fn motion_idle(&self, rt: &Realtime, sink: &impl SegmentSink) -> bool {
+    /// Idle, the one definition both shells use (the session's
+    /// `MotionPort::motion_idle`, host-sim's `Sim::idle`): nothing waits to
+    /// be planned (no homing, probe, script or full planner) and no motion
+    /// is left ([`Self::motion_idle`]).
+    pub fn idle(&self, rt: &Realtime, sink: &impl SegmentSink) -> bool {
+        self.ready() && self.motion_idle(rt, sink)
+    }
+
+    /// No motion left: nothing planned, prepared, queued for the step
+    /// interrupt or being stepped ([`Self::drained`] and an empty queue).
+    /// The queue is read before the step interrupt's idle flag: the
+    /// interrupt pops and loads a segment in one go, so one it takes
+    /// between the two reads has cleared the flag by then and is not
+    /// missed (the other order could see both idle).
+    pub fn motion_idle(&self, rt: &Realtime, sink: &impl SegmentSink) -> bool {
         self.planner.is_empty() && self.prep.is_idle() && sink.is_empty() && rt.stepper_idle()
+    }
+
+    /// [`Self::motion_idle`] as far as the machine sees without the segment
+    /// queue: the status report's Idle (it differs only while segments
+    /// wait for a stopped step interrupt to load them).
+    fn drained(&self, rt: &Realtime) -> bool {
+        self.planner.is_empty() && self.prep.is_idle() && rt.stepper_idle()
     }
 
     fn speed(feed: Feed) -> Result<Speed, MachineError> {

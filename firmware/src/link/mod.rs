@@ -62,6 +62,13 @@ pub const TOKEN_RESET: RxToken = 0x102;
 /// holds `RX_RING - 1` tokens.
 pub const RX_RING: usize = 256;
 
+/// Tokens an [`RxBacklog`] holds while the ring is full (both shells use
+/// this size, so host-sim's flow control is the board's): realtime bytes
+/// behind that much text still act on arrival. Beyond it the board NAKs
+/// its USB OUT endpoint and host-sim's pty leaves input in the kernel; the
+/// host holds the rest. 8 KiB of the board's RAM, which is nearly full.
+pub const RX_BACKLOG: usize = 4096;
+
 /// Which protocol the port speaks right now.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LinkMode {

@@ -33,10 +33,10 @@ pub const BOARD: &str = "host-sim";
 /// The virtual board's settings flash: two 16 KiB sectors, as on the F411.
 pub type SimFlash = RamFlash<{ 2 * 16384 }, 16384>;
 
-/// Received tokens the virtual board holds while its ring is full (the
-/// pty keeps whatever does not fit in the kernel's buffer, as the host's
-/// USB stack does while the board NAKs).
-pub const BACKLOG: usize = 16384;
+/// Received tokens the virtual board holds while its ring is full: the
+/// board's size (the pty keeps whatever does not fit in the kernel's
+/// buffer, as the host's USB stack does while the board NAKs).
+pub use burin::link::RX_BACKLOG as BACKLOG;
 
 /// Driver wake-up between enable and the first step, ms (the board's
 /// `WAKE_MS`).

@@ -3,14 +3,12 @@
 //! a feed hold, cycle start and override still act within a millisecond,
 //! a status query waits until its reply fits, and no reply is cut.
 
+use burin::controller::TX_RING;
 use burin::executor::State;
 use host_sim::device_sim::VirtualDevice;
 use host_sim::record::Discard;
 
 use crate::rig;
-
-/// The board's TX ring (`burin-fw/rings.rs`).
-const TX_RING: usize = 1024;
 
 fn ms(dev: &VirtualDevice, n: u64) -> u64 {
     dev.sim.now() + u64::from(dev.sim.tick_hz()) / 1000 * n

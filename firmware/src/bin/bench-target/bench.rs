@@ -3,6 +3,7 @@
 //! (about 6 instructions at 168 MHz) vanishes in the division. The step
 //! handler also runs in a trace run ([`trace_run`]) whose executed
 //! instructions the xtask charges by Cortex-M4 timings.
+use burin::controller::PLANNER_BLOCKS;
 use burin::interp::Interpreter;
 use burin::planner::{Curve, Planner, Speed, Watch};
 use burin::realtime::Realtime;
@@ -19,8 +20,6 @@ use cortex_m_semihosting::{debug, hprintln};
 // (enabled by the HAL) expects in every binary of this package.
 use stm32f4xx_hal as _;
 
-/// Same size as the firmware's ring (host-sim uses 64 too).
-const PLANNER_BLOCKS: usize = 64;
 /// Step timer rate the stepper is configured with (TIM5 at 96 MHz).
 const TICK_HZ: u32 = 96_000_000;
 

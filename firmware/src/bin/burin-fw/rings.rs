@@ -4,13 +4,8 @@
 use burin::session::Tx;
 use heapless::spsc::Producer;
 
-/// Planner ring size (blocks of look-ahead).
-pub const PLANNER_BLOCKS: usize = 64;
-/// Prepared segments between the parse task and the step interrupt
-/// (`heapless::spsc` keeps one slot free).
-pub const SEGMENT_SLOTS: usize = 16;
-/// Reply bytes waiting for the link interrupt.
-pub const TX_RING: usize = 1024;
+// The sizes are the library's, so host-sim runs with the board's queues.
+pub use burin::controller::{PLANNER_BLOCKS, SEGMENT_SLOTS, TX_RING};
 
 /// Reply bytes towards the link interrupt.
 pub struct TxRing<'a> {

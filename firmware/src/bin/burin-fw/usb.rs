@@ -14,16 +14,16 @@ use usbd_serial::SerialPort;
 /// the parse task tells the device session (`Device::port_reset`).
 pub static PORT_CLOSED: AtomicBool = AtomicBool::new(false);
 
-/// Set when the host opened the port (DTR raised): the parse task prints
-/// the banner before it handles anything the new client sent.
+/// Set when the host opened the port (DTR raised): the parse task tells
+/// the session (`Device::port_opened`, which decides on a reset and its
+/// banner) before it handles anything the new client sent.
 pub static PORT_OPENED: AtomicBool = AtomicBool::new(false);
 
-/// Received tokens held while the ring is full (8 KiB of RAM): realtime
-/// bytes behind that much text still act on arrival. Beyond it the OUT
-/// endpoint NAKs and the host holds the rest. A static of init's, lent to
-/// the link: inside it, the link was 8 KB that init built on the stack and
-/// moved twice (init's frame was 20.7 KB on the F401).
-pub const BACKLOG: usize = 4096;
+/// Received tokens held while the ring is full (`burin::link::RX_BACKLOG`,
+/// 8 KiB of RAM). A static of init's, lent to the link: inside it, the
+/// link was 8 KB that init built on the stack and moved twice (init's
+/// frame was 20.7 KB on the F401).
+pub use burin::link::RX_BACKLOG as BACKLOG;
 
 /// One full-speed OUT packet.
 const PACKET: usize = 64;
