@@ -334,7 +334,7 @@ impl<const N: usize> Machine<N> {
     }
 
     /// No motion left: nothing planned, prepared, queued for the step
-    /// interrupt or being stepped ([`Self::drained`] and an empty queue).
+    /// interrupt or being stepped (`drained` and an empty queue).
     /// The queue is read before the step interrupt's idle flag: the
     /// interrupt pops and loads a segment in one go, so one it takes
     /// between the two reads has cleared the flag by then and is not
