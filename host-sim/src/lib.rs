@@ -13,6 +13,7 @@ pub mod feed;
 pub mod fuzz;
 pub mod offline;
 pub mod outputs;
+pub mod par;
 pub mod plot;
 pub mod pty;
 pub mod record;

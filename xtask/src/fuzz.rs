@@ -127,24 +127,9 @@ fn fuzz_all(targets: &[&str], secs: u64, runs: Option<u64>) -> Result<Vec<Outcom
     }
     // libFuzzer runs on one core: as many targets at once as there are
     // cores, each for its full time (CI's 2 cores: 3 rounds, not 6).
-    let width = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let done = std::sync::Mutex::new(Vec::new());
-    std::thread::scope(|s| {
-        for _ in 0..width.min(targets.len()) {
-            s.spawn(|| loop {
-                let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                let Some(t) = targets.get(i) else { break };
-                let o = fuzz_one(t, &seeds[i], secs, runs);
-                done.lock().unwrap_or_else(|e| e.into_inner()).push((i, o));
-            });
-        }
-    });
-    let mut done = done.into_inner().unwrap_or_else(|e| e.into_inner());
-    done.sort_by_key(|d| d.0);
-    let outs = done
+    let order: Vec<usize> = (0..targets.len()).collect();
+    let outs = host_sim::par::each_core(&order, |i| fuzz_one(targets[i], &seeds[i], secs, runs))
         .into_iter()
-        .map(|d| d.1)
         .collect::<Result<Vec<Outcome>>>()?;
     eprintln!(
         "\n{:<16} {:>12} {:>9} {:>8} {:>7}  finding",

@@ -231,9 +231,7 @@ fn before_line(
     let ours = host_sim::check::canon_moves(&head, prelude, settings);
     Ok(match (theirs, ours) {
         (Canon::Ok(theirs), Ok(ours)) => {
-            let theirs = canon::dedup(theirs);
-            let ours = canon::dedup(canon::ours(&ours));
-            let mut v = canon::compare(&theirs, &ours, head.to_ascii_uppercase().contains("G38"));
+            let mut v = canon::compare_program(theirs, &ours, &head);
             match v.diff.take() {
                 Some(d) => Err(d),
                 None => Ok(v),
@@ -341,10 +339,7 @@ pub fn run(install: bool) -> Result<()> {
         };
         match (theirs, ours) {
             (Canon::Ok(theirs), Ok(ours)) => {
-                let theirs = canon::dedup(theirs);
-                let ours = canon::dedup(canon::ours(&ours));
-                let probe_cut = src.to_ascii_uppercase().contains("G38");
-                let v = canon::compare(&theirs, &ours, probe_cut);
+                let v = canon::compare_program(theirs, &ours, &src);
                 match (v.diff, listed_as("differs", &mut used)) {
                     // Cutter compensation's own files (issue 33) must agree
                     // within 0.001 mm on every end point and arc centre.

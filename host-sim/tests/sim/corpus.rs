@@ -3,8 +3,6 @@
 //! pin-timing properties.
 use crate::common;
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
 
 use burin::command::Command;
 use burin::interp::Interpreter;
@@ -116,24 +114,12 @@ fn corpus_jobs_end_exactly_and_keep_limits() {
     // Longest first, so the last job to start is a short one.
     let mut order: Vec<usize> = (0..jobs.len()).collect();
     order.sort_by_key(|&i| std::cmp::Reverse(jobs[i].1.len()));
-    let next = AtomicUsize::new(0);
-    let results = Mutex::new(Vec::new());
-    let width = std::thread::available_parallelism().map_or(1, |n| n.get());
-    std::thread::scope(|s| {
-        for _ in 0..width {
-            s.spawn(|| loop {
-                let k = next.fetch_add(1, Ordering::Relaxed);
-                let Some(&i) = order.get(k) else { break };
-                let (rel, src) = &jobs[i];
-                let line = check_job(&cfg, rel, src);
-                results.lock().unwrap().push((i, line));
-            });
-        }
+    let results = host_sim::par::each_core(&order, |i| {
+        let (rel, src) = &jobs[i];
+        check_job(&cfg, rel, src)
     });
-    let mut results = results.into_inner().unwrap();
-    results.sort_by_key(|r| r.0);
     let (mut ran, mut skipped) = (0, 0);
-    for (_, line) in results {
+    for line in results {
         match line {
             Some(l) => {
                 println!("{l}");

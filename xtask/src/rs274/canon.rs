@@ -263,6 +263,14 @@ pub struct Verdict {
     pub diff: Option<String>,
 }
 
+/// rs274's moves for the program `src` against burin's, whole: both
+/// without repeats ([`dedup`]), cut after a probe when `src` has one.
+pub fn compare_program(theirs: Vec<Theirs>, ours_: &[CanonMove], src: &str) -> Verdict {
+    let theirs = dedup(theirs);
+    let ours_ = dedup(ours(ours_));
+    compare(&theirs, &ours_, src.to_ascii_uppercase().contains("G38"))
+}
+
 /// Compares two whole sequences move by move; `probe_cut`: rs274 stops
 /// after its first probe, so burin's later moves are not compared.
 pub fn compare(theirs: &[Theirs], ours: &[Theirs], probe_cut: bool) -> Verdict {
