@@ -210,7 +210,7 @@ mod app {
     /// X limit (PA4): trips at once while armed motion runs.
     #[task(binds = EXTI4, priority = 4, local = [wake_limit_x])]
     fn limit_x(cx: limit_x::Context) {
-        if crate::inputs::on_limit(pac::Interrupt::EXTI4, inp::LIMIT_X) {
+        if crate::inputs::on_instant(pac::Interrupt::EXTI4, inp::LIMIT_X) {
             let _ = cx.local.wake_limit_x.try_send(());
         }
     }
@@ -218,7 +218,7 @@ mod app {
     /// Y and Z limits (PA5, PA6) share EXTI9_5.
     #[task(binds = EXTI9_5, priority = 4, local = [wake_limit_yz])]
     fn limit_yz(cx: limit_yz::Context) {
-        if crate::inputs::on_limit(pac::Interrupt::EXTI9_5, inp::LIMIT_Y | inp::LIMIT_Z) {
+        if crate::inputs::on_instant(pac::Interrupt::EXTI9_5, inp::LIMIT_Y | inp::LIMIT_Z) {
             let _ = cx.local.wake_limit_yz.try_send(());
         }
     }
@@ -226,7 +226,7 @@ mod app {
     /// Reset / e-stop (PA2): pulses, spindle and coolant stop at once.
     #[task(binds = EXTI2, priority = 4, local = [wake_estop])]
     fn estop(cx: estop::Context) {
-        if crate::inputs::on_estop() {
+        if crate::inputs::on_instant(pac::Interrupt::EXTI2, inp::ESTOP) {
             let _ = cx.local.wake_estop.try_send(());
         }
     }
@@ -241,7 +241,7 @@ mod app {
     /// Feed hold (PA1): acts on the first edge, as `!` from the host.
     #[task(binds = EXTI1, priority = 2, local = [wake_hold])]
     fn feed_hold(cx: feed_hold::Context) {
-        if crate::inputs::on_feed_hold() {
+        if crate::inputs::on_instant(pac::Interrupt::EXTI1, inp::FEED_HOLD) {
             let _ = cx.local.wake_hold.try_send(());
         }
     }

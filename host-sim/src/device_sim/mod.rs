@@ -27,6 +27,9 @@ use crate::config::MachineConfig;
 use crate::engine::{DeviceTask, Sim};
 use crate::record::Recorder;
 
+mod panel;
+pub use panel::Panel;
+
 /// Board name the virtual device reports in `$I` and the handshake.
 pub const BOARD: &str = "host-sim";
 
@@ -76,6 +79,8 @@ pub struct VirtualDevice<'r> {
     pub pin_log: Vec<(u64, Pins)>,
     port_closed: bool,
     port_opened: bool,
+    /// Switch inputs a test sets ([`VirtualDevice::set_input`]).
+    panel: Panel,
 }
 
 impl<'r> VirtualDevice<'r> {
@@ -125,6 +130,7 @@ impl<'r> VirtualDevice<'r> {
             pin_log: Vec::new(),
             port_closed: false,
             port_opened: false,
+            panel: Panel::default(),
         }
     }
 
@@ -177,6 +183,15 @@ impl<'r> VirtualDevice<'r> {
     /// runs again whenever the engine says it is due, as the step
     /// interrupt wakes it on the board), then the task again.
     pub fn advance_to(&mut self, tick: u64) {
+        // A masked input's heartbeat comes between (`panel`).
+        while let Some(at) = self.beat_due(tick) {
+            self.run_to(at);
+            self.beat(at);
+        }
+        self.run_to(tick);
+    }
+
+    fn run_to(&mut self, tick: u64) {
         loop {
             self.poll();
             self.sim.run_until(tick);
@@ -199,6 +214,7 @@ impl<'r> VirtualDevice<'r> {
             log,
             port_closed,
             port_opened,
+            panel,
             ..
         } = self;
         let task = DeviceTask {
@@ -206,7 +222,7 @@ impl<'r> VirtualDevice<'r> {
             flags,
             rx: ring,
             tx,
-            pins: 0,
+            pins: panel.report_pins(),
             port_closed: *port_closed,
             port_opened: *port_opened,
             log: log.as_mut(),

@@ -18,6 +18,7 @@ mod link_abuse;
 mod link_props;
 mod outputs;
 mod oword_flow;
+mod panel_inputs;
 mod persist;
 mod pty_replay;
 mod realtime_grbl;

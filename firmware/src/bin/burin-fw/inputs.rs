@@ -1,5 +1,7 @@
 //! Switch inputs on EXTI: the interrupt halves (tiny, lock-free) and the
-//! heartbeat's re-check (`burin::inputs::Debounce`).
+//! heartbeat's re-check (`burin::inputs::Debounce`). What an input does
+//! (trip, e-stop, hold, start) is `burin::inputs::{on_edge, heartbeat}`'s
+//! decision, the same in host-sim; this file only moves levels and masks.
 //!
 //! A line is masked in the NVIC, not in EXTI_IMR: NVIC's set/clear-enable
 //! registers are one store each, while IMR is read-modify-write and shared
@@ -15,7 +17,7 @@
 //!   settled;
 //! - the heartbeat unmasks a line once `Debounce` says it settled.
 use crate::boards::board;
-use burin::inputs::{self as inp, Change, Debounce};
+use burin::inputs::{self as inp, Debounce};
 use core::sync::atomic::{AtomicU16, AtomicU32, AtomicU8, Ordering::Relaxed};
 use cortex_m::peripheral::NVIC;
 use stm32f4xx_hal::pac::{self, Interrupt};
@@ -105,58 +107,23 @@ pub fn take_edges(irq: Interrupt, mine: u8) -> u8 {
     fired
 }
 
-/// Limit interrupt: a limit that closed during armed motion trips at once.
-pub fn on_limit(irq: Interrupt, mine: u8) -> bool {
+/// Interrupt half of an instant input (limits, e-stop, feed hold): takes
+/// the vector's edges, then does what `burin::inputs::on_edge` decided
+/// (a hard-limit trip while armed, the e-stop's stop and reset, the
+/// hold). Returns whether to wake the parse task.
+pub fn on_instant(irq: Interrupt, mine: u8) -> bool {
     let fired = take_edges(irq, mine);
-    let act = inp::acts_now(fired, active_now());
-    EDGES.fetch_or(u16::from(act) << 8, Relaxed);
-    limits_closed(act)
-}
-
-/// A hard-limit trip for the active limits in `act`, if hard limits are
-/// armed. As in GRBL, also at rest: a switch that closes while nothing
-/// moves means the machine was pushed, or the wiring picks up noise, and
-/// either wants the operator's attention (alarm 1, position flagged lost
-/// as after any hard limit).
-pub fn limits_closed(act: u8) -> bool {
-    let act = act & inp::LIMITS;
-    let trip = act != 0 && crate::RT.limits_armed();
-    if trip {
-        crate::RT.hard_limit(act);
+    let acted = inp::on_edge(&crate::RT, fired, active_now(), &mut raise);
+    EDGES.fetch_or(u16::from(acted.inputs) << 8, Relaxed);
+    if acted.cut_outputs {
+        board::kill_aux();
     }
-    trip
+    acted.wake
 }
 
-/// E-stop interrupt: acts if the e-stop reads active after its edge.
-pub fn on_estop() -> bool {
-    let fired = take_edges(Interrupt::EXTI2, inp::ESTOP);
-    let act = inp::acts_now(fired, active_now()) & inp::ESTOP != 0;
-    if act {
-        EDGES.fetch_or(u16::from(inp::ESTOP) << 8, Relaxed);
-        estop();
-    }
-    act
-}
-
-/// Feed-hold interrupt: raises the hold flag (as a `!` from the host) if
-/// the button reads pressed after its edge; the caller wakes the session.
-pub fn on_feed_hold() -> bool {
-    let fired = take_edges(Interrupt::EXTI1, inp::FEED_HOLD);
-    let act = inp::acts_now(fired, active_now()) & inp::FEED_HOLD != 0;
-    if act {
-        EDGES.fetch_or(u16::from(inp::FEED_HOLD) << 8, Relaxed);
-        crate::FLAGS.raise(protocol::Rt::FeedHold);
-    }
-    act
-}
-
-/// Stop the pulses and the spindle now, then let the session do the rest
-/// of a soft reset (exactly as a 0x18 from the host).
-pub fn estop() {
-    crate::RT.set_estop(true);
-    crate::RT.halt_stepper();
-    board::kill_aux();
-    crate::FLAGS.raise(protocol::Rt::SoftReset);
+/// A realtime command from a switch, as if the host had sent it.
+fn raise(cmd: protocol::Rt) {
+    crate::FLAGS.raise(cmd);
 }
 
 fn lines_of(inputs: u8) -> u32 {
@@ -167,11 +134,12 @@ fn lines_of(inputs: u8) -> u32 {
         .fold(0, |acc, (_, (_, line))| acc | (1 << line))
 }
 
-/// The heartbeat's half: takes the interrupts' edges, re-checks the masked
-/// inputs at `now` (ms) and unmasks the settled ones. Returns the settled
-/// changes: button presses, and presses of instant inputs whose interrupt
-/// read them open (a bounce), for the caller to act on.
-pub fn poll(deb: &mut Debounce, now: u32) -> Change {
+/// The heartbeat's input work at `now` (ms): takes the interrupts' edges,
+/// lets `burin::inputs::heartbeat` re-check the masked inputs and act on
+/// settled presses (buttons, and instant inputs whose interrupt read them
+/// open: a bounce, acted on late rather than never), then unmasks the
+/// lines that settled.
+pub fn heartbeat(deb: &mut Debounce, now: u32) {
     let taken = EDGES.swap(0, Relaxed);
     let (edges, seen) = (taken as u8, (taken >> 8) as u8);
     // Pending bits of masked lines are stale: clear them before sampling,
@@ -179,11 +147,11 @@ pub fn poll(deb: &mut Debounce, now: u32) -> Change {
     let masked = deb.masked() | edges;
     // SAFETY: write-1-to-clear of lines whose vector is masked.
     exti().pr().write(|w| unsafe { w.bits(lines_of(masked)) });
-    let active = active_now();
-    // Presses the interrupts acted on are not reported again.
-    let first = deb.edge(edges, active, now);
-    let mut change = deb.poll(active, now);
-    change.pressed |= first.pressed & !seen;
+    let (change, acted) =
+        inp::heartbeat(&crate::RT, deb, edges, seen, active_now(), now, &mut raise);
+    if acted.cut_outputs {
+        board::kill_aux();
+    }
     let still = deb.masked();
     for (i, (irq, _)) in VECTORS.iter().enumerate() {
         let shared = VECTORS
@@ -199,34 +167,10 @@ pub fn poll(deb: &mut Debounce, now: u32) -> Change {
         }
     }
     PINS.store(inp::report_pins(deb.stable()), Relaxed);
-    change
-}
-
-/// The heartbeat's input work at `now` (ms): [`poll`], then settled button
-/// presses become realtime commands through the same flags as `!` and `~`
-/// from the host, and instant inputs whose interrupt read them open (a
-/// bounce) but that settled closed act now, late rather than never.
-pub fn heartbeat(debounce: &mut Debounce, now: u32) {
-    let change = poll(debounce, now);
-    if change.pressed & inp::FEED_HOLD != 0 {
-        crate::FLAGS.raise(protocol::Rt::FeedHold);
-    }
-    if change.pressed & inp::CYCLE_START != 0 {
-        crate::FLAGS.raise(protocol::Rt::CycleStart);
-    }
-    if change.pressed & inp::ESTOP != 0 {
-        estop();
-    }
-    limits_closed(change.pressed);
-    // The e-stop level for the machine's alarm latch, once settled (its
-    // edge interrupt set it already on the first edge).
-    if debounce.masked() & inp::ESTOP == 0 {
-        crate::RT.set_estop(debounce.stable() & inp::ESTOP != 0);
-    }
     if change.pressed | change.released != 0 {
         defmt::info!(
             "inputs active: {=u8:07b} (bit 0 X limit .. 6 e-stop)",
-            debounce.stable()
+            deb.stable()
         );
     }
 }

@@ -13,6 +13,9 @@
 //! 5 cycle start, 6 reset/e-stop. A set bit means "active" (switch closed
 //! after the `$5`/`$6` inverts), never a raw pin level.
 
+mod panel;
+pub use panel::{act, heartbeat, on_edge, Acted};
+
 pub const LIMIT_X: u8 = 1 << 0;
 pub const LIMIT_Y: u8 = 1 << 1;
 pub const LIMIT_Z: u8 = 1 << 2;
