@@ -131,7 +131,23 @@ pub(super) fn submit_lines(
         let motion = cmd.end().is_some();
         match machine.submit(rt, &cmd, line, &mut |n| note(stats, rec, n)) {
             Ok(()) => stats.moves += u32::from(motion),
-            Err(e) => stats.errors.push(machine_error(line, e)),
+            Err(e) => {
+                // The board's rule for a refusal after the line was taken
+                // (`session::late`): the job stops there as an alarm and
+                // nothing queued behind it runs. Skipping the command and
+                // running on, as this runner once did, runs the rest of
+                // the job from a place the program did not mean.
+                // The alarm's note records the error; in alarm already
+                // there is none, so it is recorded here.
+                if machine.alarm().is_some() {
+                    stats.errors.push(machine_error(line, e));
+                }
+                machine.fault(e, line);
+                let _ = machine.take_fault();
+                lines.clear();
+                task.popped();
+                break;
+            }
         }
     }
     taken

@@ -3,6 +3,7 @@
 use crate::common;
 use burin::command::{Arc, ArcDir, Command, Feed, Plane, ProbeKind};
 use common::*;
+use host_sim::config::MachineConfig;
 use host_sim::engine::Sim;
 
 const ALL: u8 = 0;
@@ -234,63 +235,68 @@ fn probe_g38_2_contact_and_no_contact() {
     assert_eq!(sim.errors().last().map(|e| e.code), Some(424));
 }
 
-#[test]
-fn soft_limits_refuse_before_any_step() {
-    let mut cfg = config();
-    cfg.settings.soft_limits = true;
+/// A job with `cmds` on `cfg`: its errors (line, code) and each axis's
+/// step count.
+fn refusals(cfg: &MachineConfig, cmds: Vec<(u32, Command)>) -> (Vec<(u32, u16)>, [u32; 4]) {
     let mut rec = Collect::default();
-    let mut sim = Sim::new(&cfg, &mut rec);
-    sim.push_command(
-        1,
-        Command::Line {
-            end: [5.0, -5.0, 0.0, 0.0],
-            feed: Feed::PerMin(1000.0),
-        },
-    );
-    // Start and end inside, but the bulge crosses X = 0 (to X = +0.05).
-    sim.push_command(
-        2,
-        Command::Arc(Arc {
-            end: [-20.0, -1.0, 0.0, 0.0],
-            center: [-10.0, -1.0],
-            plane: Plane::XY,
-            dir: ArcDir::Cw,
-            turns: 0,
-            feed: Feed::PerMin(1000.0),
-        }),
-    );
-    sim.push_command(
-        3,
-        Command::Line {
-            end: [-1.0, -1.0, 0.0, 0.0],
-            feed: Feed::PerMin(1000.0),
-        },
-    );
-    sim.push_command(
-        4,
-        Command::Arc(Arc {
-            end: [-21.0, -1.0, 0.0, 0.0],
-            center: [-11.0, -1.0],
-            plane: Plane::XY,
-            dir: ArcDir::Ccw, // over the top: Y up to +9
-            turns: 0,
-            feed: Feed::PerMin(1000.0),
-        }),
-    );
+    let mut sim = Sim::new(cfg, &mut rec);
+    for (line, c) in cmds {
+        sim.push_command(line, c);
+    }
     sim.run();
-    let codes: Vec<(u32, u16)> = sim.errors().iter().map(|e| (e.line, e.code)).collect();
-    assert_eq!(codes, vec![(1, 400), (2, 400), (4, 400)]);
+    let codes = sim.errors().iter().map(|e| (e.line, e.code)).collect();
     drop(sim);
-    // Only line 3 ran: X and Y each moved 1 mm.
-    let s = rec.summary.clone();
-    assert!(s.is_none());
+    assert!(rec.summary.is_none());
     let steps = rec.events.iter().fold([0; 4], |mut a, e| {
         for (i, c) in a.iter_mut().enumerate() {
             *c += (e.step_mask >> i & 1) as u32;
         }
         a
     });
-    assert_eq!(steps, [80, 80, 0, 0]);
+    (codes, steps)
+}
+
+/// Each refusal stops the job where it is, as on the board
+/// (`session::late`): nothing after it runs.
+#[test]
+fn soft_limits_refuse_before_any_step() {
+    let mut cfg = config();
+    cfg.settings.soft_limits = true;
+    let line = |end| Command::Line {
+        end,
+        feed: Feed::PerMin(1000.0),
+    };
+    let into_x = (1, line([5.0, -5.0, 0.0, 0.0]));
+    assert_eq!(refusals(&cfg, vec![into_x]), (vec![(1, 400)], [0; 4]));
+    // Start and end inside, but the bulge crosses X = 0 (to X = +0.05).
+    let bulge = Command::Arc(Arc {
+        end: [-20.0, -1.0, 0.0, 0.0],
+        center: [-10.0, -1.0],
+        plane: Plane::XY,
+        dir: ArcDir::Cw,
+        turns: 0,
+        feed: Feed::PerMin(1000.0),
+    });
+    let inside = (3, line([-1.0, -1.0, 0.0, 0.0]));
+    let (codes, steps) = refusals(&cfg, vec![(2, bulge), inside.clone()]);
+    assert_eq!((codes, steps), (vec![(2, 400)], [0; 4]), "line 3 ran");
+    let over_the_top = Command::Arc(Arc {
+        end: [-21.0, -1.0, 0.0, 0.0],
+        center: [-11.0, -1.0],
+        plane: Plane::XY,
+        dir: ArcDir::Ccw, // over the top: Y up to +9
+        turns: 0,
+        feed: Feed::PerMin(1000.0),
+    });
+    // Line 3 started and ramped down along its path when line 4 was
+    // refused (a fault's stop): X and Y moved alike, short of its 1 mm.
+    let (codes, steps) = refusals(&cfg, vec![inside, (4, over_the_top)]);
+    assert_eq!(codes, vec![(4, 400)]);
+    assert!(
+        steps[0] == steps[1] && steps[0] > 0 && steps[0] < 80,
+        "{steps:?}"
+    );
+    assert_eq!(steps[2..], [0, 0]);
 }
 
 #[test]
@@ -321,7 +327,8 @@ fn step_rate_ceiling_is_an_error() {
             .collect::<Vec<_>>(),
         vec![(7, 401)]
     );
-    assert_eq!(sim.rt.position(), [0, 0, 0, 100]);
+    // The job stopped at the refusal: line 8 did not run either.
+    assert_eq!(sim.rt.position(), [0, 0, 0, 0]);
 }
 
 #[test]
