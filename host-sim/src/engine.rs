@@ -196,7 +196,7 @@ impl<'r> Sim<'r> {
     }
     /// Last G38.x result (machine mm, contact).
     pub fn probe_result(&self) -> Option<([f32; AXES], bool)> {
-        self.machine.probe_result
+        self.machine.probe_result()
     }
 
     /// Schedule realtime input at `tick` (kept in tick order; equal ticks in call order).

@@ -100,7 +100,9 @@ enum Chords {
     },
 }
 
+/// Tagged, `None` first: a zero byte (the placeholder's, see there).
 #[derive(Clone, Debug)]
+#[repr(u8)]
 enum Pending {
     None,
     Chords {
@@ -147,6 +149,15 @@ pub enum State {
     Alarm,
 }
 
+/// `Option<(Pos, bool)>` with a zero `None` (the niche of
+/// `Option<(Pos, bool)>` is a 2 in the `bool`; see `Machine::placeholder`).
+#[derive(Clone, Copy, Debug)]
+#[repr(u8)]
+enum Probed {
+    None,
+    At(Pos, bool),
+}
+
 /// The executor. `N` is the planner ring size.
 #[derive(Debug)]
 pub struct Machine<const N: usize> {
@@ -161,8 +172,8 @@ pub struct Machine<const N: usize> {
     commanded: Pos,
     override_epoch: u32,
     switches: Switches,
-    /// Last G38.x result: position (mm) and whether contact happened.
-    pub probe_result: Option<(Pos, bool)>,
+    /// Last G38.x result ([`Machine::probe_result`]).
+    probed: Probed,
     /// A canned cycle or tool change being expanded, and its line.
     script: Option<(script::Script, u32)>,
     tool_event: Option<ToolEvent>,
@@ -188,7 +199,7 @@ impl<const N: usize> Machine<N> {
             commanded: [0.0; AXES],
             override_epoch: 0,
             switches: Switches::default(),
-            probe_result: None,
+            probed: Probed::None,
             script: None,
             tool_event: None,
             tool_reference: None,
@@ -196,16 +207,21 @@ impl<const N: usize> Machine<N> {
         }
     }
 
-    /// A machine on the default settings and no step clock, built at
-    /// compile time: the board's static slot starts as this and
-    /// [`Machine::rebuild`] turns it into `Machine::new(settings, tick_hz)`
-    /// in place. Built at run time, `Machine::new` needs the whole machine
-    /// (about 20 KB with 64 blocks) as a temporary on the stack, which the
-    /// F401's 20 KiB stack does not have.
+    /// A machine of all zero bits, built at compile time: the board's
+    /// static slot starts as this and [`Machine::rebuild`] turns it into
+    /// `Machine::new(settings, tick_hz)` in place before anything else
+    /// touches it (zero settings would divide by a zero `steps_per_mm`).
+    /// Built at run time, `Machine::new` needs the whole machine (about
+    /// 11 KB with 64 blocks) as a temporary on the stack, which the F401's
+    /// 20 KiB stack cannot spare; zero bits put the static in `.bss`
+    /// rather than `.data`, whose load image cost 11 KB of flash
+    /// (`cargo xtask build` checks where the slot lands). The enums it
+    /// holds are tagged so that their `None` is zero (`Pending`, `Probed`,
+    /// `MachineError`, `ToolEvent`, `Script`).
     pub const fn placeholder() -> Self {
         Machine {
-            planner: Planner::new(Settings::DEFAULT),
-            prep: Preparer::new(Settings::DEFAULT, StepConfig::UNSET),
+            planner: Planner::zeroed(),
+            prep: Preparer::zeroed(),
             cfg: StepConfig::UNSET,
             pending: Pending::None,
             alarm: None,
@@ -217,7 +233,7 @@ impl<const N: usize> Machine<N> {
                 limits: 0,
                 probe: false,
             },
-            probe_result: None,
+            probed: Probed::None,
             script: None,
             tool_event: None,
             tool_reference: None,
@@ -242,7 +258,7 @@ impl<const N: usize> Machine<N> {
             commanded,
             override_epoch,
             switches,
-            probe_result,
+            probed,
             script,
             tool_event,
             tool_reference,
@@ -257,11 +273,19 @@ impl<const N: usize> Machine<N> {
         self.commanded = commanded;
         self.override_epoch = override_epoch;
         self.switches = switches;
-        self.probe_result = probe_result;
+        self.probed = probed;
         self.script = script;
         self.tool_event = tool_event;
         self.tool_reference = tool_reference;
         self.fault = fault;
+    }
+
+    /// Last G38.x result: position (mm) and whether contact happened.
+    pub fn probe_result(&self) -> Option<(Pos, bool)> {
+        match self.probed {
+            Probed::None => None,
+            Probed::At(p, c) => Some((p, c)),
+        }
     }
 
     pub fn settings(&self) -> &Settings {
@@ -515,7 +539,7 @@ impl<const N: usize> Machine<N> {
                         // The flush takes the stop point (past the trip) as
                         // the commanded position; the interpreter resyncs to it.
                         self.flush(rt);
-                        self.probe_result = Some((at, true));
+                        self.probed = Probed::At(at, true);
                         obs(Note::Probed {
                             line,
                             position: at,

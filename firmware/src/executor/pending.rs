@@ -97,7 +97,7 @@ impl<const N: usize> Machine<N> {
             Pending::ProbeRun { kind, line } => {
                 // The move ended without the probe tripping.
                 let pos = self.commanded;
-                self.probe_result = Some((pos, false));
+                self.probed = Probed::At(pos, false);
                 obs(Note::Probed {
                     line,
                     position: pos,

@@ -176,6 +176,45 @@ impl Block {
         line: 0,
     };
 
+    /// All zero bits, for storage nothing reads yet (the board's machine
+    /// slot, `Machine::placeholder`, lands in `.bss` that way).
+    pub const ZEROED: Block = Block {
+        kind: BlockKind::Line,
+        target: [0; AXES],
+        steps: [0; AXES],
+        count: 0,
+        dir_mask: 0,
+        length: 0.0,
+        programmed: 0.0,
+        rapid: false,
+        cap: 0.0,
+        nominal: 0.0,
+        accel: 0.0,
+        line_accel: 0.0,
+        curve_ar: 0.0,
+        curve_an: 0.0,
+        curve_tangent: [[0.0; 2]; 2],
+        floor: 0.0,
+        junction: 0.0,
+        hold_m: 0.0,
+        hold_pre_m: 0.0,
+        corner: 0.0,
+        hold_fixed: passes::Sides {
+            pre: 0.0,
+            post: 0.0,
+        },
+        quiet: 0,
+        release: 0,
+        max_entry: 0.0,
+        entry: 0.0,
+        watch: Watch {
+            limits: 0,
+            probe: 0,
+            homing: false,
+        },
+        line: 0,
+    };
+
     pub fn shape(&self, s: &Settings) -> Shape {
         let jerk = match s.profile {
             crate::settings::Profile::Trapezoid => 0.0,
@@ -287,6 +326,19 @@ impl<const N: usize> Planner<N> {
             rapid_pct: 1.0,
             tick_hz: 0,
             settings,
+        }
+    }
+
+    /// All zero bits (the board's machine slot, see
+    /// [`Settings::ZEROED`]); [`Planner::reset`] makes it a planner.
+    pub const fn zeroed() -> Self {
+        Planner {
+            blocks: [Block::ZEROED; N],
+            still_time: [0.0; AXES],
+            quiet_time: [0.0; AXES],
+            feed_pct: 0.0,
+            rapid_pct: 0.0,
+            ..Planner::new(Settings::ZEROED)
         }
     }
 
