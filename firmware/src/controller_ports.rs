@@ -133,7 +133,7 @@ impl<Q: SegmentSink, const N: usize> MotionPort for Core<'_, Q, N> {
         self.outputs.speed()
     }
     fn planner_free(&self) -> u16 {
-        (N - self.machine.planner.len()) as u16
+        (N - self.machine.motion.planner().len()) as u16
     }
     fn planner_blocks(&self) -> u16 {
         N as u16

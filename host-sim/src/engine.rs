@@ -287,7 +287,7 @@ impl<'r> Sim<'r> {
                 }
                 None => {
                     if self.auto_resume
-                        && self.machine.prep.hold() == burin::stepper::prep::Hold::Held
+                        && self.machine.motion.hold() == burin::stepper::prep::Hold::Held
                     {
                         self.rt.cycle_start();
                         self.plan_task();

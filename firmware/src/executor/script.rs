@@ -59,13 +59,13 @@ impl<const N: usize> Machine<N> {
             line,
             command: &cmd,
         });
-        if self.planner.settings.tool_change.mode > 0 {
+        if self.motion.settings().tool_change.mode > 0 {
             self.script = Some((Script::Tool { tool, stage: 0 }, line));
         }
     }
 
     fn tool_step(&mut self, tool: u32, stage: u8) -> Option<ToolStep> {
-        let tc = self.planner.settings.tool_change;
+        let tc = self.motion.settings().tool_change;
         let mut at = self.commanded;
         let z = tc.position[2];
         Some(match stage {
@@ -124,7 +124,7 @@ impl<const N: usize> Machine<N> {
     /// Feeds the running script's steps while nothing else is pending.
     pub(super) fn run_script(&mut self, rt: &Realtime, obs: &mut dyn FnMut(Note)) {
         for _ in 0..CHORDS_PER_CALL {
-            if !matches!(self.pending, Pending::None) || self.planner.is_full() {
+            if !matches!(self.pending, Pending::None) || !self.motion.has_room() {
                 return;
             }
             let Some((script, line)) = self.script.as_mut() else {

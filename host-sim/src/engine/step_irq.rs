@@ -33,7 +33,7 @@ impl Sim<'_> {
         if was_running && !self.driver.is_running() && self.rt.underruns() == underruns {
             // Ran dry at a planned stop: a starved planner if the stop was
             // only there because the next line had not arrived or been parsed.
-            let running = self.machine.prep.hold() == burin::stepper::prep::Hold::Running
+            let running = self.machine.motion.hold() == burin::stepper::prep::Hold::Running
                 && !self.rt.hold_requested();
             let waiting = !self.lines.is_empty() || (self.device_mode && self.input_pending);
             if running && self.machine.ready() && waiting {

@@ -168,7 +168,7 @@ pub fn executor(data: &[u8]) {
     if done && sim.machine.alarm().is_none() {
         let want = sim
             .machine
-            .planner
+            .motion
             .to_steps(&sim.machine.commanded_position());
         if let Ok(want) = want {
             assert_eq!(
