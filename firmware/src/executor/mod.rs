@@ -240,7 +240,7 @@ impl<const N: usize> Machine<N> {
     }
 
     /// [`Machine::new`], in place (`$n=`): the planner keeps its ring's
-    /// storage ([`Planner::reset`]), so no second machine is built on the
+    /// storage ([`Pipeline::rebuild`]), so no second machine is built on the
     /// stack (`Machine::new`'s frame is 15.6 KB on the F401 image).
     pub fn rebuild(&mut self, settings: Settings, tick_hz: u32) {
         self.motion.rebuild(settings, tick_hz);

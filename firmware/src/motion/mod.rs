@@ -9,6 +9,20 @@
 //! whatever the sequencer asks, it asks in machine mm, and what the planner
 //! and the stepper see may differ from it only here.
 //!
+//! Backlash compensation (`$160`-`$163`, [`Settings::backlash_mm`]) is the
+//! first: the planner works in motor steps, which are the commanded
+//! position plus `comp`. When a move reverses an axis, a take-up block
+//! (a rapid line on the reversing axes alone, so their rate and
+//! acceleration limits hold and the reversal stops at its corner) moves
+//! the motors across the slack first and `comp` changes by it. An axis
+//! whose slack is taken up towards its homing direction (`$23`) has
+//! `comp` 0, the other way `∓backlash`: that is the state assumed at
+//! power-up and kept through homing and position redefinitions, which
+//! change coordinates, not the mechanism. The step interrupt leaves
+//! take-up steps out of the position ([`crate::stepper::Segment::takeup`])
+//! and adds them to [`Realtime::takeup`], so the reported position never
+//! shows them, and a flush takes `comp` back from what ran.
+//!
 //! ```text
 //! executor (sequencer) --Move--> Pipeline::submit --> planner --> preparer --> step ISR
 //! ```
@@ -52,6 +66,9 @@ pub struct Pipeline<const N: usize> {
     planner: Planner<N>,
     prep: Preparer,
     cfg: StepConfig,
+    /// Motor steps minus commanded steps per axis at the end of what is
+    /// planned: the backlash taken up away from the homing direction.
+    comp: [i32; AXES],
 }
 
 impl<const N: usize> Pipeline<N> {
@@ -63,6 +80,7 @@ impl<const N: usize> Pipeline<N> {
             planner,
             prep: Preparer::new(settings, cfg),
             cfg,
+            comp: [0; AXES],
         }
     }
 
@@ -73,11 +91,14 @@ impl<const N: usize> Pipeline<N> {
             planner: Planner::zeroed(),
             prep: Preparer::zeroed(),
             cfg: StepConfig::UNSET,
+            comp: [0; AXES],
         }
     }
 
     /// [`Pipeline::new`], in place: the planner keeps its ring's storage
-    /// ([`Planner::reset`]), so no second ring is built on the stack.
+    /// ([`Planner::reset`]), so no second ring is built on the stack. The
+    /// backlash state stays (the mechanism did not move; `$n=` waits for
+    /// idle, so it agrees with [`Realtime::takeup`]).
     pub fn rebuild(&mut self, settings: Settings, tick_hz: u32) {
         self.planner.reset(settings);
         self.planner.set_tick_hz(tick_hz);
@@ -94,13 +115,30 @@ impl<const N: usize> Pipeline<N> {
                 speed,
                 watch,
                 line,
-            } => self.planner.push_line_mm(&end, speed, watch, line),
+            } => {
+                if !self.compensating() {
+                    return self.planner.push_line_mm(&end, speed, watch, line);
+                }
+                self.take_up(&end, line)?;
+                let comp = self.comp;
+                self.planner
+                    .push_shifted(&end, &comp, speed, watch, line, None)
+            }
             Move::Chord {
                 end,
                 speed,
                 curve,
                 line,
-            } => self.planner.push_chord(&end, speed, line, curve),
+            } => {
+                if !self.compensating() {
+                    return self.planner.push_chord(&end, speed, line, curve);
+                }
+                self.take_up(&end, line)?;
+                let comp = self.comp;
+                let watch = Watch::default();
+                self.planner
+                    .push_shifted(&end, &comp, speed, watch, line, Some(curve))
+            }
             Move::Dwell { seconds, line } => {
                 let ticks = dwell_ticks(seconds, self.cfg.tick_hz);
                 self.planner.push_dwell(ticks, line)
@@ -108,9 +146,65 @@ impl<const N: usize> Pipeline<N> {
         }
     }
 
-    /// The next [`submit`](Self::submit) has a planner slot.
+    /// The next [`submit`](Self::submit) has a planner slot (two while
+    /// backlash is compensated: a take-up may go first).
     pub fn has_room(&self) -> bool {
-        !self.planner.is_full()
+        let need = if self.compensating() { 2 } else { 1 };
+        self.planner.len() + need <= N
+    }
+
+    /// Backlash is set on some axis or still taken up (a path that only
+    /// this can change: with `$160`-`$163` at 0 and nothing taken up,
+    /// moves are planned exactly as without compensation).
+    fn compensating(&self) -> bool {
+        self.comp != [0; AXES] || self.settings().backlash_mm.iter().any(|&b| b > 0.0)
+    }
+
+    /// Motor steps minus commanded steps for axis `i` once it has moved
+    /// towards positive (`positive`) or negative: 0 towards its homing
+    /// direction, the backlash against it.
+    fn comp_towards(&self, i: usize, positive: bool) -> i32 {
+        let s = self.settings();
+        let homes_positive = s.homing_dir_invert & (1 << i) == 0;
+        if positive == homes_positive {
+            return 0;
+        }
+        let b = libm::roundf(s.backlash_mm[i] * s.axes[i].steps_per_mm);
+        let b = if b.is_finite() { b as i32 } else { 0 };
+        if homes_positive {
+            -b
+        } else {
+            b
+        }
+    }
+
+    /// Queue the take-up a move to `end` needs on the axes it reverses
+    /// (or moves for the first time since the slack changed side), and
+    /// move `comp` by it.
+    fn take_up(&mut self, end: &Pos, line: u32) -> Result<(), PlanError> {
+        let target = self.planner.to_steps(end)?;
+        let at = self.planner.position();
+        let take: [i32; AXES] = core::array::from_fn(|i| {
+            let d = i64::from(target[i]) - (i64::from(at[i]) - i64::from(self.comp[i]));
+            if d == 0 {
+                0
+            } else {
+                self.comp_towards(i, d > 0).wrapping_sub(self.comp[i])
+            }
+        });
+        if take == [0; AXES] {
+            return Ok(());
+        }
+        self.planner.push_takeup(&take, line)?;
+        for (c, t) in self.comp.iter_mut().zip(take) {
+            *c = c.wrapping_add(t);
+        }
+        Ok(())
+    }
+
+    /// Motor steps minus commanded steps per axis, as planned.
+    pub fn backlash_comp(&self) -> [i32; AXES] {
+        self.comp
     }
 
     pub fn settings(&self) -> &Settings {
@@ -142,8 +236,13 @@ impl<const N: usize> Pipeline<N> {
     /// nothing queued. Returns the position in mm.
     pub fn redefine(&mut self, rt: &Realtime, steps: &[i32; AXES]) -> Pos {
         rt.redefine_position(steps);
-        self.planner.clear(*steps);
+        self.planner.clear(self.motor(steps));
         self.steps_to_mm(steps)
+    }
+
+    /// Motor steps for a commanded (reported) step position.
+    fn motor(&self, steps: &[i32; AXES]) -> [i32; AXES] {
+        core::array::from_fn(|i| steps[i].wrapping_add(self.comp[i]))
     }
 
     /// Drop everything queued and take the stepper's position as truth:
@@ -152,7 +251,9 @@ impl<const N: usize> Pipeline<N> {
         rt.bump_generation();
         self.prep.reset();
         let pos = rt.position();
-        self.planner.clear(pos);
+        // What was planned but not loaded is gone: the take-up that ran.
+        self.comp = rt.takeup();
+        self.planner.clear(self.motor(&pos));
         rt.clear_trip();
         self.steps_to_mm(&pos)
     }
@@ -219,7 +320,10 @@ pub fn dwell_ticks(seconds: f32, tick_hz: u32) -> u64 {
 }
 
 #[cfg(test)]
-mod tests {
+mod tests;
+
+#[cfg(test)]
+mod dwell_tests {
     use super::dwell_ticks;
 
     #[test]

@@ -134,6 +134,10 @@ pub struct Block {
     pub max_entry: f32,
     pub entry: f32,
     pub watch: Watch,
+    /// Backlash take-up (`motion::Pipeline`): its steps turn the motors
+    /// but do not move the tool, so the step interrupt leaves them out of
+    /// the reported position; never merged with a neighbour.
+    pub takeup: bool,
     /// Source line, for errors and traces.
     pub line: u32,
 }
@@ -173,6 +177,7 @@ impl Block {
             probe: 0,
             homing: false,
         },
+        takeup: false,
         line: 0,
     };
 
@@ -212,6 +217,7 @@ impl Block {
             probe: 0,
             homing: false,
         },
+        takeup: false,
         line: 0,
     };
 
@@ -474,7 +480,7 @@ impl<const N: usize> Planner<N> {
         line: u32,
     ) -> Result<(), PlanError> {
         let mm = self.steps_mm(&target);
-        self.push(target, &mm, speed, watch, line, None)
+        self.push(target, &mm, speed, watch, line, push::Piece::Line)
     }
 
     /// [`push_line`](Self::push_line) to a commanded position in mm (rounded
@@ -487,7 +493,7 @@ impl<const N: usize> Planner<N> {
         line: u32,
     ) -> Result<(), PlanError> {
         let target = self.to_steps(end)?;
-        self.push(target, end, speed, watch, line, None)
+        self.push(target, end, speed, watch, line, push::Piece::Line)
     }
 
     /// Queue one chord of an arc or spline, ending at `end` mm. On a curve
@@ -501,7 +507,14 @@ impl<const N: usize> Planner<N> {
         curve: Curve,
     ) -> Result<(), PlanError> {
         let target = self.to_steps(end)?;
-        self.push(target, end, speed, Watch::default(), line, Some(curve))
+        self.push(
+            target,
+            end,
+            speed,
+            Watch::default(),
+            line,
+            push::Piece::Chord(curve),
+        )
     }
 
     /// Queue a dwell; motion stops before it.

@@ -132,6 +132,12 @@ pub struct Settings {
     /// long before the coolant and the motion resume (GRBL's compiled-in
     /// 4 s; grblHAL's `$392`). 0 resumes at once.
     pub spindle_delay_s: f32,
+    /// `$160`-`$163` backlash per axis, mm (grblHAL's numbers): the
+    /// mechanical slack a reversing axis takes up before the tool moves.
+    /// The motion pipeline moves the motors that much more at each
+    /// reversal (`motion::Pipeline`), without it showing in the reported
+    /// position. 0: no compensation.
+    pub backlash_mm: [f32; AXES],
 }
 
 /// What M6 does (`$211`-`$219`). Positions are machine mm.
@@ -234,6 +240,7 @@ impl Settings {
         g28_homes: false,
         tool_change: ToolChange::DEFAULT,
         spindle_delay_s: 4.0,
+        backlash_mm: [0.0; AXES],
     };
 
     /// Every field zero (enums their first variant): only the board's
@@ -278,5 +285,6 @@ impl Settings {
         g28_homes: false,
         tool_change: ToolChange::ZEROED,
         spindle_delay_s: 0.0,
+        backlash_mm: [0.0; AXES],
     };
 }

@@ -65,6 +65,7 @@ pub fn small_machine(soft_limits: bool, probe: bool) -> MachineConfig {
         host: HostModel::INSTANT,
         interrupts: Default::default(),
         wiring: None,
+        slack_mm: Default::default(),
     }
 }
 
