@@ -125,3 +125,22 @@ fn take_ups_show_in_no_report_and_keep_the_axis_limits() {
         );
     }
 }
+
+#[test]
+fn json_reports_the_deviation_and_machine_files_check_the_keys() {
+    let s = run_file(&machine(), &job(), &mut host_sim::record::Discard);
+    let mut out = Vec::new();
+    let info = machine().run_info();
+    host_sim::report::write_json(&mut out, &info, &s).unwrap();
+    let j: serde_json::Value = serde_json::from_slice(&out).unwrap();
+    let d = j["max_tool_deviation_mm"].as_f64().unwrap();
+    assert_eq!(d, s.max_tool_deviation_mm);
+    assert!(d > 0.0 && d <= 0.02, "{d}");
+    for (text, key) in [
+        ("[axes.x]\nslack_mm = -0.1", "axes.x.slack_mm"),
+        ("[axes.y]\nbacklash_mm = 11", "axes.y.backlash_mm"),
+    ] {
+        let e = MachineConfig::from_toml_str(text).unwrap_err().to_string();
+        assert!(e.contains(key), "{e}");
+    }
+}
