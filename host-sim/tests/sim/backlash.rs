@@ -144,3 +144,32 @@ fn json_reports_the_deviation_and_machine_files_check_the_keys() {
         assert!(e.contains(key), "{e}");
     }
 }
+
+/// Homing (its pull-off reverses each axis), a probe and reversals on the
+/// default machine with switches: with the slack compensated the tool
+/// keeps to the path as well as on a machine without slack, and the job
+/// ends where it was commanded.
+#[test]
+fn homing_and_probing_with_backlash_end_where_commanded() {
+    let src = "$H\nG21 G90 G17 G94\nG1 X-10 Y-10 F1200\nG1 X-2 Y-4\nG1 X-10 Y-8\n\
+               G2 X-10 Y-16 I0 J-4\nG1 X-5 Y-5\nG38.2 Z-60 F100\nG0 Z-1\nG1 X-1 Y-1\n";
+    let mut plain = MachineConfig::default();
+    plain.settings.homing_enable = true;
+    let mut slack = plain.clone();
+    slack.slack_mm = [0.1, 0.1, 0.0, 0.0];
+    slack.settings.backlash_mm = [0.1, 0.1, 0.0, 0.0];
+    let p = run_file(&plain, src, &mut host_sim::record::Discard);
+    let s = run_file(&slack, src, &mut host_sim::record::Discard);
+    for r in [&p, &s] {
+        assert!(r.errors.is_empty(), "{:?}", r.errors);
+        assert_eq!(r.final_position_mm, [-1.0, -1.0, -1.0, 0.0]);
+    }
+    assert!(
+        s.max_tool_deviation_mm <= p.max_tool_deviation_mm + 0.002,
+        "{} mm with slack, {} mm without",
+        s.max_tool_deviation_mm,
+        p.max_tool_deviation_mm
+    );
+    // Compensated: the motors took the slack up (more steps on X and Y).
+    assert!(s.steps[0] > p.steps[0] && s.steps[1] > p.steps[1]);
+}
