@@ -241,7 +241,9 @@ impl<const N: usize> Machine<N> {
 
     /// [`Machine::new`], in place (`$n=`): the planner keeps its ring's
     /// storage ([`Pipeline::rebuild`]), so no second machine is built on the
-    /// stack (`Machine::new`'s frame is 15.6 KB on the F401 image).
+    /// stack (`Machine::new`'s frame is 15.6 KB on the F401 image). The
+    /// sequencer's fields start as in `new`, which are the placeholder's:
+    /// taken from that constant, no second pipeline is built either.
     pub fn rebuild(&mut self, settings: Settings, tick_hz: u32) {
         self.motion.rebuild(settings, tick_hz);
         let Machine {
@@ -258,7 +260,7 @@ impl<const N: usize> Machine<N> {
             tool_event,
             tool_reference,
             fault,
-        } = Machine::<0>::new(settings, tick_hz);
+        } = Machine::<0>::placeholder();
         self.pending = pending;
         self.alarm = alarm;
         self.position_lost = position_lost;
