@@ -120,7 +120,7 @@ impl<Q: SegmentSink, const N: usize> MotionPort for Core<'_, Q, N> {
         self.machine.commanded_position()
     }
     fn probe_result(&self) -> Option<(Pos, bool)> {
-        self.machine.probe_result
+        self.machine.probe_result()
     }
     fn take_tool_event(&mut self) -> Option<executor::ToolEvent> {
         self.machine.take_tool_event()
@@ -133,7 +133,7 @@ impl<Q: SegmentSink, const N: usize> MotionPort for Core<'_, Q, N> {
         self.outputs.speed()
     }
     fn planner_free(&self) -> u16 {
-        (N - self.machine.planner.len()) as u16
+        (N - self.machine.motion.planner().len()) as u16
     }
     fn planner_blocks(&self) -> u16 {
         N as u16

@@ -7,8 +7,9 @@
 //!
 //! Pipeline, one module per stage:
 //! `link` (bytes) -> `session` (lines, replies) -> `gcode` (lexer/parser)
-//! -> `interp` (modal state) -> [`command`] -> `executor` -> `arc`
-//! (segmenter) -> `planner` (look-ahead) -> `stepper` (segments, pulses).
+//! -> `interp` (modal state) -> [`command`] -> `executor` (sequencer; `arc`
+//! makes chords) -> [`motion::Move`] -> `motion` (the one gateway) ->
+//! `planner` (look-ahead) -> `stepper` (segments, pulses).
 //! [`controller`] is the whole parse/plan task, which both shells drive.
 //!
 //! Import rule: the modules are declared below bottom up, and each imports
@@ -49,7 +50,10 @@ pub mod flow;
 // step generation: the interrupts' shared flags, then segments and pulses
 pub mod realtime;
 pub mod stepper;
-// the machine: soft limits, homing, probing, scripts, alarms
+// the motion pipeline behind its one gateway (`Move`): planner, preparer
+pub mod motion;
+// the machine, sequencing the program: soft limits, homing, probing,
+// scripts, alarms
 pub mod executor;
 // the periphery: switches, link, outputs, persistence, suspend
 pub mod inputs;

@@ -61,8 +61,13 @@ pub struct Realtime {
     trip: AtomicU8,
     /// Axes whose switch caused the trip (limit switches) or the probe bit.
     trip_mask: AtomicU8,
-    /// Machine position in steps, written by the stepper as it steps.
+    /// Machine position in steps, written by the stepper as it steps: the
+    /// tool's, without backlash take-up steps (those go to `takeup`).
     position: [AtomicI32; AXES],
+    /// Signed backlash take-up steps the stepper has loaded since power-up
+    /// (a take-up segment's whole steps when it starts): the motors stand
+    /// at `position + takeup` once it has finished.
+    takeup: [AtomicI32; AXES],
     /// Position at the moment of the last trip.
     trip_position: [AtomicI32; AXES],
     /// The stepper has no segment and the timer is stopped.
@@ -117,6 +122,7 @@ impl Realtime {
             trip_mask: AtomicU8::new(0),
             position: [const { AtomicI32::new(0) }; AXES],
             trip_position: [const { AtomicI32::new(0) }; AXES],
+            takeup: [const { AtomicI32::new(0) }; AXES],
             stepper_idle: AtomicBool::new(true),
             stepping: AtomicBool::new(false),
             new_position: [const { AtomicI32::new(0) }; AXES],
@@ -302,6 +308,16 @@ impl Realtime {
     pub(crate) fn store_position(&self, axis: usize, steps: i32) {
         if let Some(a) = self.position.get(axis) {
             a.store(steps, Relaxed);
+        }
+    }
+    /// Backlash take-up steps loaded so far, per axis (see `takeup`):
+    /// at rest, the motors' position is [`Self::position`] plus this.
+    pub fn takeup(&self) -> [i32; AXES] {
+        core::array::from_fn(|i| self.takeup[i].load(Relaxed))
+    }
+    pub(crate) fn add_takeup(&self, axis: usize, steps: i32) {
+        if let Some(a) = self.takeup.get(axis) {
+            a.store(a.load(Relaxed).wrapping_add(steps), Relaxed);
         }
     }
     pub fn stepper_idle(&self) -> bool {

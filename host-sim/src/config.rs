@@ -126,6 +126,11 @@ pub struct MachineConfig {
     /// The switches' and motors' wiring; `None`: as the settings the
     /// machine starts with say ([`Wiring::matching`]).
     pub wiring: Option<Wiring>,
+    /// Mechanical slack per axis, mm (a fact of the machine, not a
+    /// setting; `$160`-`$163` compensate it): the modelled tool follows the
+    /// motor with this dead band (`engine::World`), taken up towards the
+    /// homing direction at power-up, as the firmware assumes.
+    pub slack_mm: [f32; AXES],
 }
 
 /// The default machine: a small 300 × 300 × 100 mm gantry mill on the
@@ -171,6 +176,7 @@ impl Default for MachineConfig {
             host: HostModel::default(),
             interrupts: Interrupts::default(),
             wiring: None,
+            slack_mm: [0.0; AXES],
         }
     }
 }
@@ -264,7 +270,16 @@ impl MachineConfig {
             return Err(ConfigError::invalid("tick_hz", "must be at least 1000 Hz"));
         }
         for (i, ax) in s.axes.iter().enumerate() {
-            validate_axis(file::AXIS_KEYS[i], ax)?;
+            let keys = file::AXIS_KEYS[i];
+            validate_axis(keys, ax)?;
+            at_least_zero(keys[4], s.backlash_mm[i])?;
+            if s.backlash_mm[i] > 10.0 {
+                return Err(ConfigError::invalid(
+                    keys[4],
+                    "must be at most 10 ($160-$163)",
+                ));
+            }
+            at_least_zero(keys[5], self.slack_mm[i])?;
         }
         positive("motion.arc_tolerance_mm", s.arc_tolerance)?;
         at_least_zero("motion.junction_deviation_mm", s.junction_deviation)?;
@@ -332,7 +347,7 @@ impl MachineConfig {
     }
 }
 
-fn validate_axis(keys: [&str; 4], ax: &AxisSettings) -> Result<(), ConfigError> {
+fn validate_axis(keys: [&str; 6], ax: &AxisSettings) -> Result<(), ConfigError> {
     positive(keys[0], ax.steps_per_mm)?;
     positive(keys[1], ax.max_rate)?;
     positive(keys[2], ax.max_accel)?;

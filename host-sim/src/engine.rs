@@ -11,6 +11,7 @@
 //! clocks or hash maps, so two runs of the same job are identical event for
 //! event.
 
+mod deviation;
 mod dma;
 mod host;
 mod job;
@@ -106,6 +107,8 @@ struct Stats {
     steps_per_mm: [f32; AXES],
     /// Simulated work: step interrupts entered and task passes run.
     work: u64,
+    /// The modelled tool against the commanded path.
+    deviation: deviation::Deviation,
 }
 
 fn machine_error(line: u32, e: MachineError) -> RunError {
@@ -196,7 +199,7 @@ impl<'r> Sim<'r> {
     }
     /// Last G38.x result (machine mm, contact).
     pub fn probe_result(&self) -> Option<([f32; AXES], bool)> {
-        self.machine.probe_result
+        self.machine.probe_result()
     }
 
     /// Schedule realtime input at `tick` (kept in tick order; equal ticks in call order).
@@ -287,7 +290,7 @@ impl<'r> Sim<'r> {
                 }
                 None => {
                     if self.auto_resume
-                        && self.machine.prep.hold() == burin::stepper::prep::Hold::Held
+                        && self.machine.motion.hold() == burin::stepper::prep::Hold::Held
                     {
                         self.rt.cycle_start();
                         self.plan_task();
@@ -346,6 +349,7 @@ impl<'r> Sim<'r> {
             final_position_mm: mm,
             final_work_position_mm: std::array::from_fn(|i| mm[i] - wco[i] as f64),
             planner_underruns: self.rt.underruns() + self.stats.starved,
+            max_tool_deviation_mm: self.stats.deviation.max_mm,
             errors: self.stats.errors.clone(),
         }
     }
@@ -380,6 +384,7 @@ fn note(stats: &mut Stats, rec: &mut dyn Recorder, n: Note) {
                 stats.distance += (d2 as f64).sqrt();
             }
             stats.last_path = Some(end);
+            stats.deviation.point(end);
             stats.blocks += 1;
             rec.commanded(line, k, end);
             let (feed_mm_s, seconds) = match speed {
@@ -403,7 +408,10 @@ fn note(stats: &mut Stats, rec: &mut dyn Recorder, n: Note) {
             line,
             start,
             geometry,
-        } => rec.motion(line, start, &geometry),
+        } => {
+            stats.deviation.point(start);
+            rec.motion(line, start, &geometry);
+        }
         Note::Homed { .. } => {}
         Note::Executed { .. } => {}
     }

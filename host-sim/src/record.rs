@@ -88,6 +88,10 @@ pub struct Summary {
     pub final_work_position_mm: [f64; AXES],
     pub planner_underruns: u32,
     pub errors: Vec<RunError>,
+    /// Largest distance from the modelled tool (behind the machine's
+    /// slack, `MachineConfig::slack_mm`) to the commanded path, mm,
+    /// measured at every step interrupt.
+    pub max_tool_deviation_mm: f64,
 }
 
 /// Receives a run as it happens.

@@ -4,7 +4,9 @@
 //! `final_position_mm`, `final_position_steps`, `job_time_s`, `steps`,
 //! `max_feed_mm_min`, `planner_underruns`, `errors` (`{line, code, message}`),
 //! `tick_hz`, and `machine.axes` (`{name, steps_per_mm, max_rate_mm_min,
-//! max_accel_mm_s2, travel_mm}`). Per-axis arrays are in X, Y, Z, A order.
+//! max_accel_mm_s2, travel_mm}`); `max_tool_deviation_mm` (the modelled
+//! tool's largest distance from the commanded path, see `Summary`). Per-axis
+//! arrays are in X, Y, Z, A order.
 //! Extra fields may be added; none of these may change meaning.
 
 use std::io::{self, Write};
@@ -34,6 +36,7 @@ struct Json<'a> {
     lines: u32,
     moves: u32,
     distance_mm: f64,
+    max_tool_deviation_mm: f64,
 }
 
 #[derive(Serialize)]
@@ -97,6 +100,7 @@ pub fn write_json<W: Write>(mut w: W, info: &RunInfo, s: &Summary) -> io::Result
         lines: s.lines,
         moves: s.moves,
         distance_mm: s.distance_mm,
+        max_tool_deviation_mm: s.max_tool_deviation_mm,
     };
     serde_json::to_writer_pretty(&mut w, &j)?;
     w.write_all(b"\n")?;

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 mod checks;
 pub use checks::{check_fault_layout, check_vectors};
-use checks::{check_no_float_text, check_no_soft_double, word};
+use checks::{check_machine_slot_in_bss, check_no_float_text, check_no_soft_double, word};
 
 pub const FLASH_BASE: u32 = 0x0800_0000;
 /// Flash sectors 1 and 2 of both Black Pills: the settings and work
@@ -131,6 +131,7 @@ pub fn build_and_check(board: Board) -> Result<Sizes> {
     check_fault_layout(&elf)?;
     check_no_float_text(&elf)?;
     check_no_soft_double(&elf)?;
+    check_machine_slot_in_bss(&elf)?;
     check_budget(board, &sizes)?;
     Ok(sizes)
 }

@@ -13,10 +13,14 @@ use crate::arc::ArcError;
 use crate::planner::PlanError;
 
 /// What went wrong in the motion core.
+///
+/// Tagged from 1, so that `Option<MachineError>`'s `None` is a zero byte
+/// (the board's machine slot is all zero bits, `Machine::placeholder`).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(u8)]
 pub enum MachineError {
     /// 400: the move leaves the machine envelope on this axis.
-    SoftLimit { axis: u8 },
+    SoftLimit { axis: u8 } = 1,
     /// 401: this axis's max rate times its steps/mm exceeds `$201`; the move
     /// could not be stepped without losing steps, so it is refused.
     StepRateTooHigh { axis: u8 },

@@ -1,9 +1,13 @@
-//! The executor: takes [`Command`]s in program order and drives the
-//! segmenter, the planner and the segment preparer; runs homing, G27 and
-//! probing as small state machines; keeps alarms and the position-lost flag.
+//! The executor, the sequencer: takes [`Command`]s in program order, turns
+//! them into [`Move`]s (arcs and splines as chords, independent rapids as
+//! legs, canned cycles and M6 as scripts) and hands every one to the motion
+//! pipeline through its one gateway, [`Pipeline::submit`]; runs homing,
+//! G27 and probing as small state machines; keeps alarms and the
+//! position-lost flag. It never touches the planner or the preparer: the
+//! pipeline ([`crate::motion`]) owns them and the motion settings.
 //!
 //! It lives in the parse/plan task. It talks to the step interrupt only
-//! through the segment queue and [`Realtime`].
+//! through the pipeline and [`Realtime`].
 
 mod error;
 mod homing;
@@ -17,11 +21,12 @@ pub use script::ToolEvent;
 
 use crate::arc::{ArcChords, SplineChords};
 use crate::command::{Arc, AxisMask, Command, Feed, Pos, ProbeKind, Spline};
-use crate::planner::{Curve, Planner, Speed, Watch};
+use crate::motion::{Move, Pipeline};
+use crate::planner::{Curve, Speed, Watch};
 use crate::realtime::{Realtime, Trip};
 use crate::seams::{StepConfig, Switches};
 use crate::settings::{RapidMode, Settings};
-use crate::stepper::prep::{Preparer, SegmentSink};
+use crate::stepper::prep::SegmentSink;
 use crate::AXES;
 
 /// Chords (arc, spline or rapid legs) the executor plans in one call: a
@@ -100,7 +105,9 @@ enum Chords {
     },
 }
 
+/// Tagged, `None` first: a zero byte (the placeholder's, see there).
 #[derive(Clone, Debug)]
+#[repr(u8)]
 enum Pending {
     None,
     Chords {
@@ -147,12 +154,21 @@ pub enum State {
     Alarm,
 }
 
+/// `Option<(Pos, bool)>` with a zero `None` (the niche of
+/// `Option<(Pos, bool)>` is a 2 in the `bool`; see `Machine::placeholder`).
+#[derive(Clone, Copy, Debug)]
+#[repr(u8)]
+enum Probed {
+    None,
+    At(Pos, bool),
+}
+
 /// The executor. `N` is the planner ring size.
 #[derive(Debug)]
 pub struct Machine<const N: usize> {
-    pub planner: Planner<N>,
-    pub prep: Preparer,
-    cfg: StepConfig,
+    /// Where every motion goes ([`Pipeline::submit`]); shells and tests
+    /// read the planner and the preparer through it.
+    pub motion: Pipeline<N>,
     pending: Pending,
     alarm: Option<MachineError>,
     position_lost: bool,
@@ -161,8 +177,8 @@ pub struct Machine<const N: usize> {
     commanded: Pos,
     override_epoch: u32,
     switches: Switches,
-    /// Last G38.x result: position (mm) and whether contact happened.
-    pub probe_result: Option<(Pos, bool)>,
+    /// Last G38.x result ([`Machine::probe_result`]).
+    probed: Probed,
     /// A canned cycle or tool change being expanded, and its line.
     script: Option<(script::Script, u32)>,
     tool_event: Option<ToolEvent>,
@@ -174,13 +190,8 @@ pub struct Machine<const N: usize> {
 
 impl<const N: usize> Machine<N> {
     pub fn new(settings: Settings, tick_hz: u32) -> Self {
-        let cfg = StepConfig::new(&settings, tick_hz);
-        let mut planner = Planner::new(settings);
-        planner.set_tick_hz(tick_hz);
         Machine {
-            planner,
-            prep: Preparer::new(settings, cfg),
-            cfg,
+            motion: Pipeline::new(settings, tick_hz),
             pending: Pending::None,
             alarm: None,
             position_lost: false,
@@ -188,7 +199,7 @@ impl<const N: usize> Machine<N> {
             commanded: [0.0; AXES],
             override_epoch: 0,
             switches: Switches::default(),
-            probe_result: None,
+            probed: Probed::None,
             script: None,
             tool_event: None,
             tool_reference: None,
@@ -196,17 +207,20 @@ impl<const N: usize> Machine<N> {
         }
     }
 
-    /// A machine on the default settings and no step clock, built at
-    /// compile time: the board's static slot starts as this and
-    /// [`Machine::rebuild`] turns it into `Machine::new(settings, tick_hz)`
-    /// in place. Built at run time, `Machine::new` needs the whole machine
-    /// (about 20 KB with 64 blocks) as a temporary on the stack, which the
-    /// F401's 20 KiB stack does not have.
+    /// A machine of all zero bits, built at compile time: the board's
+    /// static slot starts as this and [`Machine::rebuild`] turns it into
+    /// `Machine::new(settings, tick_hz)` in place before anything else
+    /// touches it (zero settings would divide by a zero `steps_per_mm`).
+    /// Built at run time, `Machine::new` needs the whole machine (about
+    /// 11 KB with 64 blocks) as a temporary on the stack, which the F401's
+    /// 20 KiB stack cannot spare; zero bits put the static in `.bss`
+    /// rather than `.data`, whose load image cost 11 KB of flash
+    /// (`cargo xtask build` checks where the slot lands). The enums it
+    /// holds are tagged so that their `None` is zero (`Pending`, `Probed`,
+    /// `MachineError`, `ToolEvent`, `Script`).
     pub const fn placeholder() -> Self {
         Machine {
-            planner: Planner::new(Settings::DEFAULT),
-            prep: Preparer::new(Settings::DEFAULT, StepConfig::UNSET),
-            cfg: StepConfig::UNSET,
+            motion: Pipeline::zeroed(),
             pending: Pending::None,
             alarm: None,
             position_lost: false,
@@ -217,7 +231,7 @@ impl<const N: usize> Machine<N> {
                 limits: 0,
                 probe: false,
             },
-            probe_result: None,
+            probed: Probed::None,
             script: None,
             tool_event: None,
             tool_reference: None,
@@ -226,15 +240,14 @@ impl<const N: usize> Machine<N> {
     }
 
     /// [`Machine::new`], in place (`$n=`): the planner keeps its ring's
-    /// storage ([`Planner::reset`]), so no second machine is built on the
-    /// stack (`Machine::new`'s frame is 15.6 KB on the F401 image).
+    /// storage ([`Pipeline::rebuild`]), so no second machine is built on the
+    /// stack (`Machine::new`'s frame is 15.6 KB on the F401 image). The
+    /// sequencer's fields start as in `new`, which are the placeholder's:
+    /// taken from that constant, no second pipeline is built either.
     pub fn rebuild(&mut self, settings: Settings, tick_hz: u32) {
-        self.planner.reset(settings);
-        self.planner.set_tick_hz(tick_hz);
+        self.motion.rebuild(settings, tick_hz);
         let Machine {
-            planner: _,
-            prep,
-            cfg,
+            motion: _,
             pending,
             alarm,
             position_lost,
@@ -242,14 +255,12 @@ impl<const N: usize> Machine<N> {
             commanded,
             override_epoch,
             switches,
-            probe_result,
+            probed,
             script,
             tool_event,
             tool_reference,
             fault,
-        } = Machine::<0>::new(settings, tick_hz);
-        self.prep = prep;
-        self.cfg = cfg;
+        } = Machine::<0>::placeholder();
         self.pending = pending;
         self.alarm = alarm;
         self.position_lost = position_lost;
@@ -257,22 +268,30 @@ impl<const N: usize> Machine<N> {
         self.commanded = commanded;
         self.override_epoch = override_epoch;
         self.switches = switches;
-        self.probe_result = probe_result;
+        self.probed = probed;
         self.script = script;
         self.tool_event = tool_event;
         self.tool_reference = tool_reference;
         self.fault = fault;
     }
 
+    /// Last G38.x result: position (mm) and whether contact happened.
+    pub fn probe_result(&self) -> Option<(Pos, bool)> {
+        match self.probed {
+            Probed::None => None,
+            Probed::At(p, c) => Some((p, c)),
+        }
+    }
+
     pub fn settings(&self) -> &Settings {
-        &self.planner.settings
+        self.motion.settings()
     }
     pub fn step_config(&self) -> StepConfig {
-        self.cfg
+        self.motion.step_config()
     }
     /// Ready for the next command (nothing left to feed to the planner).
     pub fn ready(&self) -> bool {
-        matches!(self.pending, Pending::None) && self.script.is_none() && !self.planner.is_full()
+        matches!(self.pending, Pending::None) && self.script.is_none() && self.motion.has_room()
     }
     pub fn alarm(&self) -> Option<MachineError> {
         self.alarm
@@ -292,8 +311,8 @@ impl<const N: usize> Machine<N> {
             State::Alarm
         } else if matches!(self.pending, Pending::Homing(_)) {
             State::Homing
-        } else if (self.prep.hold() != crate::stepper::prep::Hold::Running
-            && !self.prep.cancelling())
+        } else if (self.motion.hold() != crate::stepper::prep::Hold::Running
+            && !self.motion.cancelling())
             || rt.hold_requested()
         {
             State::Hold
@@ -314,15 +333,14 @@ impl<const N: usize> Machine<N> {
 
     /// Set the position at power-up (or from a test), mm.
     pub fn set_position(&mut self, rt: &Realtime, mm: &Pos) -> Result<(), MachineError> {
-        let steps = self.planner.to_steps(mm)?;
-        rt.redefine_position(&steps);
-        self.planner.clear(steps);
+        let steps = self.motion.to_steps(mm)?;
+        self.motion.redefine(rt, &steps);
         self.commanded = *mm;
         Ok(())
     }
 
     fn steps_to_mm(&self, steps: &[i32; AXES]) -> Pos {
-        core::array::from_fn(|i| steps[i] as f32 / self.planner.settings.axes[i].steps_per_mm)
+        self.motion.steps_to_mm(steps)
     }
 
     /// Idle, the one definition both shells use (the session's
@@ -334,20 +352,15 @@ impl<const N: usize> Machine<N> {
     }
 
     /// No motion left: nothing planned, prepared, queued for the step
-    /// interrupt or being stepped (`drained` and an empty queue).
-    /// The queue is read before the step interrupt's idle flag: the
-    /// interrupt pops and loads a segment in one go, so one it takes
-    /// between the two reads has cleared the flag by then and is not
-    /// missed (the other order could see both idle).
+    /// interrupt or being stepped ([`Pipeline::motion_idle`]).
     pub fn motion_idle(&self, rt: &Realtime, sink: &impl SegmentSink) -> bool {
-        self.planner.is_empty() && self.prep.is_idle() && sink.is_empty() && rt.stepper_idle()
+        self.motion.motion_idle(rt, sink)
     }
 
     /// [`Self::motion_idle`] as far as the machine sees without the segment
-    /// queue: the status report's Idle (it differs only while segments
-    /// wait for a stopped step interrupt to load them).
+    /// queue: the status report's Idle ([`Pipeline::drained`]).
     fn drained(&self, rt: &Realtime) -> bool {
-        self.planner.is_empty() && self.prep.is_idle() && rt.stepper_idle()
+        self.motion.drained(rt)
     }
 
     fn speed(feed: Feed) -> Result<Speed, MachineError> {
@@ -363,7 +376,7 @@ impl<const N: usize> Machine<N> {
     /// The box `lo`..`hi` must lie inside it (a jog's target is checked
     /// before its `ok`, as GRBL's error 15).
     pub fn check_soft(&self, lo: &Pos, hi: &Pos) -> Result<(), MachineError> {
-        let s = &self.planner.settings;
+        let s = self.motion.settings();
         if !s.soft_limits {
             return Ok(());
         }
@@ -394,7 +407,12 @@ impl<const N: usize> Machine<N> {
         kind: PathKind,
         obs: &mut dyn FnMut(Note),
     ) -> Result<(), MachineError> {
-        self.planner.push_line_mm(end, speed, watch, line)?;
+        self.motion.submit(Move::Line {
+            end: *end,
+            speed,
+            watch,
+            line,
+        })?;
         obs(Note::Move {
             line,
             start: self.commanded,
@@ -412,12 +430,7 @@ impl<const N: usize> Machine<N> {
 
     /// Drop everything queued and take the stepper's position as truth.
     fn flush(&mut self, rt: &Realtime) {
-        rt.bump_generation();
-        self.prep.reset();
-        let pos = rt.position();
-        self.planner.clear(pos);
-        self.commanded = self.steps_to_mm(&pos);
-        rt.clear_trip();
+        self.commanded = self.motion.flush(rt);
     }
 
     fn raise_alarm(
@@ -488,7 +501,7 @@ impl<const N: usize> Machine<N> {
         let epoch = rt.override_epoch();
         if epoch != self.override_epoch {
             self.override_epoch = epoch;
-            self.planner
+            self.motion
                 .set_overrides(rt.feed_override(), rt.rapid_override());
         }
         match rt.trip() {
@@ -496,7 +509,7 @@ impl<const N: usize> Machine<N> {
             Trip::HardLimit => {
                 let mask = rt.trip_mask();
                 self.position_lost = true;
-                let line = self.prep.line();
+                let line = self.motion.line();
                 self.raise_alarm(rt, MachineError::HardLimit { mask }, line, obs);
             }
             Trip::Probe => match self.pending {
@@ -505,17 +518,14 @@ impl<const N: usize> Machine<N> {
                 Pending::ProbeRun { line, .. } => {
                     let at = self.steps_to_mm(&rt.trip_position());
                     self.pending = Pending::ProbeStop { at, line };
-                    self.prep.cancel_motion();
+                    self.motion.cancel_motion();
                 }
                 Pending::ProbeStop { at, line } => {
-                    let stopped = self.prep.hold() == crate::stepper::prep::Hold::Held
-                        && sink.is_empty()
-                        && rt.stepper_idle();
-                    if stopped {
+                    if self.motion.stopped(rt, sink) {
                         // The flush takes the stop point (past the trip) as
                         // the commanded position; the interpreter resyncs to it.
                         self.flush(rt);
-                        self.probe_result = Some((at, true));
+                        self.probed = Probed::At(at, true);
                         obs(Note::Probed {
                             line,
                             position: at,
@@ -555,13 +565,14 @@ impl<const N: usize> Machine<N> {
         // Before any new segment is queued: a homing move, which seeks the
         // switches, never runs armed.
         rt.set_limits_armed(self.limits_armed(rt));
-        self.prep.fill(&mut self.planner, rt, sink);
+        self.motion.fill(rt, sink);
     }
 
     /// Hard limits apply (`$21`), except while homing (it seeks the
     /// switches) and in alarm (nothing moves; a switch still closed after a
     /// trip must not raise the alarm again and again).
     pub fn limits_armed(&self, rt: &Realtime) -> bool {
-        self.planner.settings.hard_limits && !matches!(self.state(rt), State::Homing | State::Alarm)
+        self.motion.settings().hard_limits
+            && !matches!(self.state(rt), State::Homing | State::Alarm)
     }
 }

@@ -21,7 +21,7 @@ impl<const N: usize> Machine<N> {
         }
         self.script = None;
         self.pending = Pending::Fault { error: e, line };
-        self.prep.cancel_motion();
+        self.motion.cancel_motion();
     }
 
     /// A fault's ramp has stopped: its error becomes the alarm.
@@ -34,10 +34,7 @@ impl<const N: usize> Machine<N> {
         let Pending::Fault { error, line } = self.pending else {
             return;
         };
-        let stopped = self.prep.hold() == crate::stepper::prep::Hold::Held
-            && sink.is_empty()
-            && rt.stepper_idle();
-        if stopped {
+        if self.motion.stopped(rt, sink) {
             // Position exact (it ramped down): an operator hold asked for
             // meanwhile goes with the job.
             rt.clear_hold();
@@ -75,7 +72,7 @@ impl<const N: usize> Machine<N> {
                 kind,
                 line,
             } => {
-                let contact = self.switches.probe ^ self.planner.settings.probe_invert;
+                let contact = self.switches.probe ^ self.motion.settings().probe_invert;
                 let towards = matches!(kind, ProbeKind::Toward | ProbeKind::TowardNoError);
                 let must = matches!(kind, ProbeKind::Toward | ProbeKind::Away);
                 if contact == towards {
@@ -97,7 +94,7 @@ impl<const N: usize> Machine<N> {
             Pending::ProbeRun { kind, line } => {
                 // The move ended without the probe tripping.
                 let pos = self.commanded;
-                self.probe_result = Some((pos, false));
+                self.probed = Probed::At(pos, false);
                 obs(Note::Probed {
                     line,
                     position: pos,
@@ -109,9 +106,9 @@ impl<const N: usize> Machine<N> {
             }
             Pending::Homing(mut h) => {
                 let line = h.line();
-                let limits = self.switches.limits ^ self.planner.settings.limit_invert;
+                let limits = self.switches.limits ^ self.motion.settings().limit_invert;
                 let pos = rt.position();
-                match h.step(&self.planner.settings, &pos, limits) {
+                match h.step(self.motion.settings(), &pos, limits) {
                     Ok(homing::Action::Move {
                         target,
                         rate,
@@ -131,16 +128,13 @@ impl<const N: usize> Machine<N> {
                         }
                     }
                     Ok(homing::Action::Settle { seconds }) => {
-                        let ticks = super::submit::dwell_ticks(seconds, self.cfg.tick_hz);
-                        match self.planner.push_dwell(ticks, line) {
+                        match self.motion.submit(Move::Dwell { seconds, line }) {
                             Ok(()) => self.pending = Pending::Homing(h),
                             Err(e) => self.raise_alarm(rt, e.into(), line, obs),
                         }
                     }
                     Ok(homing::Action::Redefine { position }) => {
-                        rt.redefine_position(&position);
-                        self.planner.clear(position);
-                        self.commanded = self.steps_to_mm(&position);
+                        self.commanded = self.motion.redefine(rt, &position);
                         self.pending = Pending::Homing(h);
                     }
                     Ok(homing::Action::Done { axes, verified }) => {

@@ -25,17 +25,21 @@ use crate::command::CycleSteps;
 use crate::command::SpindleDir;
 
 /// What the session tells the operator, or the interpreter, about M6.
+/// Tagged from 1: `None` of an `Option` of it is zero (see `MachineError`).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(u8)]
 pub enum ToolEvent {
     /// Held at the tool-change position: load `tool`, then cycle start.
-    Change { tool: u32 },
+    Change { tool: u32 } = 1,
     /// The tool setter measured `tool`: its length offset is `z` mm.
     Length { tool: u32, z: f32 },
 }
 
+/// Tagged from 1: `None` of an `Option` of it is zero (see `MachineError`).
 #[derive(Clone, Debug)]
+#[repr(u8)]
 pub(super) enum Script {
-    Cycle(CycleSteps),
+    Cycle(CycleSteps) = 1,
     Tool { tool: u32, stage: u8 },
 }
 
@@ -55,13 +59,13 @@ impl<const N: usize> Machine<N> {
             line,
             command: &cmd,
         });
-        if self.planner.settings.tool_change.mode > 0 {
+        if self.motion.settings().tool_change.mode > 0 {
             self.script = Some((Script::Tool { tool, stage: 0 }, line));
         }
     }
 
     fn tool_step(&mut self, tool: u32, stage: u8) -> Option<ToolStep> {
-        let tc = self.planner.settings.tool_change;
+        let tc = self.motion.settings().tool_change;
         let mut at = self.commanded;
         let z = tc.position[2];
         Some(match stage {
@@ -107,7 +111,7 @@ impl<const N: usize> Machine<N> {
     }
 
     fn measure(&mut self, tool: u32) {
-        let Some((p, true)) = self.probe_result else {
+        let Some((p, true)) = self.probe_result() else {
             return;
         };
         let reference = *self.tool_reference.get_or_insert(p[2]);
@@ -120,7 +124,7 @@ impl<const N: usize> Machine<N> {
     /// Feeds the running script's steps while nothing else is pending.
     pub(super) fn run_script(&mut self, rt: &Realtime, obs: &mut dyn FnMut(Note)) {
         for _ in 0..CHORDS_PER_CALL {
-            if !matches!(self.pending, Pending::None) || self.planner.is_full() {
+            if !matches!(self.pending, Pending::None) || !self.motion.has_room() {
                 return;
             }
             let Some((script, line)) = self.script.as_mut() else {

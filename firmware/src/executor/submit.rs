@@ -41,11 +41,11 @@ impl<const N: usize> Machine<N> {
         line: u32,
         obs: &mut dyn FnMut(Note),
     ) -> Result<(), MachineError> {
-        let tol = self.planner.settings.arc_tolerance;
+        let tol = self.motion.settings().arc_tolerance;
         match cmd {
             Command::Rapid { end } => {
                 self.check_soft(end, end)?;
-                if self.planner.settings.rapid_mode == RapidMode::Independent {
+                if self.motion.settings().rapid_mode == RapidMode::Independent {
                     let (pts, n) = self.rapid_legs(end);
                     obs(Note::Move {
                         line,
@@ -74,7 +74,7 @@ impl<const N: usize> Machine<N> {
                 self.push_line(end, sp, Watch::default(), line, PathKind::Feed, obs)
             }
             Command::Arc(a) => {
-                let step = crate::arc::plane_step(&self.planner.settings.axes, a.plane);
+                let step = crate::arc::plane_step(&self.motion.settings().axes, a.plane);
                 let ch = ArcChords::new(&self.commanded, a, tol, step)?;
                 let (lo, hi) = ch.bounds();
                 self.check_soft(&lo, &hi)?;
@@ -112,8 +112,10 @@ impl<const N: usize> Machine<N> {
                 if !(seconds.is_finite() && *seconds >= 0.0 && *seconds < 1.0e6) {
                     return Err(MachineError::InvalidNumber);
                 }
-                let ticks = dwell_ticks(*seconds, self.cfg.tick_hz);
-                self.planner.push_dwell(ticks, line)?;
+                self.motion.submit(Move::Dwell {
+                    seconds: *seconds,
+                    line,
+                })?;
                 obs(Note::Stop {
                     line,
                     seconds: *seconds,
@@ -132,12 +134,12 @@ impl<const N: usize> Machine<N> {
                 Ok(())
             }
             Command::Home { axes } => {
-                let h = Homing::new(&self.planner.settings, *axes, false, line)?;
+                let h = Homing::new(self.motion.settings(), *axes, false, line)?;
                 self.pending = Pending::Homing(h);
                 Ok(())
             }
             Command::VerifyHome { axes } => {
-                let h = Homing::new(&self.planner.settings, *axes, true, line)?;
+                let h = Homing::new(self.motion.settings(), *axes, true, line)?;
                 if self.homed & h.axes() != h.axes() {
                     return Err(MachineError::NotHomed);
                 }
@@ -166,7 +168,7 @@ impl<const N: usize> Machine<N> {
             // Laser mode (GRBL's): a new S or M3/M4/M5 does not stop the
             // motion; the outputs apply it when its line's first segment
             // runs (`outputs::LaserQueue`).
-            Command::Spindle { .. } if self.planner.settings.laser_mode => {
+            Command::Spindle { .. } if self.motion.settings().laser_mode => {
                 obs(Note::Executed { line, command: cmd });
                 Ok(())
             }
@@ -192,7 +194,7 @@ impl<const N: usize> Machine<N> {
     /// against soft limits is enough.
     fn rapid_legs(&self, end: &Pos) -> ([Pos; AXES], usize) {
         let start = self.commanded;
-        let s = &self.planner.settings;
+        let s = self.motion.settings();
         let rate: [f32; AXES] = core::array::from_fn(|i| s.axes[i].max_rate.max(1e-3) / 60.0);
         let time: [f32; AXES] = core::array::from_fn(|i| libm::fabsf(end[i] - start[i]) / rate[i]);
         let mut order: [usize; AXES] = core::array::from_fn(|i| i);
@@ -255,7 +257,7 @@ impl<const N: usize> Machine<N> {
     /// poll; the device keeps answering meanwhile.
     pub(super) fn feed_chords(&mut self, obs: &mut dyn FnMut(Note)) -> Result<(), MachineError> {
         for _ in 0..CHORDS_PER_CALL {
-            if self.planner.is_full() {
+            if !self.motion.has_room() {
                 break;
             }
             let Pending::Chords {
@@ -284,11 +286,22 @@ impl<const N: usize> Machine<N> {
                 self.pending = Pending::None;
                 return Ok(());
             };
-            let pushed = if kind == PathKind::Rapid {
-                self.planner.push_line_mm(&p, speed, Watch::default(), line)
+            let mv = if kind == PathKind::Rapid {
+                Move::Line {
+                    end: p,
+                    speed,
+                    watch: Watch::default(),
+                    line,
+                }
             } else {
-                self.planner.push_chord(&p, speed, line, curve)
+                Move::Chord {
+                    end: p,
+                    speed,
+                    curve,
+                    line,
+                }
             };
+            let pushed = self.motion.submit(mv);
             if let Err(e) = pushed {
                 self.pending = Pending::None;
                 return Err(e.into());
@@ -302,35 +315,5 @@ impl<const N: usize> Machine<N> {
             });
         }
         Ok(())
-    }
-}
-
-/// Timer ticks of a dwell of `seconds` (finite, not negative), without
-/// `f64` (soft-float on the board): whole seconds exactly, the fraction
-/// through `f32`, within 6 ticks (63 ns at 96 MHz) of the exact product.
-pub(super) fn dwell_ticks(seconds: f32, tick_hz: u32) -> u64 {
-    let s = seconds.max(0.0);
-    let whole = s as u64;
-    // Exact: an f32 minus its integer part.
-    let frac = s - whole as f32;
-    whole * u64::from(tick_hz) + (frac * tick_hz as f32) as u64
-}
-
-#[cfg(test)]
-mod tests {
-    use super::dwell_ticks;
-
-    #[test]
-    fn dwell_ticks_are_within_a_few_of_the_exact_product() {
-        let hz = 96_000_000u32;
-        assert_eq!(dwell_ticks(0.5, hz), 48_000_000);
-        assert_eq!(dwell_ticks(0.0, hz), 0);
-        assert_eq!(dwell_ticks(3.0, 48_000), 144_000);
-        for i in 0..100_000u32 {
-            let s = i as f32 * 0.012_345 + (i % 7) as f32 * 1_000.0;
-            let exact = (f64::from(s) * f64::from(hz)) as i64;
-            let got = dwell_ticks(s, hz) as i64;
-            assert!((got - exact).abs() <= 6, "{s}: {got} vs {exact}");
-        }
     }
 }

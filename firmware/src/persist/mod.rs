@@ -35,7 +35,7 @@ use crate::AXES;
 use record::{MAX_RECORD, OFFSETS_KEY, OFFSET_RECORDS, TOOLS_KEY, TOOL_VALUES};
 
 /// Number of `$n` settings (`table::numbers()`; a test keeps them equal).
-pub const SETTINGS: usize = 59;
+pub const SETTINGS: usize = 63;
 
 /// What a load found.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -13,7 +13,7 @@ impl<const N: usize> Planner<N> {
     /// Merge `b` into the newest block if it continues it exactly: same
     /// direction in whole steps (the step counts are proportional, so the
     /// merged Bresenham line is the same line), same speed request, plain
-    /// lines on both sides (no chord, watch or dwell), and in laser mode
+    /// lines on both sides (no chord, watch, dwell or backlash take-up), and in laser mode
     /// the same program line. The oldest block is
     /// never touched: the segment preparer works on a copy of it.
     pub(super) fn merge(&mut self, b: &Block) -> bool {
@@ -24,6 +24,7 @@ impl<const N: usize> Planner<N> {
         let p = *self.at(k);
         let plain = |x: &Block| {
             x.kind == BlockKind::Line
+                && !x.takeup
                 && x.watch == Watch::default()
                 && x.curve_ar == 0.0
                 && x.accel == x.line_accel

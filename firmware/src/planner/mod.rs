@@ -134,6 +134,10 @@ pub struct Block {
     pub max_entry: f32,
     pub entry: f32,
     pub watch: Watch,
+    /// Backlash take-up (`motion::Pipeline`): its steps turn the motors
+    /// but do not move the tool, so the step interrupt leaves them out of
+    /// the reported position; never merged with a neighbour.
+    pub takeup: bool,
     /// Source line, for errors and traces.
     pub line: u32,
 }
@@ -173,6 +177,47 @@ impl Block {
             probe: 0,
             homing: false,
         },
+        takeup: false,
+        line: 0,
+    };
+
+    /// All zero bits, for storage nothing reads yet (the board's machine
+    /// slot, `Machine::placeholder`, lands in `.bss` that way).
+    pub const ZEROED: Block = Block {
+        kind: BlockKind::Line,
+        target: [0; AXES],
+        steps: [0; AXES],
+        count: 0,
+        dir_mask: 0,
+        length: 0.0,
+        programmed: 0.0,
+        rapid: false,
+        cap: 0.0,
+        nominal: 0.0,
+        accel: 0.0,
+        line_accel: 0.0,
+        curve_ar: 0.0,
+        curve_an: 0.0,
+        curve_tangent: [[0.0; 2]; 2],
+        floor: 0.0,
+        junction: 0.0,
+        hold_m: 0.0,
+        hold_pre_m: 0.0,
+        corner: 0.0,
+        hold_fixed: passes::Sides {
+            pre: 0.0,
+            post: 0.0,
+        },
+        quiet: 0,
+        release: 0,
+        max_entry: 0.0,
+        entry: 0.0,
+        watch: Watch {
+            limits: 0,
+            probe: 0,
+            homing: false,
+        },
+        takeup: false,
         line: 0,
     };
 
@@ -287,6 +332,19 @@ impl<const N: usize> Planner<N> {
             rapid_pct: 1.0,
             tick_hz: 0,
             settings,
+        }
+    }
+
+    /// All zero bits (the board's machine slot, see
+    /// [`Settings::ZEROED`]); [`Planner::reset`] makes it a planner.
+    pub const fn zeroed() -> Self {
+        Planner {
+            blocks: [Block::ZEROED; N],
+            still_time: [0.0; AXES],
+            quiet_time: [0.0; AXES],
+            feed_pct: 0.0,
+            rapid_pct: 0.0,
+            ..Planner::new(Settings::ZEROED)
         }
     }
 
@@ -422,7 +480,7 @@ impl<const N: usize> Planner<N> {
         line: u32,
     ) -> Result<(), PlanError> {
         let mm = self.steps_mm(&target);
-        self.push(target, &mm, speed, watch, line, None)
+        self.push(target, &mm, speed, watch, line, push::Piece::Line)
     }
 
     /// [`push_line`](Self::push_line) to a commanded position in mm (rounded
@@ -435,7 +493,7 @@ impl<const N: usize> Planner<N> {
         line: u32,
     ) -> Result<(), PlanError> {
         let target = self.to_steps(end)?;
-        self.push(target, end, speed, watch, line, None)
+        self.push(target, end, speed, watch, line, push::Piece::Line)
     }
 
     /// Queue one chord of an arc or spline, ending at `end` mm. On a curve
@@ -449,7 +507,14 @@ impl<const N: usize> Planner<N> {
         curve: Curve,
     ) -> Result<(), PlanError> {
         let target = self.to_steps(end)?;
-        self.push(target, end, speed, Watch::default(), line, Some(curve))
+        self.push(
+            target,
+            end,
+            speed,
+            Watch::default(),
+            line,
+            push::Piece::Chord(curve),
+        )
     }
 
     /// Queue a dwell; motion stops before it.

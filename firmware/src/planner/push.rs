@@ -4,7 +4,58 @@
 use super::passes::CANCEL_WINDOW_S;
 use super::*;
 
+/// What a pushed block is besides its line: a chord of a curve, or a
+/// backlash take-up ([`Block::takeup`]).
+#[derive(Clone, Copy)]
+pub(super) enum Piece {
+    Line,
+    Chord(Curve),
+    TakeUp,
+}
+
 impl<const N: usize> Planner<N> {
+    /// A move to `end` mm shifted by `shift` motor steps (backlash
+    /// compensation, `motion::Pipeline`): the steps are `end`'s plus the
+    /// shift, the geometry `end` plus the shift in mm, so the length and the
+    /// corners are the commanded move's.
+    pub fn push_shifted(
+        &mut self,
+        end: &Pos,
+        shift: &[i32; AXES],
+        speed: Speed,
+        watch: Watch,
+        line: u32,
+        curve: Option<Curve>,
+    ) -> Result<(), PlanError> {
+        let mut target = self.to_steps(end)?;
+        let mut mm = *end;
+        for i in 0..AXES {
+            target[i] = target[i]
+                .checked_add(shift[i])
+                .ok_or(PlanError::InvalidNumber)?;
+            mm[i] += shift[i] as f32 / self.settings.axes[i].steps_per_mm;
+        }
+        let piece = curve.map_or(Piece::Line, Piece::Chord);
+        self.push(target, &mm, speed, watch, line, piece)
+    }
+
+    /// A backlash take-up of `steps` on the axes that reverse: a rapid
+    /// line (the axes' own rate and acceleration limits) from the end of
+    /// the last block, flagged so that it is neither merged nor counted in
+    /// the reported position.
+    pub fn push_takeup(&mut self, steps: &[i32; AXES], line: u32) -> Result<(), PlanError> {
+        let mut target = self.position;
+        let mut mm = self.position_mm;
+        for i in 0..AXES {
+            target[i] = target[i]
+                .checked_add(steps[i])
+                .ok_or(PlanError::InvalidNumber)?;
+            mm[i] += steps[i] as f32 / self.settings.axes[i].steps_per_mm;
+        }
+        let (speed, watch) = (Speed::Rapid, Watch::default());
+        self.push(target, &mm, speed, watch, line, Piece::TakeUp)
+    }
+
     pub(super) fn push(
         &mut self,
         target: [i32; AXES],
@@ -12,8 +63,13 @@ impl<const N: usize> Planner<N> {
         speed: Speed,
         watch: Watch,
         line: u32,
-        curve: Option<Curve>,
+        piece: Piece,
     ) -> Result<(), PlanError> {
+        let curve = match piece {
+            Piece::Chord(c) => Some(c),
+            Piece::Line | Piece::TakeUp => None,
+        };
+        let takeup = matches!(piece, Piece::TakeUp);
         if self.is_full() {
             return Err(PlanError::Full);
         }
@@ -21,6 +77,7 @@ impl<const N: usize> Planner<N> {
         let mut b = Block {
             target,
             watch,
+            takeup,
             line,
             ..Block::EMPTY
         };

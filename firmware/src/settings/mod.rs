@@ -132,6 +132,12 @@ pub struct Settings {
     /// long before the coolant and the motion resume (GRBL's compiled-in
     /// 4 s; grblHAL's `$392`). 0 resumes at once.
     pub spindle_delay_s: f32,
+    /// `$160`-`$163` backlash per axis, mm (grblHAL's numbers): the
+    /// mechanical slack a reversing axis takes up before the tool moves.
+    /// The motion pipeline moves the motors that much more at each
+    /// reversal (`motion::Pipeline`), without it showing in the reported
+    /// position. 0: no compensation.
+    pub backlash_mm: [f32; AXES],
 }
 
 /// What M6 does (`$211`-`$219`). Positions are machine mm.
@@ -164,6 +170,15 @@ impl ToolChange {
         feed: 100.0,
         travel: 50.0,
     };
+    /// See [`Settings::ZEROED`].
+    pub const ZEROED: ToolChange = ToolChange {
+        mode: 0,
+        position: [0.0; 3],
+        axes: 0,
+        setter: [0.0; 2],
+        feed: 0.0,
+        travel: 0.0,
+    };
 }
 
 impl Default for Settings {
@@ -182,8 +197,7 @@ const fn axis(steps: f32, rate: f32, accel: f32, travel: f32) -> AxisSettings {
 }
 
 impl Settings {
-    /// The defaults, as a constant: the board's machine slot is a static
-    /// built from them at compile time (`Machine::placeholder`).
+    /// The defaults, as a constant.
     pub const DEFAULT: Settings = Settings {
         step_pulse_us: 2.0,
         idle_delay_ms: 25,
@@ -226,5 +240,51 @@ impl Settings {
         g28_homes: false,
         tool_change: ToolChange::DEFAULT,
         spindle_delay_s: 4.0,
+        backlash_mm: [0.0; AXES],
+    };
+
+    /// Every field zero (enums their first variant): only the board's
+    /// machine slot is built from it (`Machine::placeholder`), so that the
+    /// slot's value is all zero bits and the static sits in `.bss`, not in
+    /// `.data` with an 11 KB load image in flash. `Machine::rebuild`
+    /// replaces it before anything reads it (a zero `steps_per_mm` divides).
+    pub const ZEROED: Settings = Settings {
+        step_pulse_us: 0.0,
+        idle_delay_ms: 0,
+        step_invert: 0,
+        dir_invert: 0,
+        enable_invert: false,
+        limit_invert: 0,
+        probe_invert: false,
+        status_mask: 0,
+        junction_deviation: 0.0,
+        arc_tolerance: 0.0,
+        report_inches: false,
+        control_invert: 0,
+        soft_limits: false,
+        hard_limits: false,
+        homing_enable: false,
+        homing_dir_invert: 0,
+        homing_feed: 0.0,
+        homing_seek: 0.0,
+        homing_debounce_ms: 0,
+        homing_pulloff: 0.0,
+        spindle_max: 0.0,
+        spindle_min: 0.0,
+        laser_mode: false,
+        axes: [axis(0.0, 0.0, 0.0, 0.0); AXES],
+        dir_setup_us: 0.0,
+        max_step_rate_hz: 0.0,
+        profile: Profile::Trapezoid,
+        jerk: 0.0,
+        rapid_mode: RapidMode::Coordinated,
+        verify_home_tolerance: 0.0,
+        homing_order: 0,
+        enable_delay_us: 0.0,
+        report_axes: 0,
+        g28_homes: false,
+        tool_change: ToolChange::ZEROED,
+        spindle_delay_s: 0.0,
+        backlash_mm: [0.0; AXES],
     };
 }

@@ -110,8 +110,8 @@ const GLOBAL: [(u16, Kind); 23] = [
 ];
 
 /// Per-axis groups: `$100+i` steps/mm, `$110+i` rate, `$120+i` accel,
-/// `$130+i` travel.
-const AXIS_GROUPS: [(u16, Kind); 4] = [
+/// `$130+i` travel, `$160+i` backlash.
+const AXIS_GROUPS: [(u16, Kind); 5] = [
     (
         100,
         Kind::Real {
@@ -134,6 +134,15 @@ const AXIS_GROUPS: [(u16, Kind); 4] = [
         },
     ),
     (130, Kind::Real { min: 0.0, max: BIG }),
+    // Backlash: more than a few mm of slack is a broken machine, and a
+    // take-up is a move nobody programmed.
+    (
+        160,
+        Kind::Real {
+            min: 0.0,
+            max: 10.0,
+        },
+    ),
 ];
 
 /// `$201`'s maximum, Hz: what the CPU sustains whatever `$0` is
@@ -341,6 +350,7 @@ impl Settings {
                     _ => a.max_travel,
                 }
             }
+            160..=169 => *self.backlash_mm.get(usize::from(n - 160))?,
             200 => self.dir_setup_us,
             201 => self.max_step_rate_hz,
             202 => b(self.profile == Profile::SCurve),
@@ -414,6 +424,12 @@ impl Settings {
                     12 => a.max_accel = v,
                     _ => a.max_travel = v,
                 }
+            }
+            160..=169 => {
+                *self
+                    .backlash_mm
+                    .get_mut(usize::from(n - 160))
+                    .ok_or(SettingError::Unknown)? = v;
             }
             200 => self.dir_setup_us = v,
             201 => self.max_step_rate_hz = v,

@@ -67,6 +67,12 @@ pub struct Segment {
     pub speed_mm_min: f32,
     /// Source line of the block.
     pub line: u32,
+    /// A segment of a backlash take-up block ([`Block::takeup`]): its
+    /// steps turn the motors without moving the tool, so they are not
+    /// counted in the position (they go to [`Realtime::takeup`]).
+    ///
+    /// [`Block::takeup`]: crate::planner::Block::takeup
+    pub takeup: bool,
     /// Laser mode's view of this segment: 0 when it does not cut (rapid,
     /// homing, probing, dwell, wait), else the path speed over the
     /// programmed feed (M4 scales the power with it).
@@ -149,9 +155,37 @@ impl Stepper {
         }
     }
 
-    /// Position in steps.
+    /// Position in steps (the tool's: backlash take-up steps are not
+    /// counted, see [`Segment::takeup`]).
     pub fn position(&self) -> [i32; AXES] {
         self.position
+    }
+    /// Where the motors stand, in steps: [`Self::position`] plus the
+    /// take-up steps loaded so far ([`Realtime::takeup`]) less those of the
+    /// running take-up segment still to come. For host-sim, which follows
+    /// the pins; never on the step path.
+    pub fn motor_position(&self, rt: &Realtime) -> [i32; AXES] {
+        let takeup = rt.takeup();
+        let running = self.left > 0 && self.run.delta == [0; AXES];
+        core::array::from_fn(|i| {
+            let rest = if running {
+                self.bresenham_steps(i, self.left)
+            } else {
+                0
+            };
+            let sign = if self.dir & (1 << i) != 0 { -1 } else { 1 };
+            self.position[i]
+                .wrapping_add(takeup[i])
+                .wrapping_sub(sign * rest)
+        })
+    }
+    /// Steps axis `i` makes in the next `events` events of the running
+    /// segment: Bresenham adds `inc` per event and steps each time the
+    /// accumulator reaches the threshold (at most once an event).
+    fn bresenham_steps(&self, i: usize, events: u32) -> i32 {
+        let t = u64::from(self.run.threshold).max(1);
+        let n = (u64::from(self.acc[i]) + u64::from(self.run.inc[i]) * u64::from(events)) / t;
+        n.min(i32::MAX as u64) as i32
     }
     /// Set the position (homing, power-up); only while idle.
     pub fn set_position(&mut self, rt: &Realtime, pos: [i32; AXES]) {
@@ -242,17 +276,30 @@ impl Stepper {
             speed_mm_min: s.speed_mm_min,
             line: s.line,
             moving: s.steps.iter().any(|&n| n != 0),
-            delta: core::array::from_fn(|i| if dir & (1 << i) != 0 { -1 } else { 1 }),
+            // A take-up's steps turn the motors, not the tool's position.
+            delta: core::array::from_fn(|i| match (s.takeup, dir & (1 << i) != 0) {
+                (true, _) => 0,
+                (false, true) => -1,
+                (false, false) => 1,
+            }),
             sense: 0,
         };
         self.run.sense = self.run.sense();
         rt.set_running(s.speed_mm_min, s.line, s.cut);
         if s.new_block {
             self.acc = [self.run.threshold / 2; AXES];
-            if s.dir_mask != self.dir {
-                self.dir = s.dir_mask;
-                return Some(self.event(0, self.cfg.dir_setup_ticks));
+        }
+        if s.takeup {
+            // Counted whole as the segment starts: exact once it ends
+            // (a flush in the middle of one loses the position anyway).
+            for i in 0..AXES {
+                let n = self.bresenham_steps(i, s.events);
+                rt.add_takeup(i, if dir & (1 << i) != 0 { -n } else { n });
             }
+        }
+        if s.new_block && s.dir_mask != self.dir {
+            self.dir = s.dir_mask;
+            return Some(self.event(0, self.cfg.dir_setup_ticks));
         }
         None
     }

@@ -153,6 +153,21 @@ impl Preparer {
         }
     }
 
+    /// All zero bits (the board's machine slot, see
+    /// `Settings::ZEROED`): its block is a zero block rather than `None`,
+    /// whose niche is not zero. Never run: `Machine::rebuild` replaces it.
+    pub const fn zeroed() -> Self {
+        Preparer {
+            block: Some(Block::ZEROED),
+            pshape: Shape {
+                accel: 0.0,
+                jerk: 0.0,
+                drop: 0.0,
+            },
+            ..Preparer::new(Settings::ZEROED, StepConfig::UNSET)
+        }
+    }
+
     /// Forget everything in flight (flush after reset, trip or alarm).
     pub fn reset(&mut self) {
         self.active = false;

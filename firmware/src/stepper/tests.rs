@@ -21,6 +21,7 @@ fn segment(generation: u32) -> Segment {
         speed_mm_min: 600.0,
         cut: 0.0,
         line: 7,
+        takeup: false,
     }
 }
 
@@ -72,4 +73,44 @@ fn a_flush_stops_the_next_event_whatever_the_limits_setting_does() {
     let ev = st.on_event(&rt, &mut pop, || open);
     assert_eq!((ev.ticks, ev.step_mask), (0, 0), "no step after the flush");
     assert_eq!(rt.position(), pos);
+}
+
+/// A backlash take-up segment turns the motor (the step pins pulse) but
+/// leaves the position alone: its steps go to `Realtime::takeup` as it
+/// loads, and the motors' position (host-sim's view) counts them step by
+/// step.
+#[test]
+fn take_up_steps_pulse_but_do_not_move_the_position() {
+    let rt = Realtime::new();
+    let mut st = Stepper::new(StepConfig::new(&Settings::default(), 1_000_000));
+    let mut takeup = segment(rt.generation());
+    takeup.takeup = true;
+    takeup.events = 8;
+    takeup.steps = [8, 0, 0, 0];
+    takeup.count = 8;
+    takeup.dir_mask = 0b001;
+    let mut plain = segment(rt.generation());
+    plain.new_block = true;
+    plain.dir_mask = 0b001;
+    let mut queue = [Some(takeup), Some(plain)];
+    let mut pop = || queue.iter_mut().find_map(Option::take);
+    let open = Switches::default();
+    let mut pulses = 0;
+    let mut motor = Vec::new();
+    for _ in 0..8 {
+        let ev = st.on_event(&rt, &mut pop, || open);
+        pulses += u32::from(ev.step_mask & 1);
+        motor.push(st.motor_position(&rt)[0]);
+        assert_eq!(rt.position(), [0; crate::AXES], "the tool stands still");
+    }
+    // The direction event, then seven of the eight take-up steps.
+    assert_eq!(pulses, 7);
+    assert_eq!(rt.takeup(), [-8, 0, 0, 0]);
+    assert_eq!(motor, [0, -1, -2, -3, -4, -5, -6, -7]);
+    // The last take-up step, then the plain segment counts again.
+    for _ in 0..3 {
+        st.on_event(&rt, &mut pop, || open);
+    }
+    assert_eq!(rt.position(), [-2, 0, 0, 0]);
+    assert_eq!(st.motor_position(&rt), [-10, 0, 0, 0]);
 }

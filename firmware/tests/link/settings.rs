@@ -11,16 +11,30 @@ fn numbers_are_ascending_unique_and_all_readable() {
     let s = Settings::default();
     let nums: Vec<u16> = table::numbers().collect();
     assert!(nums.windows(2).all(|w| w[0] < w[1]));
-    assert_eq!(nums.len(), 23 + 16 + 10 + 9 + 1);
+    assert_eq!(nums.len(), 23 + 16 + 4 + 10 + 9 + 1);
     for n in &nums {
         let v = s.get(*n).unwrap_or_else(|| panic!("${n} unreadable"));
         let mut t = s;
         assert_eq!(t.set(*n, v), Ok(()), "${n}={v} default must be valid");
         assert_eq!(t, s);
     }
-    for n in [7, 15, 99, 104, 114, 140, 199, 209, 65535] {
+    for n in [7, 15, 99, 104, 114, 140, 164, 199, 209, 65535] {
         assert_eq!(s.get(n), None, "${n}");
     }
+}
+
+#[test]
+fn backlash_is_160_to_163_in_mm_up_to_10() {
+    let mut s = Settings::default();
+    assert_eq!(s.backlash_mm, [0.0; 4], "off by default");
+    assert_eq!(s.set(160, 0.1), Ok(()));
+    assert_eq!(s.set(163, 10.0), Ok(()));
+    assert_eq!(s.backlash_mm, [0.1, 0.0, 0.0, 10.0]);
+    assert_eq!(s.get(161), Some(0.0));
+    assert_eq!(s.set(162, 10.5), Err(SettingError::OutOfRange));
+    assert_eq!(s.set(161, -0.1), Err(SettingError::Negative));
+    assert_eq!(s.set(164, 0.1), Err(SettingError::Unknown));
+    assert_eq!(s.backlash_mm, [0.1, 0.0, 0.0, 10.0]);
 }
 
 #[test]
@@ -123,8 +137,12 @@ fn settings_listing() {
     );
     let mut all = String::new();
     reply::settings(&mut all, &Settings::default()).expect("string sink");
-    assert_eq!(all.lines().count(), 59);
+    assert_eq!(all.lines().count(), 63);
     assert!(all.contains("$220=4.000\r\n"), "spin-up delay, GRBL's 4 s");
+    assert!(
+        all.contains("$133=0.000\r\n$160=0.000\r\n$161=0.000\r\n$162=0.000\r\n$163=0.000\r\n$200="),
+        "backlash, grblHAL's numbers, off by default"
+    );
     assert!(
         all.contains("$210=0\r\n"),
         "G28 meaning listed, RS274NGC by default"

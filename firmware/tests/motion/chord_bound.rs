@@ -38,7 +38,7 @@ fn chords_under_a_step_are_planned_a_bounded_piece_per_call() {
         "submit planned {total}"
     );
     let mut polls = 0u32;
-    while !m.ready() || !m.planner.is_empty() || !q.is_empty() || !rt.stepper_idle() {
+    while !m.ready() || !m.motion.planner().is_empty() || !q.is_empty() || !rt.stepper_idle() {
         let mut count = |n: Note| {
             if let Note::Path { .. } = n {
                 chords += 1;

@@ -53,13 +53,13 @@ fn run_move(settings: Settings, dx: f32, feed: f32) -> Outcome {
     let mut counted = 0i64;
     let sign = if dx < 0.0 { -1 } else { 1 };
     loop {
-        let before = m.prep.walks();
+        let before = m.motion.prep().walks();
         m.poll(&rt, &mut q, Switches::default(), &mut |n| {
             if let burin::executor::Note::Error { error, .. } = n {
                 late = Some(error);
             }
         });
-        let walked = m.prep.walks().wrapping_sub(before);
+        let walked = m.motion.prep().walks().wrapping_sub(before);
         assert!(
             walked <= MAX_SEGMENTS_PER_POLL * MAX_WALKS_PER_SEGMENT,
             "one poll walked {walked} times"
@@ -67,7 +67,7 @@ fn run_move(settings: Settings, dx: f32, feed: f32) -> Outcome {
         if let Some(e) = late {
             return Outcome::Refused(e);
         }
-        if q.is_empty() && m.planner.is_empty() && m.prep.is_idle() {
+        if q.is_empty() && m.motion.planner().is_empty() && m.motion.prep().is_idle() {
             break;
         }
         // The step interrupt drains what the task prepared.
@@ -181,7 +181,11 @@ fn step_span(s: Settings, dx: f32, feed: f32, pct: u16) -> (i32, u64) {
     let (mut now, mut first, mut last) = (0u64, None, 0u64);
     for _ in 0..10_000 {
         m.poll(&rt, &mut q, Switches::default(), &mut |_| {});
-        if q.is_empty() && m.planner.is_empty() && m.prep.is_idle() && st.is_idle() {
+        if q.is_empty()
+            && m.motion.planner().is_empty()
+            && m.motion.prep().is_idle()
+            && st.is_idle()
+        {
             break;
         }
         let ev = st.on_event(&rt, &mut || q.dequeue(), Switches::default);

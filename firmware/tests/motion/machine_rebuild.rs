@@ -58,10 +58,10 @@ fn a_rebuilt_machine_moves_as_a_new_one() {
         &mut |_| {},
     )
     .expect("submit");
-    used.planner.set_overrides(150, 50);
-    assert!(!used.planner.is_empty());
+    used.motion.set_overrides(150, 50);
+    assert!(!used.motion.planner().is_empty());
     used.rebuild(b, 1_000_000);
-    assert!(used.planner.is_empty());
+    assert!(used.motion.planner().is_empty());
 
     let rt_new = Realtime::new();
     let mut fresh = Machine::<16>::new(b, 1_000_000);

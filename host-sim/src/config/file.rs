@@ -18,12 +18,14 @@ macro_rules! axis_keys {
             concat!("axes.", $l, ".max_rate_mm_min"),
             concat!("axes.", $l, ".max_accel_mm_s2"),
             concat!("axes.", $l, ".travel_mm"),
+            concat!("axes.", $l, ".backlash_mm"),
+            concat!("axes.", $l, ".slack_mm"),
         ]
     };
 }
 
 /// Key names used in error messages, per axis.
-pub(super) const AXIS_KEYS: [[&str; 4]; AXES] = [
+pub(super) const AXIS_KEYS: [[&str; 6]; AXES] = [
     axis_keys!("x"),
     axis_keys!("y"),
     axis_keys!("z"),
@@ -138,6 +140,8 @@ struct Axis {
     max_rate_mm_min: Option<f32>,
     max_accel_mm_s2: Option<f32>,
     travel_mm: Option<f32>,
+    backlash_mm: Option<f32>,
+    slack_mm: Option<f32>,
 }
 
 #[derive(Deserialize, Default)]
@@ -286,12 +290,15 @@ pub(super) fn apply(text: &str, cfg: &mut MachineConfig) -> Result<(), ConfigErr
         s.report_axes = 3;
     }
     let axes = [f.axes.x, f.axes.y, f.axes.z, f.axes.a];
-    for (dst, src) in s.axes.iter_mut().zip(axes) {
+    for (i, src) in axes.into_iter().enumerate() {
         let src = src.unwrap_or_default();
+        let dst = &mut s.axes[i];
         set(&mut dst.steps_per_mm, src.steps_per_mm);
         set(&mut dst.max_rate, src.max_rate_mm_min);
         set(&mut dst.max_accel, src.max_accel_mm_s2);
         set(&mut dst.max_travel, src.travel_mm);
+        set(&mut s.backlash_mm[i], src.backlash_mm);
+        set(&mut cfg.slack_mm[i], src.slack_mm);
     }
 
     if let Some(g) = f.gcode.g28_meaning {

@@ -33,7 +33,7 @@ impl Sim<'_> {
         if was_running && !self.driver.is_running() && self.rt.underruns() == underruns {
             // Ran dry at a planned stop: a starved planner if the stop was
             // only there because the next line had not arrived or been parsed.
-            let running = self.machine.prep.hold() == burin::stepper::prep::Hold::Running
+            let running = self.machine.motion.hold() == burin::stepper::prep::Hold::Running
                 && !self.rt.hold_requested();
             let waiting = !self.lines.is_empty() || (self.device_mode && self.input_pending);
             if running && self.machine.ready() && waiting {
@@ -41,6 +41,8 @@ impl Sim<'_> {
             }
         }
         self.apply_stores();
+        let spm = self.machine.settings().axes.map(|a| a.steps_per_mm);
+        self.stats.deviation.check(&self.world.tool_mm(&spm));
         let v = self.stepper.speed_mm_min();
         if v != self.stats.last_speed {
             self.stats.last_speed = v;
@@ -62,7 +64,8 @@ impl Sim<'_> {
         // The stepper already counted the event after the last rise: walk
         // back over it and this handler's rises to where the first rise
         // started, then forward again rise by rise (no allocation per event).
-        let mut pos = self.stepper.position();
+        // The motors' position: backlash take-up steps included.
+        let mut pos = self.stepper.motor_position(&self.rt);
         unstep(&mut pos, self.driver.pending());
         for e in stores.iter().rev().filter(|e| e.step != 0) {
             move_by(&mut pos, e.dir, e.step, -1);

@@ -1,7 +1,8 @@
-//! The physical machine around the steppers: where the carriage really is
+//! The physical machine around the steppers: where the motors really are
 //! (counted from the step pulses and the direction pins' levels,
-//! independent of what the core believes) and which switches that closes,
-//! as pin levels through the machine's [`Wiring`].
+//! independent of what the core believes), where the tool is behind the
+//! machine's mechanical slack, and which switches the motors' position
+//! closes, as pin levels through the machine's [`Wiring`].
 
 use burin::stepper::Switches;
 use burin::AXES;
@@ -24,6 +25,12 @@ struct Limit {
 pub struct World {
     /// Physical position in steps from world zero.
     pub steps: [i64; AXES],
+    /// The tool, in steps from world zero: it follows the motor within a
+    /// dead band of the axis's slack (`MachineConfig::slack_mm`), `steps -
+    /// tool` kept in `band[i]`.
+    tool: [f64; AXES],
+    band: [(f64, f64); AXES],
+    slack: bool,
     limits: [Option<Limit>; AXES],
     probe: Option<(usize, i64, i64)>,
     wiring: Wiring,
@@ -66,8 +73,23 @@ impl World {
         if let Some((a, _, _)) = probe {
             watched |= 1 << a;
         }
+        // Taken up towards the homing direction at power-up (the state the
+        // firmware's compensation assumes, `motion::Pipeline`): moving
+        // that way moves the tool at once, the other way first crosses
+        // the slack.
+        let band = std::array::from_fn(|i| {
+            let b = f64::from(cfg.slack_mm[i].max(0.0)) * spm(i);
+            if s.homing_dir_invert & (1 << i) != 0 {
+                (0.0, b)
+            } else {
+                (-b, 0.0)
+            }
+        });
         let mut w = World {
             steps,
+            tool: steps.map(|v| v as f64),
+            band,
+            slack: cfg.slack_mm.iter().any(|&b| b > 0.0),
             limits,
             probe,
             wiring: cfg.wiring.unwrap_or(Wiring::matching(s)),
@@ -88,6 +110,20 @@ impl World {
         self.update();
     }
 
+    /// Where the tool is, mm from world zero (the machine's coordinates
+    /// while the firmware's position was set to the world's, as the
+    /// start position does).
+    pub fn tool_mm(&self, steps_per_mm: &[f32; AXES]) -> [f64; AXES] {
+        std::array::from_fn(|i| {
+            let t = if self.slack {
+                self.tool[i]
+            } else {
+                self.steps[i] as f64
+            };
+            t / f64::from(steps_per_mm[i])
+        })
+    }
+
     /// Pin levels as the firmware reads them: a normally-closed switch
     /// reads active while open (the firmware's `$5`/`$6` must say so).
     pub fn switches(&self) -> Switches {
@@ -102,6 +138,11 @@ impl World {
         for i in 0..AXES {
             if step_mask & (1 << i) != 0 {
                 self.steps[i] += if negative & (1 << i) != 0 { -1 } else { 1 };
+                if self.slack {
+                    let (lo, hi) = self.band[i];
+                    let m = self.steps[i] as f64;
+                    self.tool[i] = self.tool[i].clamp(m - hi, m - lo);
+                }
             }
         }
         if step_mask & self.watched != 0 {

@@ -65,6 +65,7 @@ pub fn small_machine(soft_limits: bool, probe: bool) -> MachineConfig {
         host: HostModel::INSTANT,
         interrupts: Default::default(),
         wiring: None,
+        slack_mm: Default::default(),
     }
 }
 
@@ -168,7 +169,7 @@ pub fn executor(data: &[u8]) {
     if done && sim.machine.alarm().is_none() {
         let want = sim
             .machine
-            .planner
+            .motion
             .to_steps(&sim.machine.commanded_position());
         if let Ok(want) = want {
             assert_eq!(

@@ -66,6 +66,7 @@ fn motion(settings: Settings, tick_hz: u32, target: [f32; 4]) {
         host: HostModel::INSTANT,
         interrupts: Default::default(),
         wiring: None,
+        slack_mm: Default::default(),
     };
     let mut rec = Discard;
     let mut sim = Sim::new(&cfg, &mut rec);

@@ -55,6 +55,7 @@ pub fn config() -> MachineConfig {
         host: host_sim::config::HostModel::default(),
         interrupts: host_sim::config::Interrupts::default(),
         wiring: None,
+        slack_mm: Default::default(),
     }
 }
 

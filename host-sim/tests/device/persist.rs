@@ -94,7 +94,7 @@ fn settings_and_offsets_survive_a_reboot() {
     // Erased flash: every item defaulted, said once after the banner.
     let boot = a.lines();
     assert!(
-        has(&boot, "[MSG:Stored settings: 134 restored to defaults]"),
+        has(&boot, "[MSG:Stored settings: 138 restored to defaults]"),
         "{boot:?}"
     );
     assert_eq!(a.cmd("$110=1234"), ["ok"]);

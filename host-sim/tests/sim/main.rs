@@ -11,6 +11,7 @@ mod common;
 mod rig;
 mod synth;
 
+mod backlash;
 mod chip_facts;
 mod corpus;
 mod feed;

@@ -35,6 +35,32 @@ pub fn check_vectors(elf: &Path) -> Result<()> {
     Ok(())
 }
 
+/// The board's machine slot (`Machine::placeholder`, 11 KB) is all zero
+/// bits and so in `.bss`: in `.data` its load image costs as much flash.
+/// A field whose constant is not zero (a float default, an `Option` whose
+/// `None` is a niche value) moves it back silently; this says so.
+pub fn check_machine_slot_in_bss(elf: &Path) -> Result<()> {
+    let bytes = read(elf)?;
+    let file = parse(&bytes)?;
+    let slot = file
+        .symbols()
+        .find(|s| s.name().is_ok_and(|n| n.contains("machine_slot")))
+        .context("no machine_slot symbol")?;
+    let section = slot
+        .section_index()
+        .and_then(|i| file.section_by_index(i).ok())
+        .context("machine_slot has no section")?;
+    let name = section.name().unwrap_or("?");
+    if name != ".bss" {
+        bail!(
+            "the machine slot ({} B) is in {name}, not .bss: `Machine::placeholder` is not \
+             all zero bits, and its load image costs that much flash",
+            slot.size()
+        );
+    }
+    Ok(())
+}
+
 /// Thumb `cpsid i`.
 const CPSID_I: u16 = 0xB672;
 

@@ -270,6 +270,7 @@ fn segment(steps: [u32; AXES], events: u32, dir_mask: u8, new_block: bool) -> Se
         speed_mm_min: 6000.0,
         line: 1,
         cut: 0.0,
+        takeup: false,
     }
 }
 

@@ -20,10 +20,10 @@ pub struct Parse {
     pub rx_tokens: Consumer<'static, RxToken>,
     pub tx_bytes: Producer<'static, u8>,
     pub segments: Producer<'static, Segment>,
-    /// A static built at compile time (`Machine::placeholder`), which
-    /// `parse` rebuilds in place on the loaded settings when it
-    /// starts: `Machine::new` at run time built the whole machine (19.8 KB)
-    /// as a temporary on the stack (the F401 has 20 KiB).
+    /// A static of zero bits built at compile time (`Machine::placeholder`,
+    /// in .bss), which `parse` rebuilds in place on the loaded settings
+    /// before its first pass: `Machine::new` at run time built the whole
+    /// machine (11 KB) as a temporary on the stack (the F401 has 20 KiB).
     pub machine: &'static mut Machine<PLANNER_BLOCKS>,
     /// What the machine is built on: the settings and the step timer's
     /// tick rate.

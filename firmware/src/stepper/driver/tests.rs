@@ -119,6 +119,7 @@ fn segment(steps: u32, dir: u8, new_block: bool) -> Segment {
         speed_mm_min: 1.0,
         line: 1,
         cut: 0.0,
+        takeup: false,
     }
 }
 

@@ -111,6 +111,7 @@ impl Preparer {
                     speed_mm_min: 0.0,
                     line: b.line,
                     cut: 0.0,
+                    takeup: b.takeup,
                 });
             }
             return None;
@@ -177,6 +178,7 @@ impl Preparer {
             speed_mm_min,
             line: b.line,
             cut: cut_ratio(&b, speed_mm_min),
+            takeup: b.takeup,
         })
     }
 }

@@ -143,6 +143,7 @@ impl Preparer {
             speed_mm_min: self.v * 60.0,
             line: self.last_line,
             cut: 0.0,
+            takeup: false,
         }
     }
 
@@ -176,6 +177,7 @@ impl Preparer {
             speed_mm_min: 0.0,
             line: b.line,
             cut: 0.0,
+            takeup: false,
         })
     }
 }

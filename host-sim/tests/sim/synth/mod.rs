@@ -154,6 +154,7 @@ pub fn run(r: &mut dyn Recorder) -> Summary {
         final_position_mm: [mm(0), mm(1), mm(2), mm(3)],
         final_work_position_mm: [mm(0) + 100.0, mm(1) + 100.0, mm(2), mm(3)],
         planner_underruns: 0,
+        max_tool_deviation_mm: 0.0,
         errors: vec![host_sim::record::RunError {
             line: 7,
             code: 33,
@@ -186,6 +187,7 @@ pub fn empty_summary() -> Summary {
         final_position_mm: [0.0; 4],
         final_work_position_mm: [0.0; 4],
         planner_underruns: 0,
+        max_tool_deviation_mm: 0.0,
         errors: vec![],
     }
 }

@@ -1,0 +1,132 @@
+//! The gateway's backlash compensation, at the planner: what a reversal
+//! queues, and that nothing changes while `$160`-`$163` are 0.
+
+use super::{Move, Pipeline};
+use crate::planner::{Planner, Speed, Watch};
+use crate::realtime::Realtime;
+use crate::settings::Settings;
+
+fn line(x: f32, y: f32) -> Move {
+    Move::Line {
+        end: [x, y, 0.0, 0.0],
+        speed: Speed::Feed(20.0),
+        watch: Watch::default(),
+        line: 1,
+    }
+}
+
+/// (target X, target Y, take-up) of every queued block.
+fn blocks<const N: usize>(p: &Pipeline<N>) -> Vec<(i32, i32, bool)> {
+    (0..p.planner().len())
+        .filter_map(|k| p.planner().block(k))
+        .map(|b| (b.target[0], b.target[1], b.takeup))
+        .collect()
+}
+
+fn backlash(x: f32, y: f32) -> Settings {
+    let mut s = Settings::default();
+    s.backlash_mm[0] = x;
+    s.backlash_mm[1] = y;
+    s
+}
+
+#[test]
+fn a_reversal_takes_up_the_backlash_first_and_shifts_what_follows() {
+    // 80 steps/mm: 0.1 mm is 8 steps. The axes home towards positive
+    // (`$23=0`): moving positive needs no take-up from power-up.
+    let mut p = Pipeline::<16>::new(backlash(0.1, 0.1), 1_000_000);
+    p.submit(line(10.0, 0.0)).unwrap();
+    assert_eq!(blocks(&p), [(800, 0, false)]);
+    // X reverses: 8 steps of take-up on X alone, then the move, 8 steps
+    // further on the motor than commanded.
+    p.submit(line(0.0, 5.0)).unwrap();
+    assert_eq!(
+        blocks(&p),
+        [(800, 0, false), (792, 0, true), (-8, 400, false)]
+    );
+    assert_eq!(p.backlash_comp(), [-8, 0, 0, 0]);
+    // Y reverses, X goes on the same way: Y's take-up only.
+    p.submit(line(-1.0, 0.0)).unwrap();
+    assert_eq!(
+        p.planner().block(3).map(|b| (b.target, b.takeup)),
+        Some(([-8, 392, 0, 0], true))
+    );
+    assert_eq!(
+        p.planner().block(4).map(|b| b.target),
+        Some([-88, -8, 0, 0])
+    );
+    // Both back to positive: the slack goes back to the homing side.
+    p.submit(line(3.0, 3.0)).unwrap();
+    assert_eq!(
+        p.planner().block(5).map(|b| (b.target, b.takeup)),
+        Some(([-80, 0, 0, 0], true))
+    );
+    assert_eq!(p.backlash_comp(), [0; crate::AXES]);
+}
+
+#[test]
+fn homing_towards_negative_takes_up_the_other_way() {
+    let mut s = backlash(0.1, 0.0);
+    s.homing_dir_invert = 0b001;
+    let mut p = Pipeline::<16>::new(s, 1_000_000);
+    p.submit(line(-10.0, 0.0)).unwrap();
+    assert_eq!(blocks(&p), [(-800, 0, false)]);
+    p.submit(line(0.0, 0.0)).unwrap();
+    assert_eq!(
+        blocks(&p),
+        [(-800, 0, false), (-792, 0, true), (8, 0, false)]
+    );
+}
+
+/// `$160`-`$163` at 0: the gateway plans exactly what the planner alone
+/// does (bench-motion's table and every trace stay as they were).
+#[test]
+fn without_backlash_the_gateway_plans_as_the_planner_alone() {
+    let s = Settings::default();
+    let mut p = Pipeline::<16>::new(s, 1_000_000);
+    let mut alone = Planner::<16>::new(s);
+    alone.set_tick_hz(1_000_000);
+    for (x, y) in [(10.0, 0.0), (0.0, 5.0), (-1.0, 0.0), (3.0, 3.0)] {
+        p.submit(line(x, y)).unwrap();
+        alone
+            .push_line_mm(&[x, y, 0.0, 0.0], Speed::Feed(20.0), Watch::default(), 1)
+            .unwrap();
+    }
+    assert_eq!(p.planner().len(), alone.len());
+    for k in 0..alone.len() {
+        assert_eq!(p.planner().block(k), alone.block(k));
+    }
+    assert_eq!(p.has_room(), !alone.is_full());
+}
+
+/// A flush drops take-ups that never ran: the compensation comes back
+/// from what the step interrupt loaded, and the plan restarts at the
+/// reported position plus it.
+#[test]
+fn a_flush_keeps_the_take_up_that_ran() {
+    let rt = Realtime::new();
+    let mut p = Pipeline::<16>::new(backlash(0.1, 0.0), 1_000_000);
+    p.submit(line(10.0, 0.0)).unwrap();
+    p.submit(line(0.0, 0.0)).unwrap();
+    assert_eq!(p.backlash_comp(), [-8, 0, 0, 0]);
+    // Nothing ran: no take-up either.
+    assert_eq!(p.flush(&rt), [0.0; crate::AXES]);
+    assert_eq!(p.backlash_comp(), [0; crate::AXES]);
+    assert_eq!(p.planner().position(), [0; crate::AXES]);
+    // The reversal is still ahead, so it is taken up again.
+    p.submit(line(-1.0, 0.0)).unwrap();
+    assert_eq!(blocks(&p), [(-8, 0, true), (-88, 0, false)]);
+}
+
+/// Two slots while compensating: a take-up never finds the ring full
+/// after the gateway said there was room.
+#[test]
+fn room_means_room_for_a_take_up_too() {
+    let mut p = Pipeline::<4>::new(backlash(0.1, 0.0), 1_000_000);
+    let mut x = 0.0;
+    while p.has_room() {
+        x = if x > 0.0 { 0.0 } else { 10.0 };
+        p.submit(line(x, 0.0)).unwrap();
+    }
+    assert!(p.planner().len() >= 3, "{}", p.planner().len());
+}
