@@ -110,7 +110,36 @@ impl<const N: usize> Planner<N> {
         let l = length.min(self.prev_length);
         let a_curve = if curve { self.c_max() * a } else { a };
         let v_curve = libm::sqrtf(a_curve * l / phi);
-        v_jd.min(v_curve)
+        let v_jerk = if curve || self.settings.profile != crate::settings::Profile::SCurve {
+            f32::INFINITY
+        } else {
+            self.curve_jerk_cap(self.turn_radius(unit_mm, l, phi))
+        };
+        v_jd.min(v_curve).min(v_jerk)
+    }
+
+    /// The radius an S-curve run turns on at a vertex, for the turn's jerk
+    /// (`v³/r²`, [`Self::curve_jerk_cap`]; an arc's chords have their
+    /// arc's cap already): the larger of the vertex's own `l/φ` and the
+    /// turn from the block before the previous one over two chords. Chords
+    /// of a real curve turn alike, and both agree; a zigzag of noise
+    /// (chords a few steps long alternating a few steps across a line,
+    /// inch decimals on a circle) turns back at the next vertex, so its
+    /// axes' acceleration changes sign from chord to chord and averages
+    /// out instead of building up: there the two-chord turn is small and
+    /// does not slow the line down to its noise.
+    fn turn_radius(&self, unit: &[f32; AXES], l: f32, phi: f32) -> f32 {
+        let r = l / phi;
+        if self.prev2_unit_mm.iter().all(|&u| u == 0.0) {
+            return r;
+        }
+        let cos2 = unit
+            .iter()
+            .zip(&self.prev2_unit_mm)
+            .map(|(a, b)| a * b)
+            .sum::<f32>();
+        let phi2 = libm::acosf(crate::num::clamp(cos2, -1.0, 1.0)).max(1e-9);
+        r.max(2.0 * l / phi2)
     }
 
     /// The hold factor `m` of the corner before a block going `unit` for

@@ -87,6 +87,24 @@ fn s_curve_keeps_the_jerk_limit_round_small_holes() {
     check_jerk(&cfg, "holes", &check(&cfg, "holes", &holes));
 }
 
+/// The same on G1 polylines of the plotter kind (bench-motion's generated
+/// jobs: chords of 0.2-0.3 mm wandering at F2500, short hatch strokes at
+/// F4500): chords of a curve turn the axes' acceleration as an arc does,
+/// and the runs took them at the acceleration's speed, X/Y 154/166 % of
+/// `$203` on `gen:plotter_sketch`. The junction's jerk cap on the chords'
+/// radius (`Planner::turn_radius`) keeps them.
+#[test]
+fn s_curve_keeps_the_jerk_limit_on_plotter_polylines() {
+    let mut cfg = machine();
+    cfg.settings.profile = Profile::SCurve;
+    for (name, src) in [
+        ("sketch", host_sim::bench::jobs::plotter_sketch(1500)),
+        ("hatch", host_sim::bench::jobs::plotter_hatch(600)),
+    ] {
+        check_jerk(&cfg, name, &check(&cfg, name, &src));
+    }
+}
+
 fn polyline(pts: impl Iterator<Item = (f64, f64)>, feed: f64) -> String {
     let mut s = format!("G21 G90 G94\nG1 F{feed}\n");
     for (x, y) in pts {
