@@ -380,13 +380,14 @@ impl Stepper {
 
     /// Takes a computed event's steps back out of the position: the driver
     /// dropped it unpulsed (a halt came between its computation and its
-    /// rise).
+    /// rise). The event is the running segment's, so each step it counted
+    /// was that segment's `delta`: nothing for a take-up's steps, which the
+    /// position never counted.
     #[cold]
     pub fn take_back(&mut self, rt: &Realtime, ev: &StepEvent) {
         for i in 0..AXES {
             if ev.step_mask & (1 << i) != 0 {
-                let back = if ev.dir_mask & (1 << i) != 0 { 1 } else { -1 };
-                self.position[i] += back;
+                self.position[i] -= self.run.delta[i];
                 rt.store_position(i, self.position[i]);
             }
         }

@@ -114,3 +114,35 @@ fn take_up_steps_pulse_but_do_not_move_the_position() {
     assert_eq!(rt.position(), [-2, 0, 0, 0]);
     assert_eq!(st.motor_position(&rt), [-10, 0, 0, 0]);
 }
+
+/// A dropped event (the pulse-end path failed) gives back exactly what it
+/// counted: nothing on a take-up's step, one step on a plain segment's.
+#[test]
+fn a_dropped_take_up_step_leaves_the_position_alone() {
+    let rt = Realtime::new();
+    let mut st = Stepper::new(StepConfig::new(&Settings::default(), 1_000_000));
+    let mut takeup = segment(rt.generation());
+    takeup.takeup = true;
+    takeup.events = 4;
+    takeup.steps = [4, 0, 0, 0];
+    takeup.count = 4;
+    let mut plain = segment(rt.generation());
+    plain.new_block = true;
+    let mut queue = [Some(takeup), Some(plain)];
+    let mut pop = || queue.iter_mut().find_map(Option::take);
+    let open = Switches::default();
+    let mut dropped = 0;
+    for _ in 0..12 {
+        let ev = st.on_event(&rt, &mut pop, || open);
+        if ev.step_mask & 1 != 0 {
+            let before = rt.position();
+            st.take_back(&rt, &ev);
+            let back = before[0] - rt.position()[0];
+            assert!(back == 0 || back == 1, "took back {back}");
+            dropped += back;
+        }
+    }
+    // Every plain step was taken back again, no take-up step moved it.
+    assert_eq!(rt.position(), [0; crate::AXES]);
+    assert!(dropped > 0, "no plain step was dropped");
+}
