@@ -61,6 +61,9 @@ pub const TOKEN_RESET: RxToken = 0x102;
 /// Ring size for the RTIC app: `heapless::spsc::Queue<RxToken, RX_RING>`
 /// holds `RX_RING - 1` tokens.
 pub const RX_RING: usize = 256;
+/// Tokens that ring holds (one slot tells full from empty): what a
+/// shell with a plain queue holds, to hold what the board does.
+pub const RX_RING_HOLDS: usize = RX_RING - 1;
 
 /// Tokens an [`RxBacklog`] holds while the ring is full (both shells use
 /// this size, so host-sim's flow control is the board's): realtime bytes

@@ -18,7 +18,7 @@
 //! to [`VirtualDevice::with_flash`] to "reboot" with what was saved.
 
 use burin::controller::{Controller, Pins};
-use burin::link::{LinkMode, RtFlags, RxBacklog, RxSplitter, RxToken, RX_RING};
+use burin::link::{LinkMode, RtFlags, RxBacklog, RxSplitter, RxToken, RX_RING_HOLDS};
 use burin::persist::{FlashMap, Persist, RamFlash};
 use burin::session::{Device, Identity, Tx};
 use heapless::Deque;
@@ -66,7 +66,7 @@ pub struct VirtualDevice<'r> {
     pub sim: Sim<'r>,
     /// The receive interrupt's half of the link and the ring it fills.
     splitter: RxSplitter,
-    ring: Deque<RxToken, RX_RING>,
+    ring: Deque<RxToken, RX_RING_HOLDS>,
     backlog: Box<RxBacklog<BACKLOG>>,
     flags: RtFlags,
     pub controller: Controller<FlashMap<SimFlash>>,

@@ -66,6 +66,20 @@ impl<'r> Rig<'r> {
         let st = lines.iter().rev().find_map(|l| parse_status(l));
         st.unwrap_or_else(|| panic!("no status in {lines:?}"))
     }
+    /// One `?`, answered within `rounds` rounds (the parse task may be
+    /// busy with queued lines, as on the board, for a few ms).
+    pub fn status_within(&mut self, rounds: usize) -> protocol::client::grbl::TextStatus {
+        self.send(b"?");
+        let mut seen = Vec::new();
+        for _ in 0..rounds {
+            self.run(1);
+            seen.extend(self.lines());
+            if let Some(st) = seen.iter().rev().find_map(|l| parse_status(l)) {
+                return st;
+            }
+        }
+        panic!("no status within {rounds} rounds: {seen:?}");
+    }
     pub fn until_idle(&mut self) -> protocol::client::grbl::TextStatus {
         for _ in 0..100_000 {
             self.run(10);
