@@ -184,41 +184,10 @@ impl Block {
     /// All zero bits, for storage nothing reads yet (the board's machine
     /// slot, `Machine::placeholder`, lands in `.bss` that way).
     pub const ZEROED: Block = Block {
-        kind: BlockKind::Line,
-        target: [0; AXES],
-        steps: [0; AXES],
-        count: 0,
-        dir_mask: 0,
-        length: 0.0,
-        programmed: 0.0,
-        rapid: false,
-        cap: 0.0,
-        nominal: 0.0,
         accel: 0.0,
         line_accel: 0.0,
-        curve_ar: 0.0,
-        curve_an: 0.0,
         curve_tangent: [[0.0; 2]; 2],
-        floor: 0.0,
-        junction: 0.0,
-        hold_m: 0.0,
-        hold_pre_m: 0.0,
-        corner: 0.0,
-        hold_fixed: passes::Sides {
-            pre: 0.0,
-            post: 0.0,
-        },
-        quiet: 0,
-        release: 0,
-        max_entry: 0.0,
-        entry: 0.0,
-        watch: Watch {
-            limits: 0,
-            probe: 0,
-            homing: false,
-        },
-        takeup: false,
-        line: 0,
+        ..Block::EMPTY
     };
 
     pub fn shape(&self, s: &Settings) -> Shape {
