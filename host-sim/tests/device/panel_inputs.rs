@@ -7,33 +7,14 @@ use host_sim::record::Discard;
 
 use crate::rig::{origin, Rig};
 
-fn x(r: &mut Rig) -> f32 {
-    r.status().mpos.map_or(f32::NAN, |p| p[0])
-}
-
-fn spindle_on(r: &Rig) -> bool {
-    r.dev.pins().is_some_and(|p| p.spindle.enable)
-}
-
-/// A machine cutting along X with the spindle and flood on.
-fn cutting(r: &mut Rig) {
-    r.lines();
-    assert_eq!(r.cmd("M3 S1000"), ["ok"]);
-    assert_eq!(r.cmd("M8"), ["ok"]);
-    assert_eq!(r.cmd("G1 X-50 F600"), ["ok"]);
-    r.run(100);
-    assert_eq!(r.status().state, "Run");
-    assert!(spindle_on(r));
-}
-
 #[test]
 fn an_estop_stops_at_once_cuts_the_outputs_and_holds_the_alarm_until_released() {
     let cfg = origin();
     let mut rec = Discard;
     let mut r = Rig::new(&cfg, &mut rec);
-    cutting(&mut r);
+    r.cutting();
     r.dev.set_input(ESTOP, true);
-    assert!(!spindle_on(&r), "the outputs are cut on the edge");
+    assert!(!r.spindle_on(), "the outputs are cut on the edge");
     let stopped = r.dev.position_steps();
     r.run(50);
     assert_eq!(r.dev.position_steps(), stopped, "a step after the e-stop");
@@ -87,25 +68,25 @@ fn the_panel_buttons_hold_and_resume_and_a_glitch_resumes_nothing() {
     let cfg = origin();
     let mut rec = Discard;
     let mut r = Rig::new(&cfg, &mut rec);
-    cutting(&mut r);
+    r.cutting();
     r.dev.set_input(FEED_HOLD, true);
     r.run(1);
     assert!(r.status().state.starts_with("Hold"));
     r.dev.set_input(FEED_HOLD, false);
     r.run(300);
     assert_eq!(r.status().state, "Hold:0");
-    let held = x(&mut r);
+    let held = r.x();
     // 4 ms on the cycle-start line: shorter than the settle time.
     r.dev.set_input(CYCLE_START, true);
     r.run(2);
     r.dev.set_input(CYCLE_START, false);
     r.run(50);
     assert_eq!(r.status().state, "Hold:0");
-    assert_eq!(x(&mut r), held);
+    assert_eq!(r.x(), held);
     r.dev.set_input(CYCLE_START, true);
     r.run(15);
     assert_eq!(r.status().state, "Run");
     r.dev.set_input(CYCLE_START, false);
     r.run(50);
-    assert!(x(&mut r) < held, "resumed");
+    assert!(r.x() < held, "resumed");
 }

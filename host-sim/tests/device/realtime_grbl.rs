@@ -21,28 +21,12 @@ fn until_state(r: &mut Rig, want: &str, limit: usize) {
     panic!("never {want}: {:?}", r.status());
 }
 
-fn x(r: &mut Rig) -> f32 {
-    r.status().mpos.map_or(f32::NAN, |p| p[0])
-}
-
-fn spindle_on(r: &Rig) -> bool {
-    r.dev.pins().is_some_and(|p| p.spindle.enable)
-}
-
-fn flood_on(r: &Rig) -> bool {
-    r.dev.pins().is_some_and(|p| p.flood)
-}
-
-/// A machine cutting along X with the spindle and flood on.
+/// A machine cutting along X with the spindle and flood on, `$220` at
+/// half a second.
 fn cutting(r: &mut Rig) {
     r.lines();
     assert_eq!(r.cmd("$220=0.5"), ["ok"]);
-    assert_eq!(r.cmd("M3 S1000"), ["ok"]);
-    assert_eq!(r.cmd("M8"), ["ok"]);
-    assert_eq!(r.cmd("G1 X-50 F600"), ["ok"]);
-    r.run(100);
-    assert_eq!(r.status().state, "Run");
-    assert!(spindle_on(r) && flood_on(r));
+    r.cutting();
 }
 
 /// Item 1: 0x84 holds (`Door:2` while stopping, `[MSG:Check Door]`),
@@ -61,24 +45,24 @@ fn safety_door_stops_outputs_and_resumes_after_the_spin_up_delay() {
     assert!(lines.iter().any(|l| l == "[MSG:Check Door]"), "{lines:?}");
     assert_eq!(r.status().state, "Door:2");
     assert!(
-        spindle_on(&r),
+        r.spindle_on(),
         "the spindle turns until the hold has stopped"
     );
     until_state(&mut r, "Door:0", 1000);
     r.run(2);
-    assert!(!spindle_on(&r) && !flood_on(&r));
+    assert!(!r.spindle_on() && !r.flood_on());
     let st = r.status();
     assert_eq!(st.spindle, Some(0.0));
-    let held_at = x(&mut r);
+    let held_at = r.x();
     r.send(b"~");
     r.run(5);
     assert_eq!(r.status().state, "Door:3");
-    assert!(spindle_on(&r) && !flood_on(&r), "spindle first");
+    assert!(r.spindle_on() && !r.flood_on(), "spindle first");
     r.run(150);
-    assert_eq!(x(&mut r), held_at, "no motion before the spindle is up");
+    assert_eq!(r.x(), held_at, "no motion before the spindle is up");
     r.run(150);
-    assert!(flood_on(&r), "coolant after the delay");
-    assert_ne!(x(&mut r), held_at, "and the motion");
+    assert!(r.flood_on(), "coolant after the delay");
+    assert_ne!(r.x(), held_at, "and the motion");
     let st = r.until_idle();
     assert_eq!(st.mpos.map(|p| p[0]), Some(-50.0));
 }
@@ -94,12 +78,12 @@ fn safety_door_resumes_only_with_the_door_closed() {
     r.dev.sim.rt.set_door_open(true);
     r.send(&[0x84]);
     until_state(&mut r, "Door:1", 1000);
-    let held_at = x(&mut r);
+    let held_at = r.x();
     r.send(b"~");
     r.run(400);
     assert_eq!(r.status().state, "Door:1");
-    assert_eq!(x(&mut r), held_at);
-    assert!(!spindle_on(&r));
+    assert_eq!(r.x(), held_at);
+    assert!(!r.spindle_on());
     r.dev.sim.rt.set_door_open(false);
     r.run(2);
     assert_eq!(r.status().state, "Door:0");
@@ -116,7 +100,7 @@ fn safety_door_resumes_only_with_the_door_closed() {
     );
     assert_eq!(r.cmd("G1 X-40 F600"), ["ok"]);
     r.run(200);
-    assert_eq!(x(&mut r), -50.0, "nothing moves behind a door");
+    assert_eq!(r.x(), -50.0, "nothing moves behind a door");
     r.send(b"~");
     let st = r.until_idle();
     assert_eq!(st.mpos.map(|p| p[0]), Some(-40.0));
@@ -133,29 +117,29 @@ fn spindle_stop_toggles_only_in_a_hold() {
     cutting(&mut r);
     r.send(&[0x9E]);
     r.run(20);
-    assert!(spindle_on(&r), "no spindle stop while running");
+    assert!(r.spindle_on(), "no spindle stop while running");
     r.send(b"!");
     until_state(&mut r, "Hold:0", 1000);
     r.send(&[0x9E]);
     r.run(5);
-    assert!(!spindle_on(&r) && flood_on(&r), "the spindle alone stops");
+    assert!(!r.spindle_on() && r.flood_on(), "the spindle alone stops");
     assert_eq!(r.status().spindle, Some(0.0));
     r.lines();
     r.send(&[0x9E]);
     r.run(5);
     assert!(r.lines().iter().any(|l| l == "[MSG:Restoring spindle]"));
-    assert!(spindle_on(&r));
+    assert!(r.spindle_on());
     r.send(&[0x9E]);
     r.run(5);
-    assert!(!spindle_on(&r));
-    let held_at = x(&mut r);
+    assert!(!r.spindle_on());
+    let held_at = r.x();
     r.lines();
     r.send(b"~");
     r.run(5);
-    assert!(spindle_on(&r));
+    assert!(r.spindle_on());
     assert!(r.lines().iter().any(|l| l == "[MSG:Restoring spindle]"));
     r.run(150);
-    assert_eq!(x(&mut r), held_at, "waits for the spindle");
+    assert_eq!(r.x(), held_at, "waits for the spindle");
     let st = r.until_idle();
     assert_eq!(st.mpos.map(|p| p[0]), Some(-50.0));
 }
@@ -171,7 +155,7 @@ fn coolant_toggles_and_the_accessory_field() {
     assert_eq!(r.status().accessories, None);
     r.send(&[0xA0]);
     r.run(2);
-    assert!(flood_on(&r));
+    assert!(r.flood_on());
     assert_eq!(r.status().accessories.as_deref(), Some("F"));
     r.send(&[0xA1]);
     r.run(2);
@@ -183,7 +167,7 @@ fn coolant_toggles_and_the_accessory_field() {
     assert_eq!(r.cmd("M3"), ["ok"]);
     r.send(&[0xA0]);
     r.run(2);
-    assert!(!flood_on(&r));
+    assert!(!r.flood_on());
     assert_eq!(r.status().accessories.as_deref(), Some("SM"));
 }
 
@@ -204,10 +188,10 @@ fn a_hold_pauses_a_dwell_and_what_waits_behind_it() {
     assert_eq!(r.status().state, "Hold:0", "at once");
     r.run(1500); // 3 s: the dwell would be long over
     assert_eq!(r.status().state, "Hold:0");
-    assert_eq!(x(&mut r), 0.0, "the move behind the dwell waits");
+    assert_eq!(r.x(), 0.0, "the move behind the dwell waits");
     r.send(b"~");
     r.run(300); // 0.6 s of the 0.8 s left
-    assert_eq!(x(&mut r), 0.0, "the dwell's rest runs first");
+    assert_eq!(r.x(), 0.0, "the dwell's rest runs first");
     let st = r.until_idle();
     assert_eq!(st.mpos.map(|p| p[0]), Some(-10.0));
 }
@@ -235,7 +219,7 @@ fn a_reset_in_a_dwell_raises_no_alarm() {
         assert!(!out.iter().any(|l| l.starts_with("ALARM")), "{out:?}");
         assert!(!out.iter().any(|l| l.contains("to unlock")), "{out:?}");
         assert_eq!(r.status().state, "Idle");
-        assert_eq!(x(&mut r), 0.0);
+        assert_eq!(r.x(), 0.0);
     }
 }
 
@@ -252,12 +236,12 @@ fn a_feed_hold_cancels_a_jog() {
     assert_eq!(r.status().state, "Jog");
     r.send(b"!");
     until_state(&mut r, "Idle", 1000);
-    let stopped = x(&mut r);
+    let stopped = r.x();
     assert!(stopped < 0.0 && stopped > -50.0, "{stopped}");
     r.send(b"~");
     r.run(200);
     assert_eq!(r.status().state, "Idle");
-    assert_eq!(x(&mut r), stopped);
+    assert_eq!(r.x(), stopped);
     assert!(!r.lines().iter().any(|l| l.starts_with("ALARM")));
 }
 
@@ -300,7 +284,7 @@ fn sleep_answers_nothing_and_wakes_into_alarm() {
     );
     assert!(!out.iter().any(|l| l.starts_with("ALARM")), "{out:?}");
     assert_eq!(r.status().state, "Alarm");
-    assert_eq!(x(&mut r), 0.0, "the line sent while asleep never ran");
+    assert_eq!(r.x(), 0.0, "the line sent while asleep never ran");
     r.unlock_and_move_to(-2.0);
 }
 

@@ -90,6 +90,27 @@ impl<'r> Rig<'r> {
         }
         panic!("never idle");
     }
+    /// Machine X from a status report.
+    pub fn x(&mut self) -> f32 {
+        self.status().mpos.map_or(f32::NAN, |p| p[0])
+    }
+    pub fn spindle_on(&self) -> bool {
+        self.dev.pins().is_some_and(|p| p.spindle.enable)
+    }
+    pub fn flood_on(&self) -> bool {
+        self.dev.pins().is_some_and(|p| p.flood)
+    }
+    /// Cutting along X with the spindle and flood on (`G1 X-50 F600`,
+    /// 200 ms in).
+    pub fn cutting(&mut self) {
+        self.lines();
+        assert_eq!(self.cmd("M3 S1000"), ["ok"]);
+        assert_eq!(self.cmd("M8"), ["ok"]);
+        assert_eq!(self.cmd("G1 X-50 F600"), ["ok"]);
+        self.run(100);
+        assert_eq!(self.status().state, "Run");
+        assert!(self.spindle_on() && self.flood_on());
+    }
     /// In alarm, and X stays where it is for `rounds` more rounds.
     pub fn alarm_holds(&mut self, rounds: usize) {
         let st = self.status();
