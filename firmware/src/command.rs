@@ -17,6 +17,9 @@ pub type Pos = [f32; AXES];
 /// Bit mask over axes: bit 0 is X, bit 1 Y, bit 2 Z, bit 3 A.
 pub type AxisMask = u8;
 
+/// Every axis's bit in an [`AxisMask`].
+pub const ALL_AXES: AxisMask = ((1u16 << crate::AXES) - 1) as AxisMask;
+
 /// How fast a feed move goes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Feed {

@@ -66,11 +66,22 @@ pub mod session;
 // one pass of the parse/plan task, which both shells drive
 pub mod controller;
 
-/// Number of axes the core drives: X, Y, Z and A.
-pub const AXES: usize = 4;
+/// Number of axes the core drives and their letters, in the order of every
+/// per-axis array: defined once, in `protocol` (whose wire layout depends
+/// on it and which cannot depend on burin).
+pub use protocol::{AXES, AXIS_NAMES};
 
-/// Axis letters in the order used by every per-axis array in the core.
-pub const AXIS_NAMES: [char; AXES] = ['X', 'Y', 'Z', 'A'];
+/// A per-axis array from its first values, the rest zero: tests and tools
+/// write `pad([x, y, z])` so that they hold for any axis count.
+///
+/// # Panics
+/// If more values are given than there are axes.
+pub fn pad<T: Copy + Default, const N: usize>(v: [T; N]) -> [T; AXES] {
+    assert!(N <= AXES, "more values than axes");
+    let mut out = [T::default(); AXES];
+    out[..N].copy_from_slice(&v);
+    out
+}
 
 /// Firmware version reported by `$I`, M115 and the protocol handshake.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");

@@ -17,7 +17,7 @@ const N: usize = 100_000;
 
 /// A spiral of X/Y steps with Z stepping now and then, 20 µs apart.
 fn events() -> Vec<PinEvent> {
-    let mut pos = [0i64; 4];
+    let mut pos = [0i64; burin::AXES];
     (0..N as u64)
         .map(|i| {
             let a = i as f64 * 1e-3;

@@ -33,11 +33,11 @@ fn zigzag() -> Vec<Command> {
     for i in 0..40 {
         let y = i as f32 * 2.0;
         v.push(Command::Line {
-            end: [200.0, y + 1.0, 0.0, 0.0],
+            end: burin::pad([200.0, y + 1.0, 0.0, 0.0]),
             feed: Feed::PerMin(4000.0),
         });
         v.push(Command::Line {
-            end: [0.0, y + 2.0, -1.0, 0.0],
+            end: burin::pad([0.0, y + 2.0, -1.0, 0.0]),
             feed: Feed::PerMin(4000.0),
         });
     }
@@ -83,7 +83,12 @@ fn bench_planner(c: &mut Criterion) {
             for i in 0..N {
                 let a = i as f32 * 0.05;
                 let t = p
-                    .to_steps(&[10.0 * libm::cosf(a), 10.0 * libm::sinf(a), 0.0, 0.0])
+                    .to_steps(&burin::pad([
+                        10.0 * libm::cosf(a),
+                        10.0 * libm::sinf(a),
+                        0.0,
+                        0.0,
+                    ]))
                     .unwrap_or([0; AXES]);
                 if p.is_full() {
                     p.pop();

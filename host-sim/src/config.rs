@@ -166,13 +166,13 @@ impl Default for MachineConfig {
         MachineConfig {
             tick_hz: 96_000_000,
             settings,
-            limits: [switch, switch, switch, None],
+            limits: burin::pad([switch, switch, switch, None]),
             probe: Some(ProbeSurface {
                 axis: 2,
                 trip_mm: -50.0,
                 towards_negative: true,
             }),
-            start_position_mm: [-1.0, -1.0, -1.0, 0.0],
+            start_position_mm: burin::pad([-1.0, -1.0, -1.0, 0.0]),
             host: HostModel::default(),
             interrupts: Interrupts::default(),
             wiring: None,

@@ -104,9 +104,35 @@ pub use session::{LineVerdict, Session};
 /// accessory bits (`A:`).
 pub const PROTOCOL_VERSION: u16 = 2;
 
-/// Axes carried in positions on the wire (X, Y, Z, A). Devices with fewer axes
-/// say so in [`DeviceInfo::axes`] and leave the rest zero.
-pub const WIRE_AXES: usize = 4;
+/// Number of axes the controller drives: X, Y, Z and A. The one place the
+/// count is written: burin (which depends on this crate, never the other
+/// way) re-exports it, and every per-axis array, letter, setting number,
+/// report field and wire position derives from it. It lives here because
+/// the wire layout of [`Status`] depends on it and this crate cannot see
+/// burin's.
+pub const AXES: usize = 4;
+
+/// Every axis letter in grblHAL's order, the order of every per-axis
+/// array; the first [`AXES`] of them are driven.
+pub const ALL_AXIS_NAMES: [char; 6] = ['X', 'Y', 'Z', 'A', 'B', 'C'];
+
+const _: () = assert!(AXES >= 3 && AXES <= ALL_AXIS_NAMES.len());
+
+/// The driven axes' letters, in array order.
+pub const AXIS_NAMES: [char; AXES] = {
+    let mut n = ['X'; AXES];
+    let mut i = 0;
+    while i < AXES {
+        n[i] = ALL_AXIS_NAMES[i];
+        i += 1;
+    }
+    n
+};
+
+/// Axes carried in positions on the wire: all the controller drives.
+/// Devices with fewer axes say so in [`DeviceInfo::axes`] and leave the
+/// rest zero.
+pub const WIRE_AXES: usize = AXES;
 
 /// Longest job line, in bytes without the terminator, in either protocol.
 pub const MAX_LINE: usize = 256;

@@ -165,27 +165,38 @@ impl Default for Overrides {
 
 /// Input pin bits in [`Status::pins`] (GRBL's `Pn:` letters).
 pub mod pins {
-    pub const LIMIT_X: u16 = 1 << 0;
-    pub const LIMIT_Y: u16 = 1 << 1;
-    pub const LIMIT_Z: u16 = 1 << 2;
-    pub const LIMIT_A: u16 = 1 << 3;
-    pub const PROBE: u16 = 1 << 4;
-    pub const DOOR: u16 = 1 << 5;
-    pub const HOLD: u16 = 1 << 6;
-    pub const RESET: u16 = 1 << 7;
-    pub const START: u16 = 1 << 8;
-    /// `(bit, letter)` in the order GRBL prints them.
-    pub const LETTERS: [(u16, char); 9] = [
-        (LIMIT_X, 'X'),
-        (LIMIT_Y, 'Y'),
-        (LIMIT_Z, 'Z'),
-        (LIMIT_A, 'A'),
-        (PROBE, 'P'),
-        (DOOR, 'D'),
-        (HOLD, 'H'),
-        (RESET, 'R'),
-        (START, 'S'),
-    ];
+    use crate::{AXES, AXIS_NAMES};
+
+    /// Axis `i`'s limit bit: the limits take the first [`AXES`] bits, the
+    /// other inputs follow them.
+    pub const fn limit(i: usize) -> u16 {
+        1 << i
+    }
+    pub const LIMIT_X: u16 = limit(0);
+    pub const LIMIT_Y: u16 = limit(1);
+    pub const LIMIT_Z: u16 = limit(2);
+    pub const PROBE: u16 = 1 << AXES;
+    pub const DOOR: u16 = 1 << (AXES + 1);
+    pub const HOLD: u16 = 1 << (AXES + 2);
+    pub const RESET: u16 = 1 << (AXES + 3);
+    pub const START: u16 = 1 << (AXES + 4);
+    const _: () = assert!(AXES + 5 <= 16);
+    /// `(bit, letter)` in the order GRBL prints them: the axes' limits,
+    /// then P D H R S.
+    pub const LETTERS: [(u16, char); AXES + 5] = {
+        let mut l = [(0, 'P'); AXES + 5];
+        let mut i = 0;
+        while i < AXES {
+            l[i] = (limit(i), AXIS_NAMES[i]);
+            i += 1;
+        }
+        l[AXES] = (PROBE, 'P');
+        l[AXES + 1] = (DOOR, 'D');
+        l[AXES + 2] = (HOLD, 'H');
+        l[AXES + 3] = (RESET, 'R');
+        l[AXES + 4] = (START, 'S');
+        l
+    };
 }
 
 /// One status snapshot. The device fills this once; text mode formats it as

@@ -167,9 +167,9 @@ const JOB: &str = include_str!("../../host-sim/jobs/agree.gcode");
 /// Where the offline run (the virtual board, booted at machine zero like
 /// the QEMU board) ends the job, in steps, and the steps per mm to read
 /// `MPos` with.
-fn offline_end() -> Result<([i64; 4], [f64; 4])> {
+fn offline_end() -> Result<([i64; burin::AXES], [f64; burin::AXES])> {
     let cfg = host_sim::config::MachineConfig {
-        start_position_mm: [0.0; 4],
+        start_position_mm: [0.0; burin::AXES],
         ..Default::default()
     };
     let s = host_sim::offline::run_file(&cfg, JOB, &mut host_sim::record::Discard);
@@ -292,8 +292,8 @@ fn job_test(
     stdin: &mut impl Write,
     rx: &mpsc::Receiver<Vec<u8>>,
     seen: &mut Vec<u8>,
-    want: [i64; 4],
-    spm: [f64; 4],
+    want: [i64; burin::AXES],
+    spm: [f64; burin::AXES],
 ) -> Result<()> {
     // The `$I` reply ends with its `ok`.
     if !expect(rx, seen, b"ok", Duration::from_secs(10)) {

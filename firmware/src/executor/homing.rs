@@ -8,7 +8,7 @@
 //! others seek on.
 
 use super::MachineError;
-use crate::command::AxisMask;
+use crate::command::{AxisMask, ALL_AXES};
 use crate::planner::Watch;
 use crate::settings::Settings;
 use crate::AXES;
@@ -65,7 +65,7 @@ impl Homing {
         if !s.homing_enable {
             return Err(MachineError::HomingDisabled);
         }
-        let want = if axes == 0 { 0x0f } else { axes };
+        let want = if axes == 0 { ALL_AXES } else { axes };
         let cycles: [u8; 4] =
             core::array::from_fn(|i| ((s.homing_order >> (4 * i)) & 0x0f) as u8 & want);
         if cycles.iter().all(|c| *c == 0) {

@@ -260,7 +260,7 @@ impl<'a> Lexer<'a> {
                 let next = self.cur.peek();
                 let ends = matches!(next, None | Some(b';' | b'(' | b'*'))
                     || next.is_some_and(|b| b.is_ascii_alphabetic());
-                if ends && matches!(l, b'X' | b'Y' | b'Z' | b'A') {
+                if ends && is_axis_letter(l) {
                     return Ok(Some((0.0, true)));
                 }
                 self.cur.real(p, 0)?
@@ -428,4 +428,18 @@ fn trim_start(s: &[u8]) -> &[u8] {
 fn trim_end(s: &[u8]) -> &[u8] {
     let n = s.iter().rev().take_while(|&&b| blank(b)).count();
     s.get(..s.len() - n).unwrap_or(&[])
+}
+
+/// An axis word's letter (`crate::AXIS_NAMES`), upper case.
+pub(crate) fn is_axis_letter(l: u8) -> bool {
+    const BITS: u32 = {
+        let mut m = 0;
+        let mut i = 0;
+        while i < crate::AXES {
+            m |= 1 << (crate::AXIS_NAMES[i] as u32 - 'A' as u32);
+            i += 1;
+        }
+        m
+    };
+    l.is_ascii_uppercase() && BITS & (1 << (l - b'A')) != 0
 }

@@ -11,15 +11,22 @@
 //!
 //! Bits, the same in every mask here: 0-2 X/Y/Z limit, 3 probe, 4 feed hold,
 //! 5 cycle start, 6 reset/e-stop. A set bit means "active" (switch closed
-//! after the `$5`/`$6` inverts), never a raw pin level.
+//! after the `$5`/`$6` inverts), never a raw pin level. The limits are the
+//! boards' switch inputs, not the axis count ([`LIMIT_INPUTS`]): axis `i`'s
+//! limit is bit `i` here as in the stepper's `Switches` and the report.
 
 mod panel;
 pub use panel::{act, heartbeat, on_edge, Acted};
 
+/// Axes with a limit switch input: the first three (X, Y, Z), as the
+/// boards wire them; a rotary axis (A, B, C) has none.
+pub const LIMIT_INPUTS: usize = 3;
+const _: () = assert!(LIMIT_INPUTS <= crate::AXES);
+
 pub const LIMIT_X: u8 = 1 << 0;
 pub const LIMIT_Y: u8 = 1 << 1;
 pub const LIMIT_Z: u8 = 1 << 2;
-pub const LIMITS: u8 = LIMIT_X | LIMIT_Y | LIMIT_Z;
+pub const LIMITS: u8 = (1 << LIMIT_INPUTS) - 1;
 pub const PROBE: u8 = 1 << 3;
 pub const FEED_HOLD: u8 = 1 << 4;
 pub const CYCLE_START: u8 = 1 << 5;
@@ -66,18 +73,18 @@ pub fn acts_now(fired: u8, active: u8) -> u8 {
 /// Active inputs as the status report's `Pn:` bits.
 pub fn report_pins(active: u8) -> u16 {
     use protocol::msg::pins;
-    const MAP: [(u8, u16); 7] = [
-        (LIMIT_X, pins::LIMIT_X),
-        (LIMIT_Y, pins::LIMIT_Y),
-        (LIMIT_Z, pins::LIMIT_Z),
+    const MAP: [(u8, u16); 4] = [
         (PROBE, pins::PROBE),
         (FEED_HOLD, pins::HOLD),
         (CYCLE_START, pins::START),
         (ESTOP, pins::RESET),
     ];
+    let limits = (0..LIMIT_INPUTS)
+        .filter(|i| active & (1 << i) != 0)
+        .fold(0, |acc, i| acc | pins::limit(i));
     MAP.iter()
         .filter(|(bit, _)| active & bit != 0)
-        .fold(0, |acc, (_, pin)| acc | pin)
+        .fold(limits, |acc, (_, pin)| acc | pin)
 }
 
 /// What one call to [`Debounce`] found.

@@ -6,6 +6,7 @@
 //! is a modal group violation, as RS274NGC says.
 
 use crate::gcode::{ErrorKind, GcodeError, Unsupported, Word};
+use crate::AXES;
 
 /// G-word modal groups (index into [`Block::g`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -110,8 +111,30 @@ fn m_group(n: u16) -> Option<MGroup> {
     })
 }
 
-/// Letters that carry values (not G, M, N).
-pub(crate) const AXIS_LETTERS: [u8; 4] = [b'X', b'Y', b'Z', b'A'];
+/// The axes' letters, in array order ([`crate::AXIS_NAMES`] as bytes).
+pub(crate) const AXIS_LETTERS: [u8; AXES] = {
+    let mut l = [0; AXES];
+    let mut i = 0;
+    while i < AXES {
+        l[i] = crate::AXIS_NAMES[i] as u8;
+        i += 1;
+    }
+    l
+};
+
+/// The axes' letters as [`bit`]s.
+pub(crate) const AXIS_BITS: u32 = {
+    let mut m = 0;
+    let mut i = 0;
+    while i < AXES {
+        m |= bit(AXIS_LETTERS[i]);
+        i += 1;
+    }
+    m
+};
+
+/// The axes after X, Y and Z (A, B, C): no plane, cycle or spline uses them.
+pub(crate) const EXTRA_AXIS_BITS: u32 = AXIS_BITS & !(bit(b'X') | bit(b'Y') | bit(b'Z'));
 
 /// The words of one command.
 #[derive(Clone, Debug, Default)]
@@ -143,11 +166,8 @@ pub(crate) struct Block<'a> {
 }
 
 /// Letters that carry values: the axes and F H I J K L P Q R S T.
-const VALUE_LETTERS: u32 = bit(b'X')
+const VALUE_LETTERS: u32 = AXIS_BITS
     | bit(b'H')
-    | bit(b'Y')
-    | bit(b'Z')
-    | bit(b'A')
     | bit(b'F')
     | bit(b'I')
     | bit(b'J')
@@ -190,10 +210,26 @@ impl<'a> Block<'a> {
             .unwrap_or(0)
     }
 
+    /// The axis words present, bit `i` for axis `i`. X Y Z are letters
+    /// 23-25 of `present` and A B C letters 0-2, so two shifts and masks
+    /// do it (the size-optimised build keeps a loop over the letters, and
+    /// this runs several times a line).
     pub fn axis_mask(&self) -> u8 {
+        const _: () = assert!(AXES >= 3 && AXES <= 6);
         let p = self.present;
-        let b = |l: u8, i: u8| u8::from(p & bit(l) != 0) << i;
-        b(b'X', 0) | b(b'Y', 1) | b(b'Z', 2) | b(b'A', 3)
+        let xyz = (p >> (b'X' - b'A')) & 0b111;
+        let rest = p & ((1 << (AXES - 3)) - 1);
+        (xyz | rest << 3) as u8
+    }
+
+    /// The first axis letter (in array order) among `letters` that the
+    /// block holds.
+    pub fn first_axis_of(&self, letters: u32) -> Option<u8> {
+        // X Y Z (letters 23-25) come first in array order, then A B C.
+        let m = self.present & letters & AXIS_BITS;
+        let xyz = m & !((1 << (b'X' - b'A')) - 1);
+        let pick = if xyz != 0 { xyz } else { m };
+        (pick != 0).then(|| b'A' + pick.trailing_zeros() as u8)
     }
 
     pub fn g_of(&self, grp: GGroup) -> Option<(u16, u16)> {

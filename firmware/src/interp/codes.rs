@@ -2,7 +2,7 @@
 //! reports, messages, overrides, settings) and G group 0 (dwell, G10,
 //! homing, stored positions, G30 probing, G53, G92 and friends).
 
-use super::block::AXIS_LETTERS;
+use super::block::{bit, AXIS_BITS, AXIS_LETTERS};
 use super::exec::{all_axes, message, push, Ctx, Out, G30_PROBE_TRAVEL};
 use super::state::{State, Tables, WCS_COUNT};
 use crate::command::{Command, Feed, ReportKind};
@@ -211,14 +211,7 @@ pub(super) fn non_modal_g(
             if st.feed <= 0.0 || st.inverse_time {
                 return Err(GcodeError::new(ErrorKind::UndefinedFeed, col));
             }
-            if b.axis_mask() & !0b100 != 0 {
-                let l = if b.has(b'X') {
-                    b'X'
-                } else if b.has(b'Y') {
-                    b'Y'
-                } else {
-                    b'A'
-                };
+            if let Some(l) = b.first_axis_of(AXIS_BITS & !bit(b'Z')) {
                 return Err(cx.err(ErrorKind::AxisWordsUnused, l));
             }
             st.pending_probe_z = cx.take(b'Z').map(|z| z * u);

@@ -15,7 +15,7 @@ fn run(prog: &str) -> (Interpreter, Vec<(u32, Command)>) {
     for l in SETUP.lines() {
         it.execute_line(l.as_bytes(), &mut |_| {}).unwrap();
     }
-    it.set_machine_position([0.0, 0.0, -1.0, 0.0]);
+    it.set_machine_position(crate::pad([0.0, 0.0, -1.0, 0.0]));
     let mut out = Vec::new();
     for (i, l) in prog.lines().enumerate() {
         let n = i as u32 + 1;
@@ -228,7 +228,9 @@ fn program_end_and_g40_hand_on_the_last_move() {
     let mut out = Vec::new();
     it.execute_line_at(b"M2", 9, &mut |l, c| out.push((l, c)))
         .unwrap();
-    assert!(matches!(out[0], (2, Command::Line { end, .. }) if end == [20.0, 2.0, -1.0, 0.0]));
+    assert!(
+        matches!(out[0], (2, Command::Line { end, .. }) if end == crate::pad([20.0, 2.0, -1.0, 0.0]))
+    );
     assert!(matches!(out.last(), Some((9, Command::ProgramEnd))));
     // After M2 compensation is off: the next move is not offset.
     out.clear();

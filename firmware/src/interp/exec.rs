@@ -38,7 +38,7 @@
 //!   chord's bisector so the arc is consistent. An R short of half the
 //!   chord by up to 0.001 mm cuts the semicircle; more is an error.
 
-use super::block::{bit, Block, GGroup, MGroup, AXIS_LETTERS, MODE_GROUPS};
+use super::block::{bit, Block, GGroup, MGroup, AXIS_BITS, MODE_GROUPS};
 use super::state::{Motion, State, Tables};
 use super::tools::TOOL_MAX;
 use crate::command::{Command, Plane, SpindleDir};
@@ -163,7 +163,7 @@ fn feed_word(cx: &mut Ctx, st: &mut State) -> Result<Option<f32>, GcodeError> {
 }
 
 /// Letters a plain move may carry (see [`plain_move`]).
-const MOVE_LETTERS: u32 = bit(b'X') | bit(b'Y') | bit(b'Z') | bit(b'A') | bit(b'F');
+const MOVE_LETTERS: u32 = AXIS_BITS | bit(b'F');
 
 /// The shape of most lines in a job: a straight move (G0/G1, given or
 /// modal) with axis words and maybe F, and nothing else. For such a block
@@ -408,7 +408,7 @@ pub(crate) fn execute(
     // Every word must have had a user.
     let unused = b.present & !cx.used;
     if unused != 0 {
-        let axes_bits = AXIS_LETTERS.iter().fold(0, |m, &l| m | bit(l));
+        let axes_bits = AXIS_BITS;
         let l = (0..26u8)
             .map(|i| b'A' + i)
             .find(|&l| unused & bit(l) != 0)

@@ -1,7 +1,7 @@
 //! Group 1: where a motion block goes (units, G90/G91, work offsets, G53
 //! applied) and the arc/spline geometry of G2/G3/G5/G5.1.
 
-use super::block::AXIS_LETTERS;
+use super::block::{bit, AXIS_LETTERS, EXTRA_AXIS_BITS};
 use super::exec::{push, Ctx, Out};
 use super::geom;
 use super::state::{Motion, State};
@@ -196,8 +196,7 @@ fn spline(cx: &mut Ctx, st: &mut State, feed: Feed, col: u16) -> Result<Spline, 
     if st.plane != Plane::XY {
         return Err(GcodeError::new(ErrorKind::SplinePlane, col));
     }
-    if cx.b.has(b'Z') || cx.b.has(b'A') {
-        let l = if cx.b.has(b'Z') { b'Z' } else { b'A' };
+    if let Some(l) = cx.b.first_axis_of(bit(b'Z') | EXTRA_AXIS_BITS) {
         return Err(cx.err(ErrorKind::SplinePlane, l));
     }
     let u = st.unit();

@@ -70,14 +70,13 @@ pub struct BuildInfo<'a> {
 pub fn build_info(w: &mut impl Write, info: &BuildInfo<'_>) -> fmt::Result {
     write!(
         w,
-        "[VER:{GRBL_VERSION}.burin-{}:{}]\r\n[OPT:{},{},{RX_WINDOW}]\r\n[AXS:{}:{}]\r\n",
-        info.firmware,
-        info.board,
-        info.options,
-        info.planner_blocks,
-        info.axes,
-        "XYZA".get(..info.axes).unwrap_or("XYZA")
-    )
+        "[VER:{GRBL_VERSION}.burin-{}:{}]\r\n[OPT:{},{},{RX_WINDOW}]\r\n[AXS:{}:",
+        info.firmware, info.board, info.options, info.planner_blocks, info.axes,
+    )?;
+    for l in crate::AXIS_NAMES.iter().take(info.axes) {
+        w.write_char(*l)?;
+    }
+    w.write_str("]\r\n")
 }
 
 /// `$n=value` for one setting: whole-number settings without decimals.

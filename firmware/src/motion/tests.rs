@@ -8,7 +8,7 @@ use crate::settings::Settings;
 
 fn line(x: f32, y: f32) -> Move {
     Move::Line {
-        end: [x, y, 0.0, 0.0],
+        end: crate::pad([x, y, 0.0, 0.0]),
         speed: Speed::Feed(20.0),
         watch: Watch::default(),
         line: 1,
@@ -44,22 +44,22 @@ fn a_reversal_takes_up_the_backlash_first_and_shifts_what_follows() {
         blocks(&p),
         [(800, 0, false), (792, 0, true), (-8, 400, false)]
     );
-    assert_eq!(p.backlash_comp(), [-8, 0, 0, 0]);
+    assert_eq!(p.backlash_comp(), crate::pad([-8, 0, 0, 0]));
     // Y reverses, X goes on the same way: Y's take-up only.
     p.submit(line(-1.0, 0.0)).unwrap();
     assert_eq!(
         p.planner().block(3).map(|b| (b.target, b.takeup)),
-        Some(([-8, 392, 0, 0], true))
+        Some((crate::pad([-8, 392, 0, 0]), true))
     );
     assert_eq!(
         p.planner().block(4).map(|b| b.target),
-        Some([-88, -8, 0, 0])
+        Some(crate::pad([-88, -8, 0, 0]))
     );
     // Both back to positive: the slack goes back to the homing side.
     p.submit(line(3.0, 3.0)).unwrap();
     assert_eq!(
         p.planner().block(5).map(|b| (b.target, b.takeup)),
-        Some(([-80, 0, 0, 0], true))
+        Some((crate::pad([-80, 0, 0, 0]), true))
     );
     assert_eq!(p.backlash_comp(), [0; crate::AXES]);
 }
@@ -89,7 +89,12 @@ fn without_backlash_the_gateway_plans_as_the_planner_alone() {
     for (x, y) in [(10.0, 0.0), (0.0, 5.0), (-1.0, 0.0), (3.0, 3.0)] {
         p.submit(line(x, y)).unwrap();
         alone
-            .push_line_mm(&[x, y, 0.0, 0.0], Speed::Feed(20.0), Watch::default(), 1)
+            .push_line_mm(
+                &crate::pad([x, y, 0.0, 0.0]),
+                Speed::Feed(20.0),
+                Watch::default(),
+                1,
+            )
             .unwrap();
     }
     assert_eq!(p.planner().len(), alone.len());
@@ -108,7 +113,7 @@ fn a_flush_keeps_the_take_up_that_ran() {
     let mut p = Pipeline::<16>::new(backlash(0.1, 0.0), 1_000_000);
     p.submit(line(10.0, 0.0)).unwrap();
     p.submit(line(0.0, 0.0)).unwrap();
-    assert_eq!(p.backlash_comp(), [-8, 0, 0, 0]);
+    assert_eq!(p.backlash_comp(), crate::pad([-8, 0, 0, 0]));
     // Nothing ran: no take-up either.
     assert_eq!(p.flush(&rt), [0.0; crate::AXES]);
     assert_eq!(p.backlash_comp(), [0; crate::AXES]);

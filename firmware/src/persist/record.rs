@@ -71,7 +71,7 @@ mod tests {
         assert_eq!(rec.len(), 1 + 4 * 4);
         let mut out = [0.0; AXES];
         assert_eq!(decode(&rec, &mut out), Some(()));
-        assert_eq!(out, [1.5, -2.0, 0.25, 1e6]);
+        assert_eq!(out, crate::pad([1.5, -2.0, 0.25, 1e6]));
         // Wrong length, wrong format, empty, NaN.
         let mut one = [0.0];
         assert_eq!(decode(&rec, &mut one), None);

@@ -50,8 +50,8 @@ fn saves_only_what_changed_and_reads_it_back() {
     assert_eq!(p.save_settings(&s).ok(), Some(2));
     assert_eq!(p.save_settings(&s).ok(), Some(0));
     let mut o = loaded.offsets;
-    o.wcs[1] = [5.0, 0.0, -1.5, 0.0];
-    o.g28 = [1.0, 2.0, 3.0, 4.0];
+    o.wcs[1] = crate::pad([5.0, 0.0, -1.5, 0.0]);
+    o.g28 = crate::pad([1.0, 2.0, 3.0, 4.0]);
     assert_eq!(p.save_offsets(&o).ok(), Some(2));
 
     let mut rebooted = persist(flash_of(&mut p));
@@ -202,7 +202,7 @@ fn many_saves_wrap_the_pages_without_losing_anything() {
     let mut p = persist(Small::new());
     let mut s = p.load().settings;
     let mut o = Offsets::default();
-    o.wcs[8] = [9.0, 8.0, 7.0, 6.0];
+    o.wcs[8] = crate::pad([9.0, 8.0, 7.0, 6.0]);
     p.save_offsets(&o).expect("save");
     for i in 0..400u16 {
         s.set(110, 100.0 + f32::from(i)).expect("valid");

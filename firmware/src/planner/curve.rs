@@ -175,13 +175,13 @@ mod tests {
     fn each_chord_turns_at_what_its_normal_axis_allows() {
         let (s, c) = yz();
         // Going along Z the normal lies along Y: 500 to turn, Z's 100 to ramp.
-        let b = c.budget(&s, &[0.0, 0.0, 1.0, 0.0]).unwrap();
+        let b = c.budget(&s, &crate::pad([0.0, 0.0, 1.0, 0.0])).unwrap();
         assert_eq!((b.an, b.ar), (500.0, 1500.0));
         // tangent[k]: the plane's axes in order, Y then Z.
         assert_eq!(b.tangent[0][0], f32::INFINITY);
         assert_eq!(b.tangent[1], [100.0, 0.0]);
         // Going along Y the normal lies along Z: Z's 100 to turn.
-        let b = c.budget(&s, &[0.0, 1.0, 0.0, 0.0]).unwrap();
+        let b = c.budget(&s, &crate::pad([0.0, 1.0, 0.0, 0.0])).unwrap();
         assert_eq!(b.an, 100.0);
         assert_eq!(b.tangent[0], [500.0, 0.0]);
     }
@@ -190,7 +190,7 @@ mod tests {
     fn a_diagonal_chord_keeps_each_axis_within_its_limit_at_the_top_speed() {
         let (s, c) = yz();
         let h = core::f32::consts::FRAC_1_SQRT_2;
-        let u = [0.0, h, h, 0.0];
+        let u = crate::pad([0.0, h, h, 0.0]);
         let cb = c.budget(&s, &u).unwrap();
         let mut b = Block::EMPTY;
         (b.curve_ar, b.curve_an, b.curve_tangent) = (cb.ar, cb.an, cb.tangent);

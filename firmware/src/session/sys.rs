@@ -226,7 +226,11 @@ impl<S: crate::seams::Storage> Device<S> {
         if !(self.jogging || m.motion_idle() && self.cmds.is_empty()) {
             return Err(Code::NotIdle.code());
         }
-        let allowed = |b: &u8| b" .-+0123456789GXYZAF".contains(&b.to_ascii_uppercase());
+        let allowed = |b: &u8| {
+            let b = b.to_ascii_uppercase();
+            matches!(b, b' ' | b'.' | b'-' | b'+' | b'0'..=b'9' | b'G' | b'F')
+                || crate::gcode::lexer::is_axis_letter(b)
+        };
         if !body.iter().all(allowed) || !body.iter().any(|b| b.eq_ignore_ascii_case(&b'F')) {
             return Err(bad);
         }

@@ -12,7 +12,7 @@ fn segment(generation: u32) -> Segment {
         period: 1000,
         amass: 0,
         new_block: true,
-        steps: [100, 0, 0, 0],
+        steps: crate::pad([100, 0, 0, 0]),
         count: 100,
         dir_mask: 0,
         watch: Watch::default(),
@@ -86,7 +86,7 @@ fn take_up_steps_pulse_but_do_not_move_the_position() {
     let mut takeup = segment(rt.generation());
     takeup.takeup = true;
     takeup.events = 8;
-    takeup.steps = [8, 0, 0, 0];
+    takeup.steps = crate::pad([8, 0, 0, 0]);
     takeup.count = 8;
     takeup.dir_mask = 0b001;
     let mut plain = segment(rt.generation());
@@ -105,14 +105,14 @@ fn take_up_steps_pulse_but_do_not_move_the_position() {
     }
     // The direction event, then seven of the eight take-up steps.
     assert_eq!(pulses, 7);
-    assert_eq!(rt.takeup(), [-8, 0, 0, 0]);
+    assert_eq!(rt.takeup(), crate::pad([-8, 0, 0, 0]));
     assert_eq!(motor, [0, -1, -2, -3, -4, -5, -6, -7]);
     // The last take-up step, then the plain segment counts again.
     for _ in 0..3 {
         st.on_event(&rt, &mut pop, || open);
     }
-    assert_eq!(rt.position(), [-2, 0, 0, 0]);
-    assert_eq!(st.motor_position(&rt), [-10, 0, 0, 0]);
+    assert_eq!(rt.position(), crate::pad([-2, 0, 0, 0]));
+    assert_eq!(st.motor_position(&rt), crate::pad([-10, 0, 0, 0]));
 }
 
 /// A dropped event (the pulse-end path failed) gives back exactly what it

@@ -42,7 +42,7 @@ fn offsets_report_and_wco() {
     let mut it = Interpreter::new();
     run(&mut it, "G10 L2 P2 X1 Y2 Z3");
     run(&mut it, "G55 G92 X0");
-    assert_eq!(it.wco(), [0.0, 2.0, 3.0, 0.0]);
+    assert_eq!(it.wco(), burin::pad([0.0, 2.0, 3.0, 0.0]));
     let mut s = String::new();
     it.write_offsets(&mut s, "\n", 4).unwrap();
     assert!(
@@ -80,7 +80,7 @@ fn failing_line_restores_offsets_it_wrote() {
     }
     // The same writes on good lines do land.
     run(&mut it, "G10 L2 P1 X5");
-    assert_eq!(it.offsets().wcs[0], [5.0, 1.0, 1.0, 0.0]);
+    assert_eq!(it.offsets().wcs[0], burin::pad([5.0, 1.0, 1.0, 0.0]));
     run(&mut it, "#5161=3");
     assert_eq!(it.offsets().g28[0], 3.0);
 }
@@ -91,13 +91,13 @@ fn machine_position_feedback() {
     it.set_g28_homes(true);
     run(&mut it, "G28");
     assert!(it.needs_sync());
-    it.set_machine_position([-5.0, -6.0, -1.0, 0.0]);
+    it.set_machine_position(burin::pad([-5.0, -6.0, -1.0, 0.0]));
     assert!(!it.needs_sync());
     let c = run(&mut it, "G91 G0 X1");
     assert_eq!(
         c,
         vec![Command::Rapid {
-            end: [-4.0, -6.0, -1.0, 0.0]
+            end: burin::pad([-4.0, -6.0, -1.0, 0.0])
         }]
     );
 }

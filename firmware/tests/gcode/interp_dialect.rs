@@ -18,11 +18,11 @@ fn code(it: &mut Interpreter, line: &str) -> u16 {
     }
 }
 
-fn ends(cmds: &[Command]) -> Vec<[f32; 4]> {
+fn ends(cmds: &[Command]) -> Vec<[f32; burin::AXES]> {
     cmds.iter().filter_map(|c| c.end().copied()).collect()
 }
 
-fn near(a: [f32; 4], b: [f32; 4]) -> bool {
+fn near(a: [f32; burin::AXES], b: [f32; burin::AXES]) -> bool {
     a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-3)
 }
 
@@ -31,8 +31,14 @@ fn several_commands_read_left_to_right() {
     let mut it = Interpreter::new();
     let c = run(&mut it, "G1 X10 F100 G20 G91 G1 X1");
     assert_eq!(c.len(), 2, "{c:?}");
-    assert!(near(ends(&c)[0], [10.0, 0.0, 0.0, 0.0]), "{c:?}");
-    assert!(near(ends(&c)[1], [35.4, 0.0, 0.0, 0.0]), "{c:?}");
+    assert!(
+        near(ends(&c)[0], burin::pad([10.0, 0.0, 0.0, 0.0])),
+        "{c:?}"
+    );
+    assert!(
+        near(ends(&c)[1], burin::pad([35.4, 0.0, 0.0, 0.0])),
+        "{c:?}"
+    );
     // F100 was read in mm before G20: the inch move keeps 100 mm/min.
     assert!(
         matches!(c[1], Command::Line { feed: Feed::PerMin(f), .. } if (f - 100.0).abs() < 1e-3)
@@ -40,7 +46,13 @@ fn several_commands_read_left_to_right() {
 
     let mut it = Interpreter::new();
     let c = run(&mut it, "G0 X10 G91 G0 X5");
-    assert_eq!(ends(&c), vec![[10.0, 0.0, 0.0, 0.0], [15.0, 0.0, 0.0, 0.0]]);
+    assert_eq!(
+        ends(&c),
+        vec![
+            burin::pad([10.0, 0.0, 0.0, 0.0]),
+            burin::pad([15.0, 0.0, 0.0, 0.0])
+        ]
+    );
     assert!(it.state().incremental);
 }
 
@@ -50,11 +62,17 @@ fn a_mode_word_after_the_last_command_is_ambiguous() {
     assert_eq!(code(&mut it, "G1 X10 F100 G91"), 340);
     assert_eq!(code(&mut it, "G0 X1 G0 X2 G21 F50"), 340);
     // Refused as a whole: nothing moved, no mode changed.
-    assert_eq!(it.state().pos, [0.0; 4]);
+    assert_eq!(it.state().pos, [0.0; burin::AXES]);
     assert!(!it.state().incremental);
     // A mode word before its command is fine, as is F with its command.
     let c = run(&mut it, "G91 G0 X1 G90 G0 X5 F10");
-    assert_eq!(ends(&c), vec![[1.0, 0.0, 0.0, 0.0], [5.0, 0.0, 0.0, 0.0]]);
+    assert_eq!(
+        ends(&c),
+        vec![
+            burin::pad([1.0, 0.0, 0.0, 0.0]),
+            burin::pad([5.0, 0.0, 0.0, 0.0])
+        ]
+    );
 }
 
 #[test]
@@ -64,7 +82,7 @@ fn beagleg_g28_then_a_move_on_one_line() {
     let c = run(&mut it, "G28 G1 X100 F100");
     assert!(matches!(c[0], Command::Home { axes: 0b1111 }), "{c:?}");
     assert!(
-        matches!(c[1], Command::Line { end, .. } if end == [100.0, 0.0, 0.0, 0.0]),
+        matches!(c[1], Command::Line { end, .. } if end == burin::pad([100.0, 0.0, 0.0, 0.0])),
         "{c:?}"
     );
 }
@@ -79,23 +97,38 @@ fn g28_default_is_rs274_stored_position() {
     let c = run(&mut it, "G28 G91 Z0");
     assert_eq!(
         ends(&c),
-        vec![[50.0, 60.0, -30.0, 0.0], [50.0, 60.0, -5.0, 0.0]]
+        vec![
+            burin::pad([50.0, 60.0, -30.0, 0.0]),
+            burin::pad([50.0, 60.0, -5.0, 0.0])
+        ]
     );
     let c = run(&mut it, "G28 G91 X0 Y0");
-    assert_eq!(ends(&c)[1], [10.0, 20.0, -5.0, 0.0]);
+    assert_eq!(ends(&c)[1], burin::pad([10.0, 20.0, -5.0, 0.0]));
     assert!(!it.needs_sync(), "no homing, nothing to wait for");
     // Through an absolute intermediate point; without axes, all axes.
     run(&mut it, "G90 G0 X0 Y0 Z0");
     let c = run(&mut it, "G28 Z-2");
-    assert_eq!(ends(&c), vec![[0.0, 0.0, -2.0, 0.0], [0.0, 0.0, -5.0, 0.0]]);
+    assert_eq!(
+        ends(&c),
+        vec![
+            burin::pad([0.0, 0.0, -2.0, 0.0]),
+            burin::pad([0.0, 0.0, -5.0, 0.0])
+        ]
+    );
     let c = run(&mut it, "G28");
-    assert_eq!(ends(&c)[1], [10.0, 20.0, -5.0, 0.0]);
+    assert_eq!(ends(&c)[1], burin::pad([10.0, 20.0, -5.0, 0.0]));
     // G30 likewise, with its own position.
     run(&mut it, "G0 X1 Y2 Z3");
     run(&mut it, "G30.1");
     run(&mut it, "G0 X0 Y0 Z0");
     let c = run(&mut it, "G30 X5");
-    assert_eq!(ends(&c), vec![[5.0, 0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]]);
+    assert_eq!(
+        ends(&c),
+        vec![
+            burin::pad([5.0, 0.0, 0.0, 0.0]),
+            burin::pad([1.0, 0.0, 0.0, 0.0])
+        ]
+    );
     // A bare axis letter would be a silent 0 here: refused.
     assert_eq!(code(&mut it, "G28 X"), 102);
 }
@@ -106,7 +139,7 @@ fn g28_beagleg_homes_and_g30_probes() {
     it.set_g28_homes(true);
     let c = run(&mut it, "G28 X Y");
     assert!(matches!(c[0], Command::Home { axes: 0b11 }), "{c:?}");
-    it.set_machine_position([0.0; 4]);
+    it.set_machine_position([0.0; burin::AXES]);
     run(&mut it, "F100");
     let c = run(&mut it, "G30 Z1.5");
     assert!(matches!(c[0], Command::Probe { .. }), "{c:?}");
@@ -168,7 +201,7 @@ fn m2_resets_what_rs274ngc_lists() {
     it.write_gc_state(&mut s).unwrap();
     // Units stay (G20); motion G1, G54, G17, G90, G94, M5, M9.
     assert_eq!(s, "G1 G54 G17 G20 G90 G94 M5 M9 T0 F0 S100");
-    assert_eq!(it.wco(), [0.0; 4], "G92 suspended");
+    assert_eq!(it.wco(), [0.0; burin::AXES], "G92 suspended");
 }
 
 #[test]

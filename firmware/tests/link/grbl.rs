@@ -190,7 +190,7 @@ fn session(pacing: Pacing, seed: u64) {
         unreachable!()
     };
     assert_eq!(st.state, "Idle");
-    assert_eq!(st.mpos, Some(vec![0.0; 4]));
+    assert_eq!(st.mpos, Some(vec![0.0; burin::AXES]));
 
     // The job: lines of varied length, a status query every 50 lines.
     let job: Vec<String> = (0..600)

@@ -26,15 +26,15 @@ fn numbers_are_ascending_unique_and_all_readable() {
 #[test]
 fn backlash_is_160_to_163_in_mm_up_to_10() {
     let mut s = Settings::default();
-    assert_eq!(s.backlash_mm, [0.0; 4], "off by default");
+    assert_eq!(s.backlash_mm, [0.0; burin::AXES], "off by default");
     assert_eq!(s.set(160, 0.1), Ok(()));
     assert_eq!(s.set(163, 10.0), Ok(()));
-    assert_eq!(s.backlash_mm, [0.1, 0.0, 0.0, 10.0]);
+    assert_eq!(s.backlash_mm, burin::pad([0.1, 0.0, 0.0, 10.0]));
     assert_eq!(s.get(161), Some(0.0));
     assert_eq!(s.set(162, 10.5), Err(SettingError::OutOfRange));
     assert_eq!(s.set(161, -0.1), Err(SettingError::Negative));
     assert_eq!(s.set(164, 0.1), Err(SettingError::Unknown));
-    assert_eq!(s.backlash_mm, [0.1, 0.0, 0.0, 10.0]);
+    assert_eq!(s.backlash_mm, burin::pad([0.1, 0.0, 0.0, 10.0]));
 }
 
 #[test]
@@ -153,8 +153,8 @@ fn settings_listing() {
 fn status() -> Status {
     Status {
         state: MachineState::Run,
-        mpos: [10.0, 20.5, -1.25, 0.0],
-        wco: [5.0, 0.5, -1.0, 0.0],
+        mpos: burin::pad([10.0, 20.5, -1.25, 0.0]),
+        wco: burin::pad([5.0, 0.5, -1.0, 0.0]),
         feed: 1500.0,
         spindle: 12000.0,
         planner_free: 15,

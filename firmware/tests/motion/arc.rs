@@ -47,9 +47,9 @@ fn chords_within_tolerance_all_planes() {
         let (a, b, h) = plane.axes();
         for dir in [ArcDir::Cw, ArcDir::Ccw] {
             for r in [0.5f32, 5.0, 50.0, 250.0] {
-                let mut s = [0.0f32; 4];
+                let mut s = [0.0f32; burin::AXES];
                 s[a] = r;
-                let mut e = [0.0f32; 4];
+                let mut e = [0.0f32; burin::AXES];
                 e[b] = r;
                 e[h] = 3.0; // helical
                 e[3] = 7.0;
@@ -71,10 +71,10 @@ fn chords_within_tolerance_all_planes() {
 
 #[test]
 fn full_circle_and_multi_turn() {
-    let s = [10.0, 0.0, 0.0, 0.0];
+    let s = burin::pad([10.0, 0.0, 0.0, 0.0]);
     let one = arc(s, [0.0, 0.0], Plane::XY, ArcDir::Ccw, 0);
     let three = arc(
-        [10.0, 0.0, -6.0, 0.0],
+        burin::pad([10.0, 0.0, -6.0, 0.0]),
         [0.0, 0.0],
         Plane::XY,
         ArcDir::Ccw,
@@ -93,7 +93,7 @@ fn full_circle_and_multi_turn() {
         c3.chords()
     );
     let pts: Vec<Pos> = c3.collect();
-    assert_eq!(*pts.last().unwrap(), [10.0, 0.0, -6.0, 0.0]);
+    assert_eq!(*pts.last().unwrap(), burin::pad([10.0, 0.0, -6.0, 0.0]));
     // after one turn Z is at -2
     let p = pts[n1 as usize - 1];
     assert!(
@@ -105,8 +105,8 @@ fn full_circle_and_multi_turn() {
 
 #[test]
 fn cw_vs_ccw_go_opposite_ways() {
-    let s = [10.0, 0.0, 0.0, 0.0];
-    let e = [0.0, 10.0, 0.0, 0.0];
+    let s = burin::pad([10.0, 0.0, 0.0, 0.0]);
+    let e = burin::pad([0.0, 10.0, 0.0, 0.0]);
     let ccw: Vec<Pos> = ArcChords::new(
         &s,
         &arc(e, [0.0, 0.0], Plane::XY, ArcDir::Ccw, 0),
@@ -131,11 +131,17 @@ fn cw_vs_ccw_go_opposite_ways() {
 
 #[test]
 fn bad_arcs_are_errors_not_panics() {
-    let s = [0.0, 0.0, 0.0, 0.0];
+    let s = burin::pad([0.0, 0.0, 0.0, 0.0]);
     assert_eq!(
         ArcChords::new(
             &s,
-            &arc([1.0, 0.0, 0.0, 0.0], [0.0, 0.0], Plane::XY, ArcDir::Cw, 0),
+            &arc(
+                burin::pad([1.0, 0.0, 0.0, 0.0]),
+                [0.0, 0.0],
+                Plane::XY,
+                ArcDir::Cw,
+                0
+            ),
             TOL,
             STEP
         )
@@ -145,7 +151,7 @@ fn bad_arcs_are_errors_not_panics() {
     );
     assert_eq!(
         ArcChords::new(
-            &[f32::NAN; 4],
+            &[f32::NAN; burin::AXES],
             &arc(s, [1.0, 0.0], Plane::XY, ArcDir::Cw, 0),
             TOL,
             STEP
@@ -154,14 +160,14 @@ fn bad_arcs_are_errors_not_panics() {
         Some(ArcError::InvalidNumber)
     );
     let huge = arc(
-        [1.0, 0.0, 0.0, 0.0],
+        burin::pad([1.0, 0.0, 0.0, 0.0]),
         [0.0, 0.0],
         Plane::XY,
         ArcDir::Cw,
         u16::MAX,
     );
     assert_eq!(
-        ArcChords::new(&[1.0, 0.0, 0.0, 0.0], &huge, 1e-6, STEP).err(),
+        ArcChords::new(&burin::pad([1.0, 0.0, 0.0, 0.0]), &huge, 1e-6, STEP).err(),
         Some(ArcError::TooManySegments),
         "too many chords is refused"
     );
@@ -175,41 +181,41 @@ fn bad_arcs_are_errors_not_panics() {
 #[test]
 fn an_arc_off_its_start_is_refused() {
     let a = arc(
-        [-10.0, -1.07, -1.0, 0.0],
+        burin::pad([-10.0, -1.07, -1.0, 0.0]),
         [-11.0, -1.0],
         Plane::XY,
         ArcDir::Ccw,
         0,
     );
-    let believed = [-10.0, -1.0, 2.0, 0.0];
+    let believed = burin::pad([-10.0, -1.0, 2.0, 0.0]);
     assert!(ArcChords::new(&believed, &a, TOL, STEP).is_ok());
-    let actual = [-10.0, -10.0, -1.0, 0.0];
+    let actual = burin::pad([-10.0, -10.0, -1.0, 0.0]);
     assert_eq!(
         ArcChords::new(&actual, &a, TOL, STEP).err(),
         Some(ArcError::InvalidArc)
     );
     // 0.07 mm off on a 10 mm radius: within G20's 0.0718 mm, runs.
     let c = arc(
-        [-10.0, 0.0, 0.0, 0.0],
+        burin::pad([-10.0, 0.0, 0.0, 0.0]),
         [0.0, 0.0],
         Plane::XY,
         ArcDir::Ccw,
         0,
     );
-    assert!(ArcChords::new(&[10.07, 0.0, 0.0, 0.0], &c, TOL, STEP).is_ok());
+    assert!(ArcChords::new(&burin::pad([10.07, 0.0, 0.0, 0.0]), &c, TOL, STEP).is_ok());
     assert_eq!(
-        ArcChords::new(&[10.08, 0.0, 0.0, 0.0], &c, TOL, STEP).err(),
+        ArcChords::new(&burin::pad([10.08, 0.0, 0.0, 0.0]), &c, TOL, STEP).err(),
         Some(ArcError::InvalidArc)
     );
 }
 
 #[test]
 fn spline_flattened_within_tolerance() {
-    let s = [0.0, 0.0, 0.0, 0.0];
+    let s = burin::pad([0.0, 0.0, 0.0, 0.0]);
     let sp = Spline {
         p1: [30.0, 60.0],
         p2: [70.0, -40.0],
-        end: [100.0, 10.0, -5.0, 0.0],
+        end: burin::pad([100.0, 10.0, -5.0, 0.0]),
         feed: Feed::PerMin(1000.0),
     };
     let c = SplineChords::new(&s, &sp, TOL).unwrap();
@@ -266,7 +272,7 @@ fn path_len(start: Pos, pts: &[Pos]) -> f64 {
 /// R and I/J form, G2 and G3, it is one chord of 0.01 mm now.
 #[test]
 fn short_arc_on_huge_radius_is_short() {
-    let s = [-150.0, -150.0, 0.0, 0.0];
+    let s = burin::pad([-150.0, -150.0, 0.0, 0.0]);
     for line in [
         "G17 G91 G2 X0.01 Y0 R30000",
         "G17 G91 G2 X0.01 Y0 I0.005 J-30000",
@@ -315,7 +321,7 @@ fn short_arc_on_huge_radius_is_short() {
 /// just beyond it the arc is the short one it says.
 #[test]
 fn full_circle_only_when_start_is_end() {
-    let s = [-150.0, -150.0, 0.0, 0.0];
+    let s = burin::pad([-150.0, -150.0, 0.0, 0.0]);
     let a = parse_arc(s, "G17 G91 G2 X0 Y0 I0 J-30000");
     let ch = ArcChords::new(&s, &a, TOL, STEP).unwrap();
     assert_eq!(ch.sweep(), -2.0 * core::f32::consts::PI);
@@ -328,8 +334,8 @@ fn full_circle_only_when_start_is_end() {
         (3.0 * SAME_POINT, false),
     ] {
         for r in [10.0f32, 1e6] {
-            let s = [r, 0.0, 0.0, 0.0];
-            let e = [r, gap, 0.0, 0.0];
+            let s = burin::pad([r, 0.0, 0.0, 0.0]);
+            let e = burin::pad([r, gap, 0.0, 0.0]);
             let ch = ArcChords::new(
                 &s,
                 &arc(e, [0.0, 0.0], Plane::XY, ArcDir::Ccw, 0),

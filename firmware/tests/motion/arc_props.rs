@@ -67,7 +67,7 @@ fn line(c: &Case) -> (String, Pos) {
     let s = [c.start[0] as f32, c.start[1] as f32];
     let d = [len * c.psi.cos(), len * c.psi.sin()];
     let g = if c.cw { 2 } else { 3 };
-    let start = [s[0], s[1], 0.0, 0.0];
+    let start = burin::pad([s[0], s[1], 0.0, 0.0]);
     let text = if c.ij {
         // The centre the R form would pick, as I/J from the start.
         let half = len / 2.0;

@@ -18,7 +18,7 @@ fn chords_under_a_step_are_planned_a_bounded_piece_per_call() {
     let mut st = Stepper::new(m.step_config());
     let mut q: Queue<Segment, 16> = Queue::new();
     let helix = Command::Arc(Arc {
-        end: [0.0, 0.0, 0.0, 0.0],
+        end: burin::pad([0.0, 0.0, 0.0, 0.0]),
         center: [0.001, 0.0],
         plane: Plane::XY,
         dir: ArcDir::Ccw,
@@ -59,5 +59,5 @@ fn chords_under_a_step_are_planned_a_bounded_piece_per_call() {
     }
     assert!(total > 100_000, "only {total} chords");
     assert!(polls as u64 >= total / u64::from(CHORDS_PER_CALL));
-    assert_eq!(rt.position(), [0; 4]);
+    assert_eq!(rt.position(), [0; burin::AXES]);
 }

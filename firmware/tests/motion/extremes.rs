@@ -42,7 +42,7 @@ fn run_move(settings: Settings, dx: f32, feed: f32) -> Outcome {
     let mut st = Stepper::new(m.step_config());
     let mut q: Queue<Segment, SLOTS> = Queue::new();
     let cmd = Command::Line {
-        end: [dx, 0.0, 0.0, 0.0],
+        end: burin::pad([dx, 0.0, 0.0, 0.0]),
         feed: Feed::PerMin(feed),
     };
     let mut late = None;
@@ -174,7 +174,7 @@ fn step_span(s: Settings, dx: f32, feed: f32, pct: u16) -> (i32, u64) {
     let mut st = Stepper::new(m.step_config());
     let mut q: Queue<Segment, SLOTS> = Queue::new();
     let cmd = Command::Line {
-        end: [dx, 0.0, 0.0, 0.0],
+        end: burin::pad([dx, 0.0, 0.0, 0.0]),
         feed: Feed::PerMin(feed),
     };
     m.submit(&rt, &cmd, 1, &mut |_| {}).expect("accepted");

@@ -37,7 +37,7 @@ impl SegmentSink for Preempted<'_> {
 fn long_move(rt: &Realtime) -> Machine<16> {
     let mut m = Machine::<16>::new(Settings::default(), 1_000_000);
     let cmd = Command::Line {
-        end: [100.0, 0.0, 0.0, 0.0],
+        end: burin::pad([100.0, 0.0, 0.0, 0.0]),
         feed: Feed::PerMin(600.0),
     };
     m.submit(rt, &cmd, 1, &mut |_| {}).expect("submit");
@@ -64,7 +64,7 @@ fn segments_of_a_fill_preempted_by_a_limit_never_step() {
             (0, 0),
             "after {after}: a step ran"
         );
-        assert_eq!(rt.position(), [0; 4]);
+        assert_eq!(rt.position(), [0; burin::AXES]);
     }
 }
 

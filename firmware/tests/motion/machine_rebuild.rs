@@ -12,11 +12,11 @@ use heapless::spsc::Queue;
 fn segments(m: &mut Machine<16>, rt: &Realtime) -> Vec<Segment> {
     let cmds = [
         Command::Line {
-            end: [10.0, 5.0, 0.0, 0.0],
+            end: burin::pad([10.0, 5.0, 0.0, 0.0]),
             feed: Feed::PerMin(1200.0),
         },
         Command::Line {
-            end: [12.0, -3.0, 1.0, 0.0],
+            end: burin::pad([12.0, -3.0, 1.0, 0.0]),
             feed: Feed::PerMin(900.0),
         },
     ];
@@ -51,7 +51,7 @@ fn a_rebuilt_machine_moves_as_a_new_one() {
     used.submit(
         &rt,
         &Command::Line {
-            end: [3.0, 4.0, 0.0, 0.0],
+            end: burin::pad([3.0, 4.0, 0.0, 0.0]),
             feed: Feed::PerMin(600.0),
         },
         1,

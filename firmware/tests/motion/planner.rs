@@ -7,7 +7,7 @@ use burin::stepper::prep::Preparer;
 use burin::stepper::{StepConfig, Stepper, Switches};
 use heapless::spsc::Queue;
 
-fn steps(p: &Planner<64>, mm: [f32; 4]) -> [i32; 4] {
+fn steps(p: &Planner<64>, mm: [f32; burin::AXES]) -> [i32; burin::AXES] {
     p.to_steps(&mm).unwrap()
 }
 
@@ -15,7 +15,7 @@ fn steps(p: &Planner<64>, mm: [f32; 4]) -> [i32; 4] {
 fn straight_chain_keeps_speed_and_last_block_stops() {
     let mut p: Planner<64> = Planner::new(Settings::default());
     for i in 1..=10 {
-        let t = steps(&p, [i as f32, 0.0, 0.0, 0.0]);
+        let t = steps(&p, burin::pad([i as f32, 0.0, 0.0, 0.0]));
         p.push_line(t, Speed::Feed(20.0), Watch::default(), i)
             .unwrap();
     }
@@ -24,7 +24,7 @@ fn straight_chain_keeps_speed_and_last_block_stops() {
     assert_eq!(p.len(), 2);
     assert_eq!(
         p.block(1).unwrap().count,
-        steps(&p, [9.0, 0.0, 0.0, 0.0])[0] as u32
+        steps(&p, burin::pad([9.0, 0.0, 0.0, 0.0]))[0] as u32
     );
     assert_eq!(p.block(0).unwrap().entry, 0.0);
     // collinear junction: entry is limited by ramps only
@@ -43,21 +43,21 @@ fn straight_chain_keeps_speed_and_last_block_stops() {
 fn right_angle_corner_uses_junction_deviation() {
     let mut p: Planner<64> = Planner::new(Settings::default());
     p.push_line(
-        steps(&p, [50.0, 0.0, 0.0, 0.0]),
+        steps(&p, burin::pad([50.0, 0.0, 0.0, 0.0])),
         Speed::Feed(100.0),
         Watch::default(),
         1,
     )
     .unwrap();
     p.push_line(
-        steps(&p, [50.0, 50.0, 0.0, 0.0]),
+        steps(&p, burin::pad([50.0, 50.0, 0.0, 0.0])),
         Speed::Feed(100.0),
         Watch::default(),
         2,
     )
     .unwrap();
     p.push_line(
-        steps(&p, [50.0, 100.0, 0.0, 0.0]),
+        steps(&p, burin::pad([50.0, 100.0, 0.0, 0.0])),
         Speed::Feed(100.0),
         Watch::default(),
         3,
@@ -73,7 +73,7 @@ fn right_angle_corner_uses_junction_deviation() {
     );
     // reversal: full stop
     p.push_line(
-        steps(&p, [50.0, 90.0, 0.0, 0.0]),
+        steps(&p, burin::pad([50.0, 90.0, 0.0, 0.0])),
         Speed::Feed(100.0),
         Watch::default(),
         4,
@@ -88,7 +88,7 @@ fn right_angle_corner_uses_junction_deviation() {
 fn rapid_capped_by_slowest_axis() {
     let mut p: Planner<64> = Planner::new(Settings::default());
     p.push_line(
-        steps(&p, [0.0, 0.0, -10.0, 0.0]),
+        steps(&p, burin::pad([0.0, 0.0, -10.0, 0.0])),
         Speed::Rapid,
         Watch::default(),
         1,
@@ -252,7 +252,10 @@ fn a_resume_from_rest_holds_nothing() {
 }
 
 /// Run the planner-side and the stepper by hand (no host-sim) and count steps.
-fn run_steps(settings: Settings, moves: &[[f32; 4]]) -> ([i32; 4], [u32; 4], u8) {
+fn run_steps(
+    settings: Settings,
+    moves: &[[f32; burin::AXES]],
+) -> ([i32; burin::AXES], [u32; burin::AXES], u8) {
     let rt = Realtime::new();
     let cfg = StepConfig::new(&settings, 1_000_000);
     let mut p: Planner<64> = Planner::new(settings);
@@ -260,7 +263,7 @@ fn run_steps(settings: Settings, moves: &[[f32; 4]]) -> ([i32; 4], [u32; 4], u8)
     let mut stepper = Stepper::new(cfg);
     let mut q: Queue<burin::stepper::Segment, 8> = Queue::new();
     let mut pending = moves.iter();
-    let mut counts = [0u32; 4];
+    let mut counts = [0u32; burin::AXES];
     let mut max_amass = 0u8;
     for _ in 0..10_000_000 {
         while !p.is_full() {
@@ -292,9 +295,9 @@ fn run_steps(settings: Settings, moves: &[[f32; 4]]) -> ([i32; 4], [u32; 4], u8)
 fn exact_steps_with_smoothing_at_low_rates() {
     let s = Settings::default();
     let moves = [
-        [3.3331, 1.2347, -0.1113, 0.0],
-        [0.0001, 2.5, 0.3, 4.55],
-        [-7.77, -1.01, 0.0, 0.0],
+        burin::pad([3.3331, 1.2347, -0.1113, 0.0]),
+        burin::pad([0.0001, 2.5, 0.3, 4.55]),
+        burin::pad([-7.77, -1.01, 0.0, 0.0]),
     ];
     let (pos, counts, amass) = run_steps(s, &moves);
     let last = moves[2];

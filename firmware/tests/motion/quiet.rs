@@ -11,7 +11,7 @@ fn zigzag(p: &mut Planner<64>, from: usize, n: usize, pitch: f32, amp: f32) {
     for k in from..from + n {
         let y = if k % 2 == 1 { amp } else { -amp };
         p.push_line_mm(
-            &[k as f32 * pitch, y, 0.0, 0.0],
+            &burin::pad([k as f32 * pitch, y, 0.0, 0.0]),
             Speed::Feed(80.0),
             Watch::default(),
             k as u32,
@@ -48,7 +48,7 @@ fn a_zigzag_into_a_long_move_keeps_its_last_holds() {
         .collect();
     assert!(!held.is_empty());
     p.push_line_mm(
-        &[20.0, 10.0, 0.0, 0.0],
+        &burin::pad([20.0, 10.0, 0.0, 0.0]),
         Speed::Feed(80.0),
         Watch::default(),
         99,

@@ -24,7 +24,7 @@ fn speeds_along_a_circle(blocks: usize) -> Vec<f32> {
     };
     for k in 1..=60 {
         let t = k as f32 / n as f32 * std::f32::consts::TAU;
-        let end = [10.0 - 10.0 * t.cos(), 10.0 * t.sin(), 0.0, 0.0];
+        let end = burin::pad([10.0 - 10.0 * t.cos(), 10.0 * t.sin(), 0.0, 0.0]);
         p.push_chord(&end, Speed::Feed(50.0), k, curve).unwrap();
     }
     let mut q: Queue<Segment, 16> = Queue::new();

@@ -310,7 +310,7 @@ mod tests {
     fn to(x: f32, y: f32, f: f32) -> PathEvent {
         PathEvent::To {
             kind: PathKind::Feed,
-            to_mm: [x, y, 0.0, 0.0],
+            to_mm: burin::pad([x, y, 0.0, 0.0]),
             feed_mm_s: f,
             seconds: None,
         }
@@ -352,7 +352,7 @@ mod tests {
     fn chord_vertices_run_at_junction_deviation_alone() {
         let s = Settings::default();
         let (r, n) = (0.5f64, 64);
-        let mut b = Bound::new(s, [r as f32, 0.0, 0.0, 0.0]);
+        let mut b = Bound::new(s, burin::pad([r as f32, 0.0, 0.0, 0.0]));
         // Four turns: the third is past the ramp from rest.
         for k in 1..=4 * n {
             let t = k as f64 / n as f64 * std::f64::consts::TAU;

@@ -121,7 +121,7 @@ mod tests {
     fn circle(r: f64, v: f64, n: usize) -> (Vec<PieceProfile>, Vec<Option<f64>>) {
         let pt = |k: usize| {
             let t = k as f64 / n as f64 * std::f64::consts::TAU;
-            [r * t.cos(), r * t.sin(), 0.0, 0.0]
+            burin::pad([r * t.cos(), r * t.sin()])
         };
         let mut prof = Vec::new();
         let mut hits = Vec::new();
@@ -179,7 +179,7 @@ mod tests {
             let mut hits = Vec::new();
             let mut p = [0.0f64; AXES];
             for k in 1..=40 {
-                let q = [l * k as f64, if k % 2 == 0 { w } else { 0.0 }, 0.0, 0.0];
+                let q = burin::pad([l * k as f64, if k % 2 == 0 { w } else { 0.0 }, 0.0, 0.0]);
                 let d: [f64; AXES] = std::array::from_fn(|i| q[i] - p[i]);
                 let len = d.iter().map(|x| x * x).sum::<f64>().sqrt();
                 prof.push(PieceProfile {

@@ -11,32 +11,9 @@ use super::{ConfigError, LimitSwitch, MachineConfig, MaskPhase, ProbeSurface, Pu
 use burin::settings::{Profile, RapidMode};
 use burin::{AXES, AXIS_NAMES};
 
-macro_rules! axis_keys {
-    ($l:literal) => {
-        [
-            concat!("axes.", $l, ".steps_per_mm"),
-            concat!("axes.", $l, ".max_rate_mm_min"),
-            concat!("axes.", $l, ".max_accel_mm_s2"),
-            concat!("axes.", $l, ".travel_mm"),
-            concat!("axes.", $l, ".backlash_mm"),
-            concat!("axes.", $l, ".slack_mm"),
-        ]
-    };
-}
-
-/// Key names used in error messages, per axis.
-pub(super) const AXIS_KEYS: [[&str; 6]; AXES] = [
-    axis_keys!("x"),
-    axis_keys!("y"),
-    axis_keys!("z"),
-    axis_keys!("a"),
-];
-pub(super) const TRIP_KEYS: [&str; AXES] = [
-    "limits.x_trip_mm",
-    "limits.y_trip_mm",
-    "limits.z_trip_mm",
-    "limits.a_trip_mm",
-];
+mod letters;
+use letters::{driven, ALL_TRIP_KEYS};
+pub(super) use letters::{AXIS_KEYS, TRIP_KEYS};
 
 #[derive(Deserialize, Default)]
 #[serde(deny_unknown_fields)]
@@ -131,6 +108,8 @@ struct Axes {
     y: Option<Axis>,
     z: Option<Axis>,
     a: Option<Axis>,
+    b: Option<Axis>,
+    c: Option<Axis>,
 }
 
 #[derive(Deserialize, Default)]
@@ -205,6 +184,8 @@ struct Limits {
     y_trip_mm: Option<f32>,
     z_trip_mm: Option<f32>,
     a_trip_mm: Option<f32>,
+    b_trip_mm: Option<f32>,
+    c_trip_mm: Option<f32>,
     hysteresis_mm: Option<f32>,
 }
 
@@ -255,7 +236,13 @@ fn axis_mask(key: &str, letters: &str) -> Result<u8, ConfigError> {
             .iter()
             .position(|n| n.eq_ignore_ascii_case(&c))
             .ok_or_else(|| {
-                ConfigError::invalid(key, format!("`{c}` is not an axis (use letters of XYZA)"))
+                ConfigError::invalid(
+                    key,
+                    format!(
+                        "`{c}` is not an axis (use letters of {})",
+                        String::from_iter(AXIS_NAMES)
+                    ),
+                )
             })?;
         mask |= 1 << i;
     }
@@ -285,11 +272,16 @@ pub(super) fn apply(text: &str, cfg: &mut MachineConfig) -> Result<(), ConfigErr
     // `$208` follows the axes the file describes (issue 29): X/Y/Z tables
     // and no A are an XYZ machine, which GRBL senders must not show an A
     // for. `report.axes` still says otherwise when given.
-    let ax = &f.axes;
-    if ax.a.is_none() && (ax.x.is_some() || ax.y.is_some() || ax.z.is_some()) {
-        s.report_axes = 3;
+    let ax = f.axes;
+    let axes = driven(
+        [ax.x, ax.y, ax.z, ax.a, ax.b, ax.c],
+        ["axes.x", "axes.y", "axes.z", "axes.a", "axes.b", "axes.c"],
+    )?;
+    if let Some(last) = axes.iter().rposition(Option::is_some) {
+        if last < AXES - 1 {
+            s.report_axes = (last.max(2) + 1) as u8;
+        }
     }
-    let axes = [f.axes.x, f.axes.y, f.axes.z, f.axes.a];
     for (i, src) in axes.into_iter().enumerate() {
         let src = src.unwrap_or_default();
         let dst = &mut s.axes[i];
@@ -452,7 +444,17 @@ fn apply_switches(cfg: &mut MachineConfig, l: Limits) -> Result<(), ConfigError>
         Some(letters) => axis_mask("limits.switches", &letters)?,
         None => (0..AXES).fold(0u8, |m, i| m | (u8::from(cfg.limits[i].is_some()) << i)),
     };
-    let trips = [l.x_trip_mm, l.y_trip_mm, l.z_trip_mm, l.a_trip_mm];
+    let trips = driven(
+        [
+            l.x_trip_mm,
+            l.y_trip_mm,
+            l.z_trip_mm,
+            l.a_trip_mm,
+            l.b_trip_mm,
+            l.c_trip_mm,
+        ],
+        ALL_TRIP_KEYS,
+    )?;
     for (i, (slot, trip)) in cfg.limits.iter_mut().zip(trips).enumerate() {
         if fitted & (1 << i) == 0 {
             *slot = None;

@@ -85,15 +85,15 @@ mod tests {
     #[test]
     fn measures_the_distance_to_the_nearest_segment_of_the_window() {
         let mut d = Deviation::default();
-        d.point([0.0; 4]);
-        d.point([10.0, 0.0, 0.0, 0.0]);
-        d.point([10.0, 10.0, 0.0, 0.0]);
-        d.check(&[5.0, 0.05, 0.0, 0.0]);
+        d.point([0.0; burin::AXES]);
+        d.point(burin::pad([10.0, 0.0, 0.0, 0.0]));
+        d.point(burin::pad([10.0, 10.0, 0.0, 0.0]));
+        d.check(&burin::pad([5.0, 0.05, 0.0, 0.0]));
         assert!((d.max_mm - 0.05).abs() < 1e-9, "{}", d.max_mm);
-        d.check(&[9.9, 5.0, 0.0, 0.0]);
+        d.check(&burin::pad([9.9, 5.0, 0.0, 0.0]));
         assert!((d.max_mm - 0.1).abs() < 1e-9, "{}", d.max_mm);
         // Past the corner: the first segment is dropped behind the tool.
-        d.check(&[10.0, 9.0, 0.0, 0.0]);
+        d.check(&burin::pad([10.0, 9.0, 0.0, 0.0]));
         assert!((d.max_mm - 0.1).abs() < 1e-9);
         assert!(d.pts.len() <= 3);
     }

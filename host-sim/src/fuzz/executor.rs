@@ -61,7 +61,7 @@ pub fn small_machine(soft_limits: bool, probe: bool) -> MachineConfig {
             trip_mm: -5.0,
             towards_negative: true,
         }),
-        start_position_mm: [-10.0, -10.0, -1.0, 0.0],
+        start_position_mm: burin::pad([-10.0, -10.0, -1.0, 0.0]),
         host: HostModel::INSTANT,
         interrupts: Default::default(),
         wiring: None,

@@ -18,12 +18,12 @@ const TICKS: &[u32] = &[96_000_000, 84_000_000, 1_000_000, 48_000];
 pub fn settings(data: &[u8]) {
     let mut b = Bytes::new(data);
     let tick_hz = b.pick(TICKS);
-    let target = [
+    let target = burin::pad([
         f32::from(b.u8() as i8) / 8.0,
         f32::from(b.u8() as i8) / 8.0,
         f32::from(b.u8() as i8) / 16.0,
         f32::from(b.u8() as i8),
-    ];
+    ]);
     let mut s = Settings::default();
     for line in b.rest().split(|&c| c == b'\n') {
         let Some(Ok(cmd)) = syscmd::parse(line) else {
@@ -56,13 +56,13 @@ pub fn settings(data: &[u8]) {
 
 /// A machine on these settings: built, then one short move for at most
 /// 5 ms of virtual time.
-fn motion(settings: Settings, tick_hz: u32, target: [f32; 4]) {
+fn motion(settings: Settings, tick_hz: u32, target: [f32; burin::AXES]) {
     let cfg = MachineConfig {
         tick_hz,
         settings,
-        limits: [None; 4],
+        limits: [None; burin::AXES],
         probe: None,
-        start_position_mm: [0.0; 4],
+        start_position_mm: [0.0; burin::AXES],
         host: HostModel::INSTANT,
         interrupts: Default::default(),
         wiring: None,

@@ -67,7 +67,7 @@ pub fn config_with_switches() -> MachineConfig {
         hysteresis_mm: 0.05,
     });
     let mut c = config();
-    c.limits = [sw, sw, sw, None];
+    c.limits = burin::pad([sw, sw, sw, None]);
     c.probe = Some(ProbeSurface {
         axis: 2,
         trip_mm: -20.0,
@@ -460,16 +460,16 @@ pub fn run(cfg: &MachineConfig, cmds: &[Command], inputs: &[(f64, Input)]) -> Ru
         sim.input_at((t * cfg.tick_hz as f64) as u64, *inp);
     }
     sim.run();
-    let summary = sim.summary(cmds.len() as u32, [0.0; 4]);
+    let summary = sim.summary(cmds.len() as u32, [0.0; burin::AXES]);
     drop(sim);
     Run { rec, summary }
 }
 
-pub fn last_end(cmds: &[Command]) -> [f32; 4] {
+pub fn last_end(cmds: &[Command]) -> [f32; burin::AXES] {
     cmds.iter()
         .rev()
         .find_map(|c| c.end().copied())
-        .unwrap_or([0.0; 4])
+        .unwrap_or([0.0; burin::AXES])
 }
 
 pub fn check_all(cfg: &MachineConfig, r: &Run, cmds: &[Command], label: &str) {

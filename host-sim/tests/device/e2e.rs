@@ -39,7 +39,7 @@ fn round(dev: &mut VirtualDevice, pipe: &mut MemPipe, pending: &mut Vec<u8>, ste
     }
 }
 
-fn expected_steps(cfg: &MachineConfig, job: &str) -> [i64; 4] {
+fn expected_steps(cfg: &MachineConfig, job: &str) -> [i64; burin::AXES] {
     let s = run_job(cfg, job, &mut Discard);
     assert!(
         s.errors.is_empty(),
@@ -51,7 +51,11 @@ fn expected_steps(cfg: &MachineConfig, job: &str) -> [i64; 4] {
 
 /// Stream `lines` framed; `cut` disconnects (dropping bytes in flight) after
 /// that many lines were sent. Returns the device's execution log.
-fn stream_framed(cfg: &MachineConfig, lines: &[&str], cut: Option<usize>) -> (Vec<u32>, [i32; 4]) {
+fn stream_framed(
+    cfg: &MachineConfig,
+    lines: &[&str],
+    cut: Option<usize>,
+) -> (Vec<u32>, [i32; burin::AXES]) {
     let mut rec = Discard;
     let mut dev = VirtualDevice::new(cfg, &mut rec);
     dev.log = Some(Vec::new());
@@ -155,7 +159,11 @@ fn every_acked_line_executes_once_in_order_across_a_disconnect() {
     }
 }
 
-fn stream_text(cfg: &MachineConfig, job: &str, pacing: Pacing) -> ([i32; 4], usize, String) {
+fn stream_text(
+    cfg: &MachineConfig,
+    job: &str,
+    pacing: Pacing,
+) -> ([i32; burin::AXES], usize, String) {
     let mut rec = Discard;
     let mut dev = VirtualDevice::new(cfg, &mut rec);
     dev.log = Some(Vec::new());
@@ -223,7 +231,7 @@ fn text_char_counting_and_send_response_end_where_run_job_ends() {
 fn device_probe_then_relative_move_matches_run_job() {
     let mut cfg = common::config_with_switches();
     cfg.settings.g28_homes = true; // $210=1: the reference's G28 homes
-    cfg.start_position_mm = [-40.0, -40.0, -10.0, 0.0];
+    cfg.start_position_mm = burin::pad([-40.0, -40.0, -10.0, 0.0]);
     let job = "$H\nG90 G0 X-10 Y-10\nG38.2 Z-40 F600\nG91 G1 Z5 F500\nG90\nG1 X[#5061] F800\n";
     let reference = job.replacen("$H", "G28", 1);
     let want = expected_steps(&cfg, &reference);

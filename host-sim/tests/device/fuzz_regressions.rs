@@ -124,7 +124,7 @@ fn envelope_passes_homing_and_probing() {
         trip_mm: 0.0,
         hysteresis_mm: 0.05,
     });
-    cfg.limits = [sw, sw, sw, None];
+    cfg.limits = burin::pad([sw, sw, sw, None]);
     cfg.probe = Some(ProbeSurface {
         axis: 2,
         trip_mm: -20.0,
@@ -132,7 +132,7 @@ fn envelope_passes_homing_and_probing() {
     });
     cfg.settings.homing_enable = true;
     cfg.settings.g28_homes = true;
-    cfg.start_position_mm = [-40.0, -30.0, -10.0, 0.0];
+    cfg.start_position_mm = burin::pad([-40.0, -30.0, -10.0, 0.0]);
     let prog = "G21 G90\nG28\nG0 X-20 Y-20 Z-5\nG38.2 Z-30 F300\nG0 Z-5\n\
                 G38.3 Z-25 F600\nG0 Z-2\nG1 X-30 Y-10 F2000\nG28 X\nG0 X-5 Y-5\n";
     let (n, errors) = host_sim::fuzz::envelope::run_gcode(&cfg, prog.as_bytes(), 30.0);

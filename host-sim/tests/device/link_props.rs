@@ -24,7 +24,7 @@ const STEP_MM: f32 = 0.5;
 
 fn cfg() -> MachineConfig {
     MachineConfig {
-        start_position_mm: [0.0; 4],
+        start_position_mm: [0.0; burin::AXES],
         ..MachineConfig::default()
     }
 }

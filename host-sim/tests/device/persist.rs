@@ -9,7 +9,7 @@ use protocol::client::grbl::parse_status;
 
 fn origin() -> MachineConfig {
     MachineConfig {
-        start_position_mm: [0.0; 4],
+        start_position_mm: [0.0; burin::AXES],
         ..MachineConfig::default()
     }
 }

@@ -23,7 +23,7 @@ const TICKS_PER_US: u64 = 96;
 fn homing_machine(wiring: Wiring) -> MachineConfig {
     let mut cfg = MachineConfig::default();
     cfg.settings.homing_enable = true;
-    cfg.start_position_mm = [-10.0, -10.0, -5.0, 0.0];
+    cfg.start_position_mm = burin::pad([-10.0, -10.0, -5.0, 0.0]);
     cfg.wiring = Some(wiring);
     cfg
 }

@@ -85,7 +85,7 @@ fn within(f: impl FnOnce() + Send + 'static) {
 
 fn origin() -> MachineConfig {
     MachineConfig {
-        start_position_mm: [0.0; 4],
+        start_position_mm: [0.0; burin::AXES],
         ..MachineConfig::default()
     }
 }
@@ -110,7 +110,7 @@ fn feed_0_0001_is_refused_and_the_device_keeps_answering() {
         assert_eq!(r.state(), "Alarm");
         r.send_until(b"$X\n", |l| l == "ok");
         assert_eq!(r.state(), "Idle");
-        assert_eq!(r.dev.position_steps(), [0; 4]);
+        assert_eq!(r.dev.position_steps(), [0; burin::AXES]);
     });
 }
 

@@ -18,7 +18,7 @@ const JOB: &str = include_str!("../../jobs/agree.gcode");
 
 fn origin() -> MachineConfig {
     MachineConfig {
-        start_position_mm: [0.0; 4],
+        start_position_mm: [0.0; burin::AXES],
         ..MachineConfig::default()
     }
 }
@@ -28,7 +28,7 @@ fn offline_runs_every_line_of_the_job() {
     let s = run_file(&origin(), JOB, &mut Discard);
     assert!(s.errors.is_empty(), "{:?}", s.errors);
     // G90 X5.0125, the G91 Y+4 after M2 (from Y-2), then the G18 arc to Z0.5.
-    assert_eq!(s.final_position_steps, [401, 160, 200, 0]);
+    assert_eq!(s.final_position_steps, burin::pad([401, 160, 200, 0]));
     assert_eq!(s.lines, JOB.lines().count() as u32);
 }
 
@@ -112,7 +112,9 @@ fn pty_ends_where_the_offline_run_ends() {
         let st = parse_status(&format!("<{body}>")).expect("a status report");
         if st.state == "Idle" {
             let mpos = st.mpos.expect("MPos");
-            break std::array::from_fn::<i64, 4, _>(|i| (mpos[i] * spm[i]).round() as i64);
+            break std::array::from_fn::<i64, { burin::AXES }, _>(|i| {
+                (mpos[i] * spm[i]).round() as i64
+            });
         }
         assert!(Instant::now() < end, "never idle: <{body}>");
         std::thread::sleep(Duration::from_millis(20));

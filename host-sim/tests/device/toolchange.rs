@@ -88,7 +88,10 @@ fn m6_stops_the_spindle_moves_holds_announces_and_resumes_on_cycle_start() {
     assert_eq!(st.spindle, Some(0.0), "{st:?}");
     // The lines after it are already planned (held): the machine, not the
     // plan, is at the tool-change position (default 80/80/400 steps/mm).
-    assert_eq!(r.dev.position_steps(), [50 * 80, 40 * 80, -400, 0]);
+    assert_eq!(
+        r.dev.position_steps(),
+        burin::pad([50 * 80, 40 * 80, -400, 0])
+    );
     // Held: more time changes nothing.
     r.run(200);
     assert_eq!(r.status().wpos, st.wpos);
@@ -105,7 +108,7 @@ fn m6_stops_the_spindle_moves_holds_announces_and_resumes_on_cycle_start() {
     assert_eq!(params, ["[TLO:-3.500]", "[T:2|0.000,0.000,-3.500|0.000]"]);
     assert_eq!(
         r.dev.sim.machine.commanded_position(),
-        [20.0, 40.0, -13.5, 0.0]
+        burin::pad([20.0, 40.0, -13.5, 0.0])
     );
 }
 

@@ -11,7 +11,7 @@ use protocol::client::grbl::parse_status;
 /// The default machine, powered up at machine zero.
 pub fn origin() -> MachineConfig {
     MachineConfig {
-        start_position_mm: [0.0; 4],
+        start_position_mm: [0.0; burin::AXES],
         ..MachineConfig::default()
     }
 }

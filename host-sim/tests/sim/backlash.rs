@@ -156,13 +156,13 @@ fn homing_and_probing_with_backlash_end_where_commanded() {
     let mut plain = MachineConfig::default();
     plain.settings.homing_enable = true;
     let mut slack = plain.clone();
-    slack.slack_mm = [0.1, 0.1, 0.0, 0.0];
-    slack.settings.backlash_mm = [0.1, 0.1, 0.0, 0.0];
+    slack.slack_mm = burin::pad([0.1, 0.1, 0.0, 0.0]);
+    slack.settings.backlash_mm = burin::pad([0.1, 0.1, 0.0, 0.0]);
     let p = run_file(&plain, src, &mut host_sim::record::Discard);
     let s = run_file(&slack, src, &mut host_sim::record::Discard);
     for r in [&p, &s] {
         assert!(r.errors.is_empty(), "{:?}", r.errors);
-        assert_eq!(r.final_position_mm, [-1.0, -1.0, -1.0, 0.0]);
+        assert_eq!(r.final_position_mm, burin::pad([-1.0, -1.0, -1.0, 0.0]));
     }
     assert!(
         s.max_tool_deviation_mm <= p.max_tool_deviation_mm + 0.002,

@@ -25,7 +25,7 @@ fn move_x(path: DmaPath) -> (i64, i64) {
     sim.push_command(
         1,
         Command::Line {
-            end: [10.0, 0.0, 0.0, 0.0],
+            end: burin::pad([10.0, 0.0, 0.0, 0.0]),
             feed: Feed::PerMin(600.0),
         },
     );
@@ -63,7 +63,7 @@ fn a_broken_pulse_path_is_an_alarm_at_boot_that_nothing_unlocks() {
     assert_ne!(r.cmd("$X"), ["[MSG:Caution: Unlocked]", "ok"]);
     assert_ne!(r.cmd("G1 X5 F600"), ["ok"]);
     r.run(50);
-    assert_eq!(r.dev.sim.world.steps, [0; 4], "nothing moved");
+    assert_eq!(r.dev.sim.world.steps, [0; burin::AXES], "nothing moved");
     assert_eq!(r.status().state, "Alarm");
 }
 

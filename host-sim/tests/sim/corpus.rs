@@ -16,9 +16,9 @@ fn corpus_dir() -> Option<PathBuf> {
 
 /// Interprets the whole job; `None` if any line fails or the job's end
 /// depends on the machine (homing, probing, a tool change's moves).
-fn expected_end(src: &str) -> Option<([f32; 4], usize)> {
+fn expected_end(src: &str) -> Option<([f32; burin::AXES], usize)> {
     let mut it = Interpreter::new();
-    let mut end = [0.0f32; 4];
+    let mut end = [0.0f32; burin::AXES];
     let mut n = 0usize;
     let mut depends = false;
     for line in src.lines() {

@@ -77,5 +77,5 @@ fn collinear_pieces_that_round_to_different_step_counts_merge() {
         f.time_s,
         f.bound_s
     );
-    assert_eq!(f.limits.short_intervals, [0; 4]);
+    assert_eq!(f.limits.short_intervals, [0; burin::AXES]);
 }

@@ -26,10 +26,10 @@ fn gcode_job_exact_and_within_limits() {
     assert!(s.errors.is_empty(), "{:?}", s.errors);
     assert_eq!(s.lines, 13);
     assert_eq!(s.moves, 8);
-    assert_eq!(s.final_position_steps, [0, 0, 0, 0]);
+    assert_eq!(s.final_position_steps, burin::pad([0, 0, 0, 0]));
     let info = rec.info.clone().unwrap();
     check_max_rate(&info, &rec.events);
-    let (_, corners) = check_path(&info, [0.0; 4], &rec.path, &rec.events, 0.0);
+    let (_, corners) = check_path(&info, [0.0; burin::AXES], &rec.path, &rec.events, 0.0);
     check_max_accel(&info, &rec.events, &corners, 0.01);
     check_pin_timing(&info, &rec.events);
     assert!(s.job_time_s > 0.2, "includes the dwell");
@@ -56,14 +56,14 @@ fn gcode_errors_carry_line_numbers_and_job_continues() {
     let s = run_job(&cfg, src, &mut Collect::default());
     let lines: Vec<u32> = s.errors.iter().map(|e| e.line).collect();
     assert!(lines.contains(&2), "{:?}", s.errors);
-    assert_eq!(s.final_position_steps, [0, 0, 0, 0]);
+    assert_eq!(s.final_position_steps, burin::pad([0, 0, 0, 0]));
 }
 
 #[test]
 fn gcode_homing_and_probing_sync_the_interpreter() {
     let mut cfg = config_with_switches();
     cfg.settings.g28_homes = true; // $210=1: G28 homes (BeagleG)
-    cfg.start_position_mm = [-40.0, -40.0, -10.0, 0.0];
+    cfg.start_position_mm = burin::pad([-40.0, -40.0, -10.0, 0.0]);
     // Home, probe down to the plate at Z=-20, then a relative move from
     // wherever the probe stopped.
     let probe = "G28\nG90 G0 X-10 Y-10\nG38.2 Z-40 F600\n";

@@ -20,7 +20,7 @@ fn fusion_post_runs_to_the_end_by_default() {
     // The last line's G28 returns every axis to the G28.1 point (10, 10, 5).
     assert_eq!(
         s.final_position_steps,
-        expected_steps(&info, [10.0, 10.0, 5.0, 0.0])
+        expected_steps(&info, burin::pad([10.0, 10.0, 5.0, 0.0]))
     );
 }
 
@@ -37,7 +37,7 @@ fn beagleg_meaning_homes_and_so_needs_homing() {
         "{:?}",
         s.errors
     );
-    assert_eq!(s.final_position_steps, [0; 4]);
+    assert_eq!(s.final_position_steps, [0; burin::AXES]);
 }
 
 #[test]

@@ -35,7 +35,7 @@ fn mm() -> Interpreter {
     it
 }
 
-fn end(cmds: &[Command]) -> [f32; 4] {
+fn end(cmds: &[Command]) -> [f32; burin::AXES] {
     *cmds.iter().rev().find_map(|c| c.end()).expect("a move")
 }
 
@@ -45,7 +45,7 @@ fn g43_1_replaces_only_the_named_axes() {
     let mut it = mm();
     run(&mut it, "G43.1 X1");
     run(&mut it, "G43.1 Z2");
-    assert_eq!(it.state().tlo, [1.0, 0.0, 2.0, 0.0]);
+    assert_eq!(it.state().tlo, burin::pad([1.0, 0.0, 2.0, 0.0]));
 }
 
 /// `G43 H3` (tool 3 is 10 mm) then `G43.1 X2`: rs274 2 0 10.
@@ -55,8 +55,11 @@ fn g43_1_keeps_the_tool_length_of_g43() {
     run(&mut it, "G10 L1 P3 Z10");
     run(&mut it, "G43 H3");
     run(&mut it, "G43.1 X2");
-    assert_eq!(it.state().tlo, [2.0, 0.0, 10.0, 0.0]);
-    assert_eq!(end(&run(&mut it, "G0 X0 Z0")), [2.0, 0.0, 10.0, 0.0]);
+    assert_eq!(it.state().tlo, burin::pad([2.0, 0.0, 10.0, 0.0]));
+    assert_eq!(
+        end(&run(&mut it, "G0 X0 Z0")),
+        burin::pad([2.0, 0.0, 10.0, 0.0])
+    );
 }
 
 /// A bare G43.1 is accepted and changes nothing (was error 315).
@@ -65,7 +68,7 @@ fn bare_g43_1_is_accepted() {
     let mut it = mm();
     run(&mut it, "G43.1 Z3");
     assert!(run(&mut it, "G43.1").is_empty());
-    assert_eq!(it.state().tlo, [0.0, 0.0, 3.0, 0.0]);
+    assert_eq!(it.state().tlo, burin::pad([0.0, 0.0, 3.0, 0.0]));
 }
 
 /// `G2 X10 Y0 R7 I5 J0`: "mixed radius ijk format" (R used to win).
@@ -133,7 +136,7 @@ fn exists_evaluates() {
         &mut it,
         "G0 X[EXISTS[#<a>]*3] Y[EXISTS[#<b>]] Z[exists[#<_a>]]",
     );
-    assert_eq!(end(&c), [3.0, 0.0, 0.0, 0.0]);
+    assert_eq!(end(&c), burin::pad([3.0, 0.0, 0.0, 0.0]));
 }
 
 /// 40 nested brackets (was error 204, limit 10); LinuxCNC's own bound is
@@ -157,8 +160,14 @@ fn expressions_nest_as_deep_as_a_line_allows() {
 #[test]
 fn g0_x1_g80_moves() {
     let mut it = mm();
-    assert_eq!(end(&run(&mut it, "G0 X1 G80")), [1.0, 0.0, 0.0, 0.0]);
-    assert_eq!(end(&run(&mut it, "G1 X2 G80")), [2.0, 0.0, 0.0, 0.0]);
+    assert_eq!(
+        end(&run(&mut it, "G0 X1 G80")),
+        burin::pad([1.0, 0.0, 0.0, 0.0])
+    );
+    assert_eq!(
+        end(&run(&mut it, "G1 X2 G80")),
+        burin::pad([2.0, 0.0, 0.0, 0.0])
+    );
 }
 
 /// Tool numbers beyond the old limit (`G10 L1 P10000000 Z1`) and a 17th
@@ -191,9 +200,12 @@ fn g10_l1_writes_every_axis() {
     let mut it = mm();
     run(&mut it, "G10 L1 P5 X1 Y2 Z3 R2");
     run(&mut it, "G43 H5");
-    assert_eq!(it.state().tlo, [1.0, 2.0, 3.0, 0.0]);
+    assert_eq!(it.state().tlo, burin::pad([1.0, 2.0, 3.0, 0.0]));
     // rs274: G0 X5 with this tool ends at machine X 6, Y/Z/A where they were.
-    assert_eq!(end(&run(&mut it, "G0 X5")), [6.0, 0.0, 0.0, 0.0]);
+    assert_eq!(
+        end(&run(&mut it, "G0 X5")),
+        burin::pad([6.0, 0.0, 0.0, 0.0])
+    );
 }
 
 /// `G43 H0` after an M6: LinuxCNC 2.9 uses the tool in the spindle.
@@ -226,7 +238,7 @@ fn a_tool_without_an_entry_is_refused() {
     assert_eq!(err(&mut it, "G43.2 H7"), ErrorKind::ToolNotInTable);
     run(&mut it, "T7 M6");
     assert_eq!(err(&mut it, "G43"), ErrorKind::ToolNotInTable);
-    assert_eq!(it.state().tlo, [0.0; 4]);
+    assert_eq!(it.state().tlo, [0.0; burin::AXES]);
 }
 
 /// `G2 X6002.8 Y0 I3000 J0`: the centre stays at 3000 (rs274's ARC_FEED
@@ -243,7 +255,8 @@ fn centre_format_arcs_keep_the_given_centre() {
     assert_eq!(a.dir, ArcDir::Cw);
     // The segmenter ends exactly at the programmed end and passes through
     // the spiral's midpoint: radius 3001.4 at the top of the half turn.
-    let mut chords = burin::arc::ArcChords::new(&[0.0; 4], a, 0.01, 0.001).expect("chords");
+    let mut chords =
+        burin::arc::ArcChords::new(&[0.0; burin::AXES], a, 0.01, 0.001).expect("chords");
     let pts: Vec<_> = chords.by_ref().collect();
     let last = pts.last().expect("points");
     assert!(

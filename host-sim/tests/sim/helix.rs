@@ -23,7 +23,7 @@ fn helical_holes_turn_at_the_helix_budget_within_the_limits() {
     let cfg = common::grbl_match();
     let f = run_job(&cfg, &hole());
     assert!(f.summary.errors.is_empty(), "{:?}", f.summary.errors);
-    assert_eq!(f.limits.short_intervals, [0; 4]);
+    assert_eq!(f.limits.short_intervals, [0; burin::AXES]);
     let (_, amax) = axis_limits(&cfg);
     for (i, (peak, limit)) in f.limits.peak_acc.iter().zip(amax).enumerate().take(3) {
         assert!(
@@ -74,7 +74,7 @@ fn holds_and_overrides_in_a_helical_hole_keep_the_limits() {
         assert!(summary.errors.is_empty(), "{:?}", summary.errors);
         let l = &meter.out;
         slowest = slowest.max(l.last_tick - l.first_tick.unwrap_or(0));
-        assert_eq!(l.short_intervals, [0; 4], "at {t:.3} s");
+        assert_eq!(l.short_intervals, [0; burin::AXES], "at {t:.3} s");
         assert_eq!(l.end_steps, plain.limits.end_steps, "at {t:.3} s");
         for (i, (peak, limit)) in l.peak_acc.iter().zip(amax).enumerate().take(3) {
             assert!(

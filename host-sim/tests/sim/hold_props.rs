@@ -33,7 +33,7 @@ proptest! {
         let mut cfg = config();
         cfg.settings.axes[0].max_accel = accel_x;
         cfg.settings.axes[0].steps_per_mm = steps_x;
-        let cmds = vec![Command::Line { end: [dx, dy, dz, 0.0], feed: Feed::PerMin(feed) }];
+        let cmds = vec![Command::Line { end: burin::pad([dx, dy, dz, 0.0]), feed: Feed::PerMin(feed) }];
         let hz = cfg.tick_hz as f64;
         let free = run(&cfg, &cmds, &[]);
         let t_free = end_tick(&free) as f64 / hz;
@@ -81,7 +81,7 @@ fn a_hold_at_a_slow_feed_acts_within_a_few_steps() {
     let spm = f64::from(cfg.settings.axes[0].steps_per_mm);
     let feed = 20.0;
     let cmds = vec![Command::Line {
-        end: [5.0, 0.0, 0.0, 0.0],
+        end: burin::pad([5.0, 0.0, 0.0, 0.0]),
         feed: Feed::PerMin(feed),
     }];
     let (t_hold, t_go) = (2.0, 4.0);

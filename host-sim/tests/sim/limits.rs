@@ -26,9 +26,11 @@ fn check(cfg: &MachineConfig, name: &str, src: &str) -> JobFigures {
     );
     let l = &f.limits;
     assert_eq!(
-        l.short_intervals, [0; 4],
+        l.short_intervals,
+        [0; burin::AXES],
         "{name}: min intervals {:?} (short: {:?})",
-        l.min_interval, l.short_intervals
+        l.min_interval,
+        l.short_intervals
     );
     assert_eq!(l.end_steps, f.summary.final_position_steps, "{name}");
     let end = f.bound_end_steps;

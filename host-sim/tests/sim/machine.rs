@@ -31,7 +31,7 @@ fn home_and_check(sim: &mut Sim) {
 #[test]
 fn homing_seek_pulloff_locate() {
     let mut cfg = config_with_switches();
-    cfg.start_position_mm = [-50.0, -30.0, -12.0, 0.0];
+    cfg.start_position_mm = burin::pad([-50.0, -30.0, -12.0, 0.0]);
     let mut rec = Collect::default();
     let mut sim = Sim::new(&cfg, &mut rec);
     home_and_check(&mut sim);
@@ -60,7 +60,7 @@ fn homing_towards_negative_with_inverted_switch_pins() {
         trip_mm: -100.0,
         hysteresis_mm: 0.05,
     });
-    cfg.start_position_mm = [-20.0, 0.0, 0.0, 0.0];
+    cfg.start_position_mm = burin::pad([-20.0, 0.0, 0.0, 0.0]);
     let mut rec = Collect::default();
     let mut sim = Sim::new(&cfg, &mut rec);
     sim.push_command(1, Command::Home { axes: ALL });
@@ -86,14 +86,14 @@ fn homing_fails_without_switch() {
 #[test]
 fn g27_verify_home_passes_then_alarms_on_lost_steps() {
     let mut cfg = config_with_switches();
-    cfg.start_position_mm = [-20.0, -20.0, -5.0, 0.0];
+    cfg.start_position_mm = burin::pad([-20.0, -20.0, -5.0, 0.0]);
     let mut rec = Collect::default();
     let mut sim = Sim::new(&cfg, &mut rec);
     home_and_check(&mut sim);
     sim.push_command(
         2,
         Command::Line {
-            end: [-30.0, -30.0, -5.0, 0.0],
+            end: burin::pad([-30.0, -30.0, -5.0, 0.0]),
             feed: Feed::PerMin(2000.0),
         },
     );
@@ -109,7 +109,7 @@ fn g27_verify_home_passes_then_alarms_on_lost_steps() {
     sim.push_command(
         4,
         Command::Line {
-            end: [-30.0, -30.0, -5.0, 0.0],
+            end: burin::pad([-30.0, -30.0, -5.0, 0.0]),
             feed: Feed::PerMin(2000.0),
         },
     );
@@ -125,20 +125,20 @@ fn g27_verify_home_passes_then_alarms_on_lost_steps() {
 fn hard_limit_stops_at_once_and_loses_position() {
     let mut cfg = config_with_switches();
     cfg.settings.hard_limits = true;
-    cfg.start_position_mm = [-5.0, -5.0, -5.0, 0.0];
+    cfg.start_position_mm = burin::pad([-5.0, -5.0, -5.0, 0.0]);
     let mut rec = Collect::default();
     let mut sim = Sim::new(&cfg, &mut rec);
     sim.push_command(
         1,
         Command::Line {
-            end: [10.0, -5.0, -5.0, 0.0],
+            end: burin::pad([10.0, -5.0, -5.0, 0.0]),
             feed: Feed::PerMin(1000.0),
         },
     );
     sim.push_command(
         2,
         Command::Line {
-            end: [10.0, -10.0, -5.0, 0.0],
+            end: burin::pad([10.0, -10.0, -5.0, 0.0]),
             feed: Feed::PerMin(1000.0),
         },
     );
@@ -148,7 +148,7 @@ fn hard_limit_stops_at_once_and_loses_position() {
     sim.push_command(
         3,
         Command::Line {
-            end: [-10.0, -10.0, -5.0, 0.0],
+            end: burin::pad([-10.0, -10.0, -5.0, 0.0]),
             feed: Feed::PerMin(1000.0),
         },
     );
@@ -182,7 +182,7 @@ fn probe_g38_2_contact_and_no_contact() {
     sim.push_command(
         1,
         Command::Probe {
-            end: [0.0, 0.0, -30.0, 0.0],
+            end: burin::pad([0.0, 0.0, -30.0, 0.0]),
             feed: Feed::PerMin(100.0),
             kind: ProbeKind::Toward,
         },
@@ -203,7 +203,7 @@ fn probe_g38_2_contact_and_no_contact() {
     sim.push_command(
         2,
         Command::Probe {
-            end: [0.0, 0.0, -10.0, 0.0],
+            end: burin::pad([0.0, 0.0, -10.0, 0.0]),
             feed: Feed::PerMin(100.0),
             kind: ProbeKind::Away,
         },
@@ -215,7 +215,7 @@ fn probe_g38_2_contact_and_no_contact() {
     sim.push_command(
         3,
         Command::Probe {
-            end: [0.0, 0.0, -15.0, 0.0],
+            end: burin::pad([0.0, 0.0, -15.0, 0.0]),
             feed: Feed::PerMin(300.0),
             kind: ProbeKind::TowardNoError,
         },
@@ -226,7 +226,7 @@ fn probe_g38_2_contact_and_no_contact() {
     sim.push_command(
         4,
         Command::Probe {
-            end: [0.0, 0.0, -10.0, 0.0],
+            end: burin::pad([0.0, 0.0, -10.0, 0.0]),
             feed: Feed::PerMin(300.0),
             kind: ProbeKind::Toward,
         },
@@ -237,7 +237,10 @@ fn probe_g38_2_contact_and_no_contact() {
 
 /// A job with `cmds` on `cfg`: its errors (line, code) and each axis's
 /// step count.
-fn refusals(cfg: &MachineConfig, cmds: Vec<(u32, Command)>) -> (Vec<(u32, u16)>, [u32; 4]) {
+fn refusals(
+    cfg: &MachineConfig,
+    cmds: Vec<(u32, Command)>,
+) -> (Vec<(u32, u16)>, [u32; burin::AXES]) {
     let mut rec = Collect::default();
     let mut sim = Sim::new(cfg, &mut rec);
     for (line, c) in cmds {
@@ -247,7 +250,7 @@ fn refusals(cfg: &MachineConfig, cmds: Vec<(u32, Command)>) -> (Vec<(u32, u16)>,
     let codes = sim.errors().iter().map(|e| (e.line, e.code)).collect();
     drop(sim);
     assert!(rec.summary.is_none());
-    let steps = rec.events.iter().fold([0; 4], |mut a, e| {
+    let steps = rec.events.iter().fold([0; burin::AXES], |mut a, e| {
         for (i, c) in a.iter_mut().enumerate() {
             *c += (e.step_mask >> i & 1) as u32;
         }
@@ -266,22 +269,29 @@ fn soft_limits_refuse_before_any_step() {
         end,
         feed: Feed::PerMin(1000.0),
     };
-    let into_x = (1, line([5.0, -5.0, 0.0, 0.0]));
-    assert_eq!(refusals(&cfg, vec![into_x]), (vec![(1, 400)], [0; 4]));
+    let into_x = (1, line(burin::pad([5.0, -5.0, 0.0, 0.0])));
+    assert_eq!(
+        refusals(&cfg, vec![into_x]),
+        (vec![(1, 400)], [0; burin::AXES])
+    );
     // Start and end inside, but the bulge crosses X = 0 (to X = +0.05).
     let bulge = Command::Arc(Arc {
-        end: [-20.0, -1.0, 0.0, 0.0],
+        end: burin::pad([-20.0, -1.0, 0.0, 0.0]),
         center: [-10.0, -1.0],
         plane: Plane::XY,
         dir: ArcDir::Cw,
         turns: 0,
         feed: Feed::PerMin(1000.0),
     });
-    let inside = (3, line([-1.0, -1.0, 0.0, 0.0]));
+    let inside = (3, line(burin::pad([-1.0, -1.0, 0.0, 0.0])));
     let (codes, steps) = refusals(&cfg, vec![(2, bulge), inside.clone()]);
-    assert_eq!((codes, steps), (vec![(2, 400)], [0; 4]), "line 3 ran");
+    assert_eq!(
+        (codes, steps),
+        (vec![(2, 400)], [0; burin::AXES]),
+        "line 3 ran"
+    );
     let over_the_top = Command::Arc(Arc {
-        end: [-21.0, -1.0, 0.0, 0.0],
+        end: burin::pad([-21.0, -1.0, 0.0, 0.0]),
         center: [-11.0, -1.0],
         plane: Plane::XY,
         dir: ArcDir::Ccw, // over the top: Y up to +9
@@ -308,14 +318,14 @@ fn step_rate_ceiling_is_an_error() {
     sim.push_command(
         7,
         Command::Line {
-            end: [1.0, 0.0, 0.0, 0.0],
+            end: burin::pad([1.0, 0.0, 0.0, 0.0]),
             feed: Feed::PerMin(100.0),
         },
     );
     sim.push_command(
         8,
         Command::Line {
-            end: [0.0, 0.0, 0.0, 10.0],
+            end: burin::pad([0.0, 0.0, 0.0, 10.0]),
             feed: Feed::PerMin(100.0),
         },
     );
@@ -328,7 +338,7 @@ fn step_rate_ceiling_is_an_error() {
         vec![(7, 401)]
     );
     // The job stopped at the refusal: line 8 did not run either.
-    assert_eq!(sim.rt.position(), [0, 0, 0, 0]);
+    assert_eq!(sim.rt.position(), burin::pad([0, 0, 0, 0]));
 }
 
 #[test]
@@ -339,7 +349,7 @@ fn soft_reset_mid_move_stops_and_flags_position() {
     sim.push_command(
         1,
         Command::Line {
-            end: [100.0, 0.0, 0.0, 0.0],
+            end: burin::pad([100.0, 0.0, 0.0, 0.0]),
             feed: Feed::PerMin(3000.0),
         },
     );
@@ -364,7 +374,7 @@ fn probe_contact_ramps_down_within_accel() {
     sim.push_command(
         1,
         Command::Probe {
-            end: [0.0, 0.0, -30.0, 0.0],
+            end: burin::pad([0.0, 0.0, -30.0, 0.0]),
             feed: Feed::PerMin(1000.0),
             kind: ProbeKind::Toward,
         },
@@ -390,7 +400,7 @@ fn probe_contact_ramps_down_within_accel() {
     sim.push_command(
         2,
         Command::Line {
-            end: [0.0, 0.0, -10.0, 0.0],
+            end: burin::pad([0.0, 0.0, -10.0, 0.0]),
             feed: Feed::PerMin(600.0),
         },
     );

@@ -89,7 +89,7 @@ fn every_section_maps_onto_settings() {
     .unwrap();
     let s = &cfg.settings;
     assert_eq!(cfg.tick_hz, 84_000_000);
-    assert_eq!(cfg.start_position_mm, [1.0, 2.0, 3.0, 4.0]);
+    assert_eq!(cfg.start_position_mm, burin::pad([1.0, 2.0, 3.0, 4.0]));
     assert_eq!(s.axes[2].steps_per_mm, 1600.0);
     assert_eq!(s.axes[2].max_rate, 1000.0, "unset keys keep the default");
     assert_eq!(
@@ -119,13 +119,26 @@ fn unknown_keys_are_refused_by_name() {
     for (text, key) in [
         ("stepz_per_mm = 3", "stepz_per_mm"),
         ("[axes.x]\nsteps_per_nm = 80", "steps_per_nm"),
-        ("[axes.b]\nsteps_per_mm = 80", "b"),
+        ("[axes.d]\nsteps_per_mm = 80", "d"),
         ("[motion]\njunction_deviation = 0.01", "junction_deviation"),
         ("[limits]\nsoft_limits = true", "soft_limits"),
         ("[probe]\nplane = 1", "plane"),
     ] {
         let m = refusal(text);
         assert!(m.contains(&format!("`{key}`")), "{m}");
+    }
+}
+
+/// A letter of grblHAL's six that this build does not drive is refused
+/// by its key, not run as if the machine had fewer axes.
+#[test]
+fn axes_past_the_build_are_refused_by_key() {
+    for c in protocol::ALL_AXIS_NAMES[burin::AXES..].iter() {
+        let l = c.to_ascii_lowercase();
+        let m = refusal(&format!("[axes.{l}]\nsteps_per_mm = 80"));
+        assert!(m.contains(&format!("`axes.{l}`")), "{m}");
+        let m = refusal(&format!("[limits]\n{l}_trip_mm = 1"));
+        assert!(m.contains(&format!("`limits.{l}_trip_mm`")), "{m}");
     }
 }
 

@@ -11,14 +11,14 @@ use host_sim::trace::TraceCsv;
 #[test]
 fn csv_header_and_rows_are_exact() {
     let mut t = TraceCsv::new(Vec::new());
-    t.step_event(&synth::event(100, 0, 1, [1, 0, 0, 0]));
-    t.step_event(&synth::event(150, 0, 0, [1, 0, 0, 0])); // no step: no row
-    t.step_event(&synth::event(200, 0b10, 0b11, [2, -1, 0, 0]));
+    t.step_event(&synth::event(100, 0, 1, burin::pad([1, 0, 0, 0])));
+    t.step_event(&synth::event(150, 0, 0, burin::pad([1, 0, 0, 0]))); // no step: no row
+    t.step_event(&synth::event(200, 0b10, 0b11, burin::pad([2, -1, 0, 0])));
     t.step_event(&synth::event(
         u64::MAX,
         0b1111,
         0b1111,
-        [i64::MIN, -1, 7, i64::MAX],
+        burin::pad([i64::MIN, -1, 7, i64::MAX]),
     ));
     assert_eq!(t.rows(), 3);
     let out = String::from_utf8(t.into_inner().unwrap()).unwrap();
@@ -119,12 +119,12 @@ fn svg_stays_small_on_millions_of_steps() {
         let a = i as f64 / n as f64 * 40.0 * std::f64::consts::TAU;
         let r = 8000.0 * (0.2 + 0.8 * i as f64 / n as f64);
         // Z steps down 1 of every 1000 events: a helical ramp.
-        let pos = [
+        let pos = burin::pad([
             (r * a.cos()) as i64,
             (r * a.sin()) as i64,
             -((i / 1000) as i64),
             0,
-        ];
+        ]);
         p.step_event(&synth::event(i * 1000, 0b100, 1, pos));
         // A speed sample on every event: folding must keep this linear.
         p.velocity(i * 1000, 1000.0 + (i % 7919) as f32);
@@ -132,7 +132,7 @@ fn svg_stays_small_on_millions_of_steps() {
             p.commanded(
                 1,
                 host_sim::record::PathKind::Arc,
-                [pos[0] as f32 / 80.0, pos[1] as f32 / 80.0, 0.0, 0.0],
+                burin::pad([pos[0] as f32 / 80.0, pos[1] as f32 / 80.0, 0.0, 0.0]),
             );
         }
     }

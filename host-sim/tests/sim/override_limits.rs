@@ -16,7 +16,7 @@ use host_sim::engine::{Input, Sim};
 /// Z valleys and ridges, then square XY corners (as `motion_limits`).
 fn corners() -> Vec<Command> {
     let line = |x: f32, y: f32, z: f32| Command::Line {
-        end: [x, y, z, 0.0],
+        end: burin::pad([x, y, z, 0.0]),
         feed: Feed::PerMin(4000.0),
     };
     let mut v: Vec<Command> = (1..=12)
@@ -85,7 +85,7 @@ fn check(
     what: &str,
     worst: &mut [f64; 3],
 ) {
-    assert_eq!(l.short_intervals, [0; 4], "{what}");
+    assert_eq!(l.short_intervals, [0; burin::AXES], "{what}");
     assert_eq!(l.end_steps, plain.end_steps, "{what}");
     for (i, w) in worst.iter_mut().enumerate() {
         let lim = f64::from(cfg.settings.axes[i].max_accel);

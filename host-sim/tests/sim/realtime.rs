@@ -14,7 +14,7 @@ use host_sim::engine::Input;
 #[test]
 fn scurve_hold_mid_acceleration_keeps_jerk_limit() {
     let cmds = vec![Command::Line {
-        end: [150.0, 40.0, 0.0, 0.0],
+        end: burin::pad([150.0, 40.0, 0.0, 0.0]),
         feed: Feed::PerMin(4000.0),
     }];
     let mut cfg = config();
@@ -103,11 +103,11 @@ fn feed_override_drop_before_a_corner() {
     let (c, s) = (30f32.to_radians().cos(), 30f32.to_radians().sin());
     let cmds = vec![
         Command::Line {
-            end: [60.0, 0.0, 0.0, 0.0],
+            end: burin::pad([60.0, 0.0, 0.0, 0.0]),
             feed: Feed::PerMin(3000.0),
         },
         Command::Line {
-            end: [60.0 + 10.0 * c, 10.0 * s, 0.0, 0.0],
+            end: burin::pad([60.0 + 10.0 * c, 10.0 * s, 0.0, 0.0]),
             feed: Feed::PerMin(3000.0),
         },
     ];

@@ -55,7 +55,7 @@ fn planner_and_driver_share_the_ceiling() {
         sim.push_command(
             1,
             Command::Line {
-                end: [mm, 0.0, 0.0, 0.0],
+                end: burin::pad([mm, 0.0, 0.0, 0.0]),
                 feed: Feed::PerMin(1.0e6),
             },
         );

@@ -132,7 +132,7 @@ fn no_step_lost_and_no_pulse_cut_short_under_masked_windows() {
             let mut rec = Discard;
             let mut sim = Sim::new(&cfg, &mut rec);
             sim.record_edges();
-            let out = [mm, mm / 2.0, 0.0, 0.0];
+            let out = burin::pad([mm, mm / 2.0]);
             let back = [0.0; AXES];
             for (line, end) in [(1, out), (2, back)] {
                 sim.push_command(
@@ -148,7 +148,7 @@ fn no_step_lost_and_no_pulse_cut_short_under_masked_windows() {
             assert!(s.errors.is_empty(), "{rate} Hz, {w} µs: {:?}", s.errors);
             let t = analyse(sim.edges());
             let label = format!("{end:?} {rate} Hz, {w} µs window: {t:?}");
-            let want = [2 * STEPS, STEPS, 0, 0];
+            let want = burin::pad([2 * STEPS, STEPS]);
             assert_eq!(t.rises, want, "rising edges, {label}");
             assert_eq!(s.steps.map(|n| n as i64), want, "stepper steps, {label}");
             assert_eq!(s.final_position_steps, [0; AXES], "{label}");

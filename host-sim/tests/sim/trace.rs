@@ -7,7 +7,14 @@ use burin::settings::{Profile, RapidMode};
 use common::*;
 use host_sim::engine::Input;
 
-fn arc(end: [f32; 4], center: [f32; 2], plane: Plane, dir: ArcDir, turns: u16, f: f32) -> Command {
+fn arc(
+    end: [f32; burin::AXES],
+    center: [f32; 2],
+    plane: Plane,
+    dir: ArcDir,
+    turns: u16,
+    f: f32,
+) -> Command {
     Command::Arc(Arc {
         end,
         center,
@@ -23,14 +30,14 @@ fn arc(end: [f32; 4], center: [f32; 2], plane: Plane, dir: ArcDir, turns: u16, f
 fn mixed_job() -> Vec<Command> {
     vec![
         Command::Rapid {
-            end: [5.0, 5.0, 0.0, 0.0],
+            end: burin::pad([5.0, 5.0, 0.0, 0.0]),
         },
         Command::Line {
-            end: [25.0, 5.0, -1.0, 0.0],
+            end: burin::pad([25.0, 5.0, -1.0, 0.0]),
             feed: Feed::PerMin(1500.0),
         },
         arc(
-            [25.0, 25.0, -1.0, 0.0],
+            burin::pad([25.0, 25.0, -1.0, 0.0]),
             [25.0, 15.0],
             Plane::XY,
             ArcDir::Ccw,
@@ -39,7 +46,7 @@ fn mixed_job() -> Vec<Command> {
         ),
         // full circle, then a 2-turn helix down 2 mm
         arc(
-            [25.0, 25.0, -1.0, 0.0],
+            burin::pad([25.0, 25.0, -1.0, 0.0]),
             [25.0, 15.0],
             Plane::XY,
             ArcDir::Cw,
@@ -47,7 +54,7 @@ fn mixed_job() -> Vec<Command> {
             2500.0,
         ),
         arc(
-            [25.0, 25.0, -3.0, 0.0],
+            burin::pad([25.0, 25.0, -3.0, 0.0]),
             [20.0, 25.0],
             Plane::XY,
             ArcDir::Ccw,
@@ -56,7 +63,7 @@ fn mixed_job() -> Vec<Command> {
         ),
         Command::Dwell { seconds: 0.05 },
         arc(
-            [35.0, 25.0, -3.0, 0.0],
+            burin::pad([35.0, 25.0, -3.0, 0.0]),
             [-3.0, 30.0],
             Plane::ZX,
             ArcDir::Cw,
@@ -64,7 +71,7 @@ fn mixed_job() -> Vec<Command> {
             1200.0,
         ),
         arc(
-            [35.0, 30.0, -3.0, 10.0],
+            burin::pad([35.0, 30.0, -3.0, 10.0]),
             [27.5, -3.0],
             Plane::YZ,
             ArcDir::Ccw,
@@ -74,23 +81,23 @@ fn mixed_job() -> Vec<Command> {
         Command::Spline(Spline {
             p1: [45.0, 45.0],
             p2: [10.0, 50.0],
-            end: [5.0, 30.0, -2.0, 10.0],
+            end: burin::pad([5.0, 30.0, -2.0, 10.0]),
             feed: Feed::PerMin(2000.0),
         }),
         Command::Line {
-            end: [5.0, 10.0, -2.0, 10.0],
+            end: burin::pad([5.0, 10.0, -2.0, 10.0]),
             feed: Feed::InverseTime(60.0),
         },
         Command::Line {
-            end: [5.0, 12.0, -2.0, 10.0],
+            end: burin::pad([5.0, 12.0, -2.0, 10.0]),
             feed: Feed::PerMin(3000.0),
         },
         Command::Line {
-            end: [5.0, 11.0, -2.0, 10.0],
+            end: burin::pad([5.0, 11.0, -2.0, 10.0]),
             feed: Feed::PerMin(3000.0),
         },
         Command::Rapid {
-            end: [0.0, 0.0, 0.0, 0.0],
+            end: burin::pad([0.0, 0.0, 0.0, 0.0]),
         },
     ]
 }
@@ -146,11 +153,11 @@ fn feed_hold_and_resume_mid_arc() {
     // One big slow arc: a hold 0.4 s in lands in its middle.
     let cmds = vec![
         Command::Line {
-            end: [50.0, 0.0, 0.0, 0.0],
+            end: burin::pad([50.0, 0.0, 0.0, 0.0]),
             feed: Feed::PerMin(3000.0),
         },
         arc(
-            [0.0, 0.0, 0.0, 0.0],
+            burin::pad([0.0, 0.0, 0.0, 0.0]),
             [25.0, 0.0],
             Plane::XY,
             ArcDir::Ccw,
@@ -202,11 +209,11 @@ fn feed_override_live() {
     let cfg = config();
     let cmds = vec![
         Command::Line {
-            end: [100.0, 0.0, 0.0, 0.0],
+            end: burin::pad([100.0, 0.0, 0.0, 0.0]),
             feed: Feed::PerMin(1000.0),
         },
         Command::Line {
-            end: [100.0, 100.0, 0.0, 0.0],
+            end: burin::pad([100.0, 100.0, 0.0, 0.0]),
             feed: Feed::PerMin(1000.0),
         },
     ];
@@ -228,7 +235,7 @@ fn feed_override_live() {
 fn rapid_override_live() {
     let cfg = config();
     let cmds = vec![Command::Rapid {
-        end: [200.0, 0.0, 0.0, 0.0],
+        end: burin::pad([200.0, 0.0, 0.0, 0.0]),
     }];
     let base = run(&cfg, &cmds, &[]);
     let q = run(&cfg, &cmds, &[(0.0, Input::RapidOverride(25))]);
@@ -247,19 +254,19 @@ fn dwell_takes_its_time() {
     let a = run(
         &cfg,
         &[Command::Line {
-            end: [1.0, 0.0, 0.0, 0.0],
+            end: burin::pad([1.0, 0.0, 0.0, 0.0]),
             feed: Feed::PerMin(600.0),
         }],
         &[],
     );
     let cmds = vec![
         Command::Line {
-            end: [1.0, 0.0, 0.0, 0.0],
+            end: burin::pad([1.0, 0.0, 0.0, 0.0]),
             feed: Feed::PerMin(600.0),
         },
         Command::Dwell { seconds: 1.5 },
         Command::Line {
-            end: [0.0, 0.0, 0.0, 0.0],
+            end: burin::pad([0.0, 0.0, 0.0, 0.0]),
             feed: Feed::PerMin(600.0),
         },
     ];
@@ -273,7 +280,7 @@ fn inverse_time_feed_sets_duration() {
     let cfg = config();
     // 2 mm in 1/30 min = 2 s; slow enough that accel ramps are a few % of it.
     let cmds = vec![Command::Line {
-        end: [2.0, 0.0, 0.0, 0.0],
+        end: burin::pad([2.0, 0.0, 0.0, 0.0]),
         feed: Feed::InverseTime(30.0),
     }];
     let r = run(&cfg, &cmds, &[]);
@@ -286,7 +293,7 @@ fn inverse_time_feed_sets_duration() {
 
 #[test]
 fn independent_rapid_moves_each_axis_at_its_own_rate() {
-    let end = [100.0, 0.0, -10.0, 0.0];
+    let end = burin::pad([100.0, 0.0, -10.0, 0.0]);
     let cmds = vec![Command::Rapid { end }];
     let last_tick = |r: &Run, axis: usize| {
         r.rec
@@ -311,7 +318,7 @@ fn independent_rapid_moves_each_axis_at_its_own_rate() {
 #[test]
 fn scurve_limits_jerk_trapezoid_does_not() {
     let cmds = vec![Command::Line {
-        end: [150.0, 40.0, 0.0, 0.0],
+        end: burin::pad([150.0, 40.0, 0.0, 0.0]),
         feed: Feed::PerMin(4000.0),
     }];
     let mut cfg = config();

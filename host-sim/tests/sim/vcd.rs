@@ -111,9 +111,9 @@ fn vcd_orders_edges_when_pulses_overlap_and_dirs_change_mid_pulse() {
     let mut info = synth::info();
     info.pulse_ticks = 100;
     v.start(&info);
-    v.step_event(&ev(1000, 0, 0b01, [1, 0, 0, 0]));
-    v.step_event(&ev(1050, 0, 0b10, [1, 1, 0, 0])); // X still high
-    let mut e = ev(1080, 0b01, 0b01, [0, 1, 0, 0]); // X again, reversed, overlapping
+    v.step_event(&ev(1000, 0, 0b01, burin::pad([1, 0, 0, 0])));
+    v.step_event(&ev(1050, 0, 0b10, burin::pad([1, 1, 0, 0]))); // X still high
+    let mut e = ev(1080, 0b01, 0b01, burin::pad([0, 1, 0, 0])); // X again, reversed, overlapping
     e.dir_changed_tick = 1060;
     v.step_event(&e);
     v.finish(&empty_summary()).unwrap();

@@ -33,7 +33,11 @@ fn samples() -> Vec<HostMsg> {
 fn device_samples() -> Vec<DeviceMsg> {
     let status = Status {
         state: MachineState::Run,
-        mpos: [1.0, -2.5, 3.25, 90.0],
+        mpos: {
+            let mut p = [0.0; protocol::AXES];
+            p[..4].copy_from_slice(&[1.0, -2.5, 3.25, 90.0]);
+            p
+        },
         line: Some(42),
         overrides: Overrides {
             feed: 120,

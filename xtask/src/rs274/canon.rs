@@ -192,7 +192,9 @@ pub fn parse(out: &str) -> Canon {
 
 /// burin's moves in the same shape.
 pub fn ours(moves: &[CanonMove]) -> Vec<Theirs> {
-    let p = |v: &[f32; 4]| [v[0] as f64, v[1] as f64, v[2] as f64, v[3] as f64];
+    // rs274's XYZA; burin's other axes (B, C) never reach here (`parse`
+    // rejects them).
+    let p = |v: &[f32; burin::AXES]| [v[0] as f64, v[1] as f64, v[2] as f64, v[3] as f64];
     moves
         .iter()
         .map(|m| Theirs {

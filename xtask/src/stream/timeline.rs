@@ -256,7 +256,7 @@ pub mod tests {
     /// Five lines moving X from 0 to 5 mm at 1 mm/s; line 4 is a dwell.
     pub fn profile() -> Profile {
         sampled(vec![0.0, 1.0, 2.0, f64::NAN, 3.0, 4.0], 5.0, |t| {
-            [t, 0.0, 0.0, 0.0]
+            burin::pad([t, 0.0, 0.0, 0.0])
         })
     }
 
@@ -268,7 +268,7 @@ pub mod tests {
             dir_mask: 0,
             step_mask: 1,
             dir_changed_tick: 0,
-            pos: [x, 0, 0, 0],
+            pos: burin::pad([x, 0, 0, 0]),
         };
         // Steps every 30 ticks up to 300, a pause, then two more.
         for k in 0..=10 {
@@ -322,8 +322,10 @@ pub mod tests {
     #[test]
     fn a_standstill_is_not_placed() {
         // Line 1 dwells 1 s at X0, then moves X to 1 mm at 1 mm/s.
-        let p = sampled(vec![0.0], 2.0, |t| [(t - 1.0).max(0.0), 0.0, 0.0, 0.0]);
-        assert_eq!(p.locate(1, &[0.0; 4], 0.0), None);
+        let p = sampled(vec![0.0], 2.0, |t| {
+            burin::pad([(t - 1.0).max(0.0), 0.0, 0.0, 0.0])
+        });
+        assert_eq!(p.locate(1, &[0.0; burin::AXES], 0.0), None);
         let s = p.locate(1, &[0.01, 0.0, 0.0, 0.0], 0.0).unwrap();
         assert!((s - 1.01).abs() < 1e-6, "{s}");
     }
@@ -332,7 +334,7 @@ pub mod tests {
     fn a_point_passed_twice_in_one_line_is_placed_in_order() {
         // Line 1 plunges Z to -1 mm and retracts it, 1 mm/s.
         let p = sampled(vec![0.0], 2.0, |t| {
-            [0.0, 0.0, -(1.0 - (t - 1.0).abs()), 0.0]
+            burin::pad([0.0, 0.0, -(1.0 - (t - 1.0).abs()), 0.0])
         });
         let z = [0.0, 0.0, -0.5, 0.0];
         let down = p.locate(1, &z, 0.0).unwrap();

@@ -7,14 +7,21 @@ use burin::realtime::Realtime;
 use burin::seams::{StepPins, StepTimer};
 use burin::stepper::driver::StepDriver;
 use burin::stepper::{Segment, Stepper, Switches};
+use burin::AXES;
 use heapless::spsc::Consumer;
 use stm32f4xx_hal::{pac, rcc::Rcc, timer::Timer};
 
-/// Pin numbers (0..=15) on the step port. Axis n is X, Y, Z, A for n = 0..3.
+/// Every axis's bit: masks here have bit n for axis n.
+const ALL_AXES: u8 = ((1u16 << AXES) - 1) as u8;
+
+/// One BSRR word per combination of axes.
+const MASKS: usize = 1 << AXES;
+
+/// Pin numbers (0..=15) on the step port. Axis n is `burin::AXIS_NAMES[n]`.
 #[derive(Clone, Copy)]
 pub struct PortPins {
-    pub step: [u8; 4],
-    pub dir: [u8; 4],
+    pub step: [u8; AXES],
+    pub dir: [u8; AXES],
     pub enable: u8,
 }
 
@@ -22,24 +29,20 @@ impl PortPins {
     /// Every pin exists (0..=15) and no two functions share one; the board
     /// files check this at compile time.
     pub const fn is_valid(&self) -> bool {
-        let all = [
-            self.step[0],
-            self.step[1],
-            self.step[2],
-            self.step[3],
-            self.dir[0],
-            self.dir[1],
-            self.dir[2],
-            self.dir[3],
-            self.enable,
-        ];
         let mut seen = 0u16;
         let mut i = 0;
-        while i < all.len() {
-            if all[i] > 15 || seen & (1 << all[i]) != 0 {
+        while i <= 2 * AXES {
+            let pin = if i < AXES {
+                self.step[i]
+            } else if i < 2 * AXES {
+                self.dir[i - AXES]
+            } else {
+                self.enable
+            };
+            if pin > 15 || seen & (1 << pin) != 0 {
                 return false;
             }
-            seen |= 1 << all[i];
+            seen |= 1 << pin;
             i += 1;
         }
         true
@@ -48,10 +51,10 @@ impl PortPins {
 
 /// BSRR word that drives the pins of the axes in `touched` (bit n = axis n)
 /// high where `high` has the bit and low otherwise; other pins are untouched.
-const fn bsrr_word(pins: &[u8; 4], high: u8, touched: u8) -> u32 {
+const fn bsrr_word<const N: usize>(pins: &[u8; N], high: u8, touched: u8) -> u32 {
     let mut word = 0;
     let mut axis = 0;
-    while axis < 4 {
+    while axis < N {
         if touched & (1 << axis) != 0 {
             let pin = (pins[axis] & 0xF) as u32;
             word |= if high & (1 << axis) != 0 {
@@ -67,7 +70,7 @@ const fn bsrr_word(pins: &[u8; 4], high: u8, touched: u8) -> u32 {
 
 // Compile-time checks of the BSRR arithmetic (they run on every build).
 const _: () = {
-    let pins = [12, 13, 14, 15];
+    let pins = [12u8, 13, 14, 15];
     // X and Z high, Y and A untouched.
     assert!(bsrr_word(&pins, 0b0101, 0b0101) == (1 << 12) | (1 << 14));
     // All four driven: X, Z high; Y, A low (reset half of BSRR).
@@ -82,9 +85,9 @@ pub struct StepPort {
     /// Address of the port's BSRR register.
     bsrr: usize,
     pins: PortPins,
-    step_on: [u32; 16],
+    step_on: [u32; MASKS],
     step_off: u32,
-    dirs: [u32; 16],
+    dirs: [u32; MASKS],
     enable_on: u32,
     enable_off: u32,
 }
@@ -106,9 +109,9 @@ impl StepPort {
         let mut port = StepPort {
             bsrr: bsrr as usize,
             pins,
-            step_on: [0; 16],
+            step_on: [0; MASKS],
             step_off: 0,
-            dirs: [0; 16],
+            dirs: [0; MASKS],
             enable_on: 0,
             enable_off: 0,
         };
@@ -134,18 +137,18 @@ impl StepPort {
     /// enable pin is the parse task's at rest (`outputs::Io` rewrites it
     /// under `$4`).
     pub fn rest(&mut self, dir_mask: u8) {
-        self.write(self.step_off | self.dirs[usize::from(dir_mask & 0xF)]);
+        self.write(self.step_off | self.dirs[usize::from(dir_mask & ALL_AXES)]);
     }
 
     /// The BSRR words under `$2`/`$3`/`$4`; writes nothing.
     pub fn tables(&mut self, step_invert: u8, dir_invert: u8, enable_invert: bool) {
         let p = self.pins;
-        for mask in 0..16u8 {
+        for mask in 0..=ALL_AXES {
             self.step_on[usize::from(mask)] = bsrr_word(&p.step, mask & !step_invert, mask);
-            self.dirs[usize::from(mask)] = bsrr_word(&p.dir, mask ^ dir_invert, 0xF);
+            self.dirs[usize::from(mask)] = bsrr_word(&p.dir, mask ^ dir_invert, ALL_AXES);
         }
-        self.step_off = bsrr_word(&p.step, step_invert, 0xF);
-        let en = [p.enable; 4];
+        self.step_off = bsrr_word(&p.step, step_invert, ALL_AXES);
+        let en = [p.enable];
         let (low, high) = (bsrr_word(&en, 0, 1), bsrr_word(&en, 1, 1));
         (self.enable_on, self.enable_off) = if enable_invert {
             (high, low)
@@ -166,7 +169,7 @@ impl StepPort {
     #[cfg(not(feature = "board-qemu"))]
     #[inline(always)]
     pub fn rise_store(&self, step_mask: u8) -> (usize, u32) {
-        (self.bsrr, self.step_on[usize::from(step_mask & 0xF)])
+        (self.bsrr, self.step_on[usize::from(step_mask & ALL_AXES)])
     }
 
     #[inline(always)]
@@ -184,12 +187,12 @@ impl StepPins for StepPort {
     /// for them: the direction pins are not in the word).
     #[inline(always)]
     fn step_high(&mut self, step_mask: u8) {
-        self.write(self.step_on[usize::from(step_mask & 0xF)]);
+        self.write(self.step_on[usize::from(step_mask & ALL_AXES)]);
     }
     /// Direction pins of every axis (a no-op unless they changed).
     #[inline(always)]
     fn set_directions(&mut self, dir_mask: u8) {
-        self.write(self.dirs[usize::from(dir_mask & 0xF)]);
+        self.write(self.dirs[usize::from(dir_mask & ALL_AXES)]);
     }
     #[inline(always)]
     fn step_low(&mut self) {

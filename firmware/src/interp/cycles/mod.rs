@@ -29,7 +29,7 @@
 //!   still stopped, and restarts it: the machine ends where LinuxCNC's
 //!   interpreter believes it is.
 
-use super::block::AXIS_LETTERS;
+use super::block::{AXIS_LETTERS, EXTRA_AXIS_BITS};
 use super::exec::{push, Ctx, Out};
 use super::state::State;
 use crate::command::cycle::{MAX_MOVES, MAX_PECKS};
@@ -71,8 +71,8 @@ pub(super) fn cycle(
     out: &mut Out,
 ) -> Result<(), GcodeError> {
     let e = |k| GcodeError::new(k, col);
-    if cx.b.has(b'A') {
-        return Err(cx.err(ErrorKind::AxisWordsUnused, b'A'));
+    if let Some(l) = cx.b.first_axis_of(EXTRA_AXIS_BITS) {
+        return Err(cx.err(ErrorKind::AxisWordsUnused, l));
     }
     if st.inverse_time || st.feed <= 0.0 {
         return Err(e(ErrorKind::UndefinedFeed));

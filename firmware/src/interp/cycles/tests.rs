@@ -128,19 +128,19 @@ fn g88_pauses_at_the_bottom_then_retracts_with_the_spindle_stopped() {
     let Some(Command::Cycle(c)) = cmds.first().cloned() else {
         panic!("{cmds:?}")
     };
-    let steps: Vec<Command> = c.steps(&[0.0, 0.0, 10.0, 0.0]).collect();
+    let steps: Vec<Command> = c.steps(&crate::pad([0.0, 0.0, 10.0, 0.0])).collect();
     use crate::command::SpindleDir::*;
     assert_eq!(
         steps,
         [
             Command::Rapid {
-                end: [5.0, 0.0, 10.0, 0.0]
+                end: crate::pad([5.0, 0.0, 10.0, 0.0])
             },
             Command::Rapid {
-                end: [5.0, 0.0, 1.0, 0.0]
+                end: crate::pad([5.0, 0.0, 1.0, 0.0])
             },
             Command::Line {
-                end: [5.0, 0.0, -4.0, 0.0],
+                end: crate::pad([5.0, 0.0, -4.0, 0.0]),
                 feed: Feed::PerMin(60.0)
             },
             Command::Dwell { seconds: 0.5 },
@@ -150,7 +150,7 @@ fn g88_pauses_at_the_bottom_then_retracts_with_the_spindle_stopped() {
             },
             Command::Pause { optional: false },
             Command::Rapid {
-                end: [5.0, 0.0, 10.0, 0.0]
+                end: crate::pad([5.0, 0.0, 10.0, 0.0])
             },
             Command::Spindle {
                 dir: Cw,
@@ -224,7 +224,7 @@ fn a_deep_peck_cycle_is_one_command_however_many_moves() {
     let [Command::Cycle(c)] = cmds.as_slice() else {
         panic!("{cmds:?}")
     };
-    let n = c.steps(&[0.0, 0.0, 5.0, 0.0]).count();
+    let n = c.steps(&crate::pad([0.0, 0.0, 5.0, 0.0])).count();
     // 82 pecks of three moves (the last peck feeds to the bottom), the
     // hole move, the move down to R and the retract.
     assert_eq!(n, 3 * 81 + 1 + 1 + 1 + 1, "{n}");

@@ -50,7 +50,7 @@ fn a_tool_without_an_entry_is_refused_where_its_offset_would_apply() {
     assert_eq!(err(&mut it, "G43.2 H1"), ErrorKind::ToolNotInTable);
     run(&mut it, "T5 M6");
     assert_eq!(it.take_tool_warning(), Some(5));
-    it.set_machine_position([0.0; 4]);
+    it.set_machine_position([0.0; crate::AXES]);
     assert_eq!(err(&mut it, "G43"), ErrorKind::ToolNotInTable);
     run(&mut it, "G10 L1 P5 Z2");
     run(&mut it, "G43");
@@ -63,7 +63,7 @@ fn g43_h0_uses_the_tool_in_the_spindle() {
     let mut it = Interpreter::new();
     run(&mut it, "G10 L1 P3 Z10");
     run(&mut it, "T3 M6");
-    it.set_machine_position([0.0; 4]);
+    it.set_machine_position([0.0; crate::AXES]);
     run(&mut it, "G43 H0");
     assert_eq!(it.wco()[2], 10.0);
     run(&mut it, "M61 Q0 G43 H0");
@@ -77,7 +77,7 @@ fn g43_without_h_uses_the_tool_in_the_spindle() {
     let c = run(&mut it, "M6 T102");
     assert!(c.contains(&Command::ToolChange { tool: 102 }), "{c:?}");
     assert!(it.needs_sync(), "the machine moved for the change");
-    it.set_machine_position([0.0; 4]);
+    it.set_machine_position([0.0; crate::AXES]);
     run(&mut it, "G43");
     assert_eq!(it.wco()[2], 12.0);
     run(&mut it, "M61 Q0 G43");
@@ -202,7 +202,7 @@ fn g10_l1_every_axis_and_radius() {
         Some(([25.4, 50.8, 76.2], 25.4))
     );
     run(&mut it, "G21 G43 H5");
-    assert_eq!(it.wco(), [25.4, 50.8, 76.2, 0.0]);
+    assert_eq!(it.wco(), crate::pad([25.4, 50.8, 76.2, 0.0]));
     // The table holds no rotary offset.
     assert_eq!(err(&mut it, "G10 L1 P5 Z1 A1"), ErrorKind::AxisWordsUnused);
 }

@@ -387,7 +387,7 @@ fn booted_flash(cfg: &crate::config::MachineConfig) -> crate::device_sim::SimFla
 pub fn device(data: &[u8]) {
     let mut cfg = super::executor::small_machine(false, false);
     cfg.host = HostModel::INSTANT;
-    cfg.start_position_mm = [-10.0, -10.0, -1.0, 0.0];
+    cfg.start_position_mm = burin::pad([-10.0, -10.0, -1.0, 0.0]);
     let env = RefCell::new(Envelope::new(cfg.settings.axes.map(|a| a.steps_per_mm)));
     let mut rec = EnvelopeRec(&env);
     let mut dev = VirtualDevice::with_flash(&cfg, &mut rec, booted_flash(&cfg));

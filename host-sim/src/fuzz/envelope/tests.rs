@@ -6,7 +6,7 @@ const SPM: [f64; AXES] = [100.0; AXES];
 
 fn arc(end: [f32; 2], center: [f32; 2], dir: ArcDir) -> Committed {
     Committed::Arc(Arc {
-        end: [end[0], end[1], 0.0, 0.0],
+        end: burin::pad([end[0], end[1], 0.0, 0.0]),
         center,
         plane: Plane::XY,
         dir,
@@ -17,7 +17,7 @@ fn arc(end: [f32; 2], center: [f32; 2], dir: ArcDir) -> Committed {
 
 #[test]
 fn arc_boxes_include_the_bulge_they_sweep() {
-    let s = [1.0, 0.0, 0.0, 0.0];
+    let s = burin::pad([1.0, 0.0, 0.0, 0.0]);
     // A quarter CCW from +X to +Y about the origin: no cardinal inside.
     let (b, fin) = move_bounds(&s, &arc([0.0, 1.0], [0.0, 0.0], ArcDir::Ccw), &SPM);
     assert_eq!((b.lo[0], b.hi[0], b.lo[1], b.hi[1]), (0.0, 1.0, 0.0, 1.0));
@@ -35,7 +35,7 @@ fn arc_boxes_include_the_bulge_they_sweep() {
 fn a_short_arc_on_a_huge_radius_has_a_short_box() {
     // Issue 35: G2 X0.01 R30000 from (-150, -150); the centre is
     // 30 m away on -Y. Its box is the 0.01 mm chord and its sagitta.
-    let s = [-150.0, -150.0, 0.0, 0.0];
+    let s = burin::pad([-150.0, -150.0, 0.0, 0.0]);
     let c = [-149.995, -150.0 - 30_000.0];
     let (b, fin) = move_bounds(&s, &arc([-149.99, -150.0], c, ArcDir::Cw), &SPM);
     assert!(
@@ -54,12 +54,12 @@ fn spline_box_is_the_control_polygon() {
     let sp = Committed::Spline(Spline {
         p1: [-2.0, 3.0],
         p2: [5.0, -1.0],
-        end: [1.0, 1.0, 2.0, 0.0],
+        end: burin::pad([1.0, 1.0, 2.0, 0.0]),
         feed: Feed::PerMin(100.0),
     });
     let (b, fin) = move_bounds(&s, &sp, &SPM);
-    assert_eq!(b.lo, [-2.0, -1.0, 0.0, 0.0]);
-    assert_eq!(b.hi, [5.0, 3.0, 2.0, 0.0]);
+    assert_eq!(b.lo, burin::pad([-2.0, -1.0, 0.0, 0.0]));
+    assert_eq!(b.hi, burin::pad([5.0, 3.0, 2.0, 0.0]));
     assert!(!fin);
 }
 
@@ -67,21 +67,27 @@ fn spline_box_is_the_control_polygon() {
 fn steps_outside_the_window_fail_and_finished_moves_retire() {
     let mut e = Envelope::new([100.0; AXES]);
     e.settle([0; AXES]);
-    e.motion(1, [0.0; AXES], Committed::Straight([1.0, 0.0, 0.0, 0.0]));
+    e.motion(
+        1,
+        [0.0; AXES],
+        Committed::Straight(burin::pad([1.0, 0.0, 0.0, 0.0])),
+    );
     e.motion(
         2,
-        [1.0, 0.0, 0.0, 0.0],
-        Committed::Straight([1.0, 1.0, 0.0, 0.0]),
+        burin::pad([1.0, 0.0, 0.0, 0.0]),
+        Committed::Straight(burin::pad([1.0, 1.0, 0.0, 0.0])),
     );
     for x in 0..=100 {
-        e.step(&[x, 0, 0, 0]);
+        e.step(&burin::pad([x, 0, 0, 0]));
     }
     for y in 0..=50 {
-        e.step(&[100, y, 0, 0]);
+        e.step(&burin::pad([100, y, 0, 0]));
     }
     // Within line 1's box, but line 1 is finished: outside line 2's
     // box and the two steps around line 1's end.
-    let back = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| e.step(&[97, 50, 0, 0])));
+    let back = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        e.step(&burin::pad([97, 50, 0, 0]))
+    }));
     assert!(
         back.is_err(),
         "three steps back along a finished move passed"
@@ -91,8 +97,10 @@ fn steps_outside_the_window_fail_and_finished_moves_retire() {
 #[test]
 fn a_step_with_nothing_committed_fails() {
     let mut e = Envelope::new([100.0; AXES]);
-    e.settle([5, 0, 0, 0]);
-    e.step(&[6, 0, 0, 0]);
-    let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| e.step(&[7, 0, 0, 0])));
+    e.settle(burin::pad([5, 0, 0, 0]));
+    e.step(&burin::pad([6, 0, 0, 0]));
+    let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        e.step(&burin::pad([7, 0, 0, 0]))
+    }));
     assert!(r.is_err(), "two steps from rest with no move passed");
 }

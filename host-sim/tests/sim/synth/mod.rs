@@ -22,7 +22,11 @@ pub fn info() -> RunInfo {
     };
     RunInfo {
         tick_hz: TICK_HZ,
-        axes: [ax('X', SPM), ax('Y', SPM), ax('Z', 400.0), ax('A', 10.0)],
+        axes: std::array::from_fn(|i| {
+            // X and Y fine, Z a leadscrew, the rotary letters 10 per degree.
+            let spm = [SPM, SPM, 400.0, 10.0, 10.0, 10.0];
+            ax(burin::AXIS_NAMES[i], spm[i])
+        }),
         pulse_ticks: PULSE,
         dir_setup_ticks: SETUP,
     }
@@ -78,7 +82,7 @@ pub fn run(r: &mut dyn Recorder) -> Summary {
     let info = info();
     r.start(&info);
     let hz = f64::from(TICK_HZ);
-    let mut pos = [-80i64, -80, -400, 0];
+    let mut pos = burin::pad([-80i64, -80, -400, 0]);
     let mut tick: u64 = 1000;
     let mut dir_mask = 0u8;
     let mut dir_changed = 0u64;
@@ -87,7 +91,7 @@ pub fn run(r: &mut dyn Recorder) -> Summary {
     let mut max_feed: f64 = 0.0;
     let mut cur = [-1.0f64, -1.0];
     for (kind, to, feed) in moves() {
-        r.commanded(1, kind, [to[0], to[1], -1.0, 0.0]);
+        r.commanded(1, kind, burin::pad([to[0], to[1], -1.0, 0.0]));
         let target = [
             (f64::from(to[0]) * 80.0).round() as i64,
             (f64::from(to[1]) * 80.0).round() as i64,
@@ -151,8 +155,8 @@ pub fn run(r: &mut dyn Recorder) -> Summary {
         max_feed_mm_min: max_feed,
         steps,
         final_position_steps: pos,
-        final_position_mm: [mm(0), mm(1), mm(2), mm(3)],
-        final_work_position_mm: [mm(0) + 100.0, mm(1) + 100.0, mm(2), mm(3)],
+        final_position_mm: burin::pad([mm(0), mm(1), mm(2), mm(3)]),
+        final_work_position_mm: burin::pad([mm(0) + 100.0, mm(1) + 100.0, mm(2), mm(3)]),
         planner_underruns: 0,
         max_tool_deviation_mm: 0.0,
         errors: vec![host_sim::record::RunError {
@@ -165,7 +169,7 @@ pub fn run(r: &mut dyn Recorder) -> Summary {
     summary
 }
 
-pub fn event(tick: u64, dir_mask: u8, step_mask: u8, pos: [i64; 4]) -> PinEvent {
+pub fn event(tick: u64, dir_mask: u8, step_mask: u8, pos: [i64; burin::AXES]) -> PinEvent {
     PinEvent {
         tick,
         dir_mask,
@@ -182,10 +186,10 @@ pub fn empty_summary() -> Summary {
         job_time_s: 0.0,
         distance_mm: 0.0,
         max_feed_mm_min: 0.0,
-        steps: [0; 4],
-        final_position_steps: [0; 4],
-        final_position_mm: [0.0; 4],
-        final_work_position_mm: [0.0; 4],
+        steps: [0; burin::AXES],
+        final_position_steps: [0; burin::AXES],
+        final_position_mm: [0.0; burin::AXES],
+        final_work_position_mm: [0.0; burin::AXES],
         planner_underruns: 0,
         max_tool_deviation_mm: 0.0,
         errors: vec![],

@@ -39,7 +39,8 @@ use stm32f4xx_hal::{
     timer::PwmChannel,
 };
 
-/// Step, direction and enable pin numbers on port B.
+/// Step, direction and enable pin numbers on port B, one step/dir pair per
+/// axis (`burin::AXES` of them: a new axis count needs its pins here).
 pub const PORT_PINS: PortPins = PortPins {
     step: [12, 13, 14, 15],
     dir: [4, 5, 6, 7],
