@@ -35,7 +35,8 @@ use crate::AXES;
 use record::{MAX_RECORD, OFFSETS_KEY, OFFSET_RECORDS, TOOLS_KEY, TOOL_VALUES};
 
 /// Number of `$n` settings (`table::numbers()`; a test keeps them equal).
-pub const SETTINGS: usize = 63;
+/// 63 with four axes.
+pub const SETTINGS: usize = table::COUNT;
 
 /// What a load found.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -67,8 +67,8 @@ mod tests {
     #[test]
     fn round_trip_and_rejects() {
         let mut buf = [0; MAX_RECORD];
-        let rec = encode(&[1.5, -2.0, 0.25, 1e6], &mut buf).to_vec();
-        assert_eq!(rec.len(), 1 + 4 * 4);
+        let rec = encode(&crate::pad([1.5, -2.0, 0.25, 1e6]), &mut buf).to_vec();
+        assert_eq!(rec.len(), 1 + 4 * AXES);
         let mut out = [0.0; AXES];
         assert_eq!(decode(&rec, &mut out), Some(()));
         assert_eq!(out, crate::pad([1.5, -2.0, 0.25, 1e6]));

@@ -133,19 +133,19 @@ fn values_set_would_refuse_fall_back_to_their_default() {
     let mut p = persist(Board::new());
     p.load();
     let mut buf = [0u8; MAX_RECORD];
-    // $0 (pulse) above its range, $2 a mask with a bit for a fifth axis,
+    // $0 (pulse) above its range, $2 a mask with a bit past the last axis,
     // $1 in an unknown format, an offset with a NaN.
     let store = p.storage();
     store
         .store(0, record::encode(&[1000.0], &mut buf))
         .expect("store");
     store
-        .store(2, record::encode(&[16.0], &mut buf))
+        .store(2, record::encode(&[f32::from(1u16 << AXES)], &mut buf))
         .expect("store");
     store
         .store(1, &[record::FORMAT + 1, 0, 0, 0x80, 0x3F])
         .expect("store");
-    let nan = record::encode(&[0.0, f32::NAN, 0.0, 0.0], &mut buf);
+    let nan = record::encode(&crate::pad([0.0, f32::NAN]), &mut buf);
     store.store(OFFSETS_KEY, nan).expect("store");
     store
         .store(110, record::encode(&[777.0], &mut buf))

@@ -258,6 +258,11 @@ pub fn is_integer(n: u16) -> bool {
 }
 
 /// Every setting number in ascending order (the `$$` listing).
+/// How many settings [`numbers`] lists: the per-axis groups grow with
+/// [`AXES`].
+pub const COUNT: usize =
+    GLOBAL.len() + AXIS_GROUPS.len() * AXES + BURIN.len() + TOOL.len() + SPINDLE.len();
+
 pub fn numbers() -> impl Iterator<Item = u16> {
     let axes = AXIS_GROUPS
         .iter()

@@ -11,14 +11,27 @@ fn numbers_are_ascending_unique_and_all_readable() {
     let s = Settings::default();
     let nums: Vec<u16> = table::numbers().collect();
     assert!(nums.windows(2).all(|w| w[0] < w[1]));
-    assert_eq!(nums.len(), 23 + 16 + 4 + 10 + 9 + 1);
+    // Five per-axis groups ($100 $110 $120 $130 $160).
+    assert_eq!(nums.len(), 23 + 5 * burin::AXES + 10 + 9 + 1);
     for n in &nums {
         let v = s.get(*n).unwrap_or_else(|| panic!("${n} unreadable"));
         let mut t = s;
         assert_eq!(t.set(*n, v), Ok(()), "${n}={v} default must be valid");
         assert_eq!(t, s);
     }
-    for n in [7, 15, 99, 104, 114, 140, 164, 199, 209, 65535] {
+    let past = burin::AXES as u16;
+    for n in [
+        7,
+        15,
+        99,
+        100 + past,
+        110 + past,
+        140,
+        160 + past,
+        199,
+        209,
+        65535,
+    ] {
         assert_eq!(s.get(n), None, "${n}");
     }
 }
@@ -33,7 +46,8 @@ fn backlash_is_160_to_163_in_mm_up_to_10() {
     assert_eq!(s.get(161), Some(0.0));
     assert_eq!(s.set(162, 10.5), Err(SettingError::OutOfRange));
     assert_eq!(s.set(161, -0.1), Err(SettingError::Negative));
-    assert_eq!(s.set(164, 0.1), Err(SettingError::Unknown));
+    let past = 160 + burin::AXES as u16;
+    assert_eq!(s.set(past, 0.1), Err(SettingError::Unknown));
     assert_eq!(s.backlash_mm, burin::pad([0.1, 0.0, 0.0, 10.0]));
 }
 
@@ -60,7 +74,13 @@ fn writes_are_validated_and_errors_change_nothing() {
         (100, 0.0, SettingError::OutOfRange, 110),
         (1, 2.5, SettingError::NotInteger, 111),
         (20, 2.0, SettingError::OutOfRange, 110),
-        (3, 16.0, SettingError::BadMask, 112),
+        // A direction invert bit past the last axis.
+        (
+            3,
+            f32::from(1u16 << burin::AXES),
+            SettingError::BadMask,
+            112,
+        ),
         (10, 4.0, SettingError::BadMask, 112),
         (12, 0.0, SettingError::OutOfRange, 110),
     ];
@@ -137,10 +157,15 @@ fn settings_listing() {
     );
     let mut all = String::new();
     reply::settings(&mut all, &Settings::default()).expect("string sink");
-    assert_eq!(all.lines().count(), 63);
+    assert_eq!(all.lines().count(), burin::persist::SETTINGS);
     assert!(all.contains("$220=4.000\r\n"), "spin-up delay, GRBL's 4 s");
+    // The last travel, then one backlash setting per axis, then burin's.
+    let mut backlash = format!("${}=0.000\r\n", 130 + burin::AXES - 1);
+    for i in 0..burin::AXES {
+        backlash += &format!("${}=0.000\r\n", 160 + i);
+    }
     assert!(
-        all.contains("$133=0.000\r\n$160=0.000\r\n$161=0.000\r\n$162=0.000\r\n$163=0.000\r\n$200="),
+        all.contains(&format!("{backlash}$200=")),
         "backlash, grblHAL's numbers, off by default"
     );
     assert!(

@@ -301,7 +301,7 @@ fn exact_steps_with_smoothing_at_low_rates() {
     ];
     let (pos, counts, amass) = run_steps(s, &moves);
     let last = moves[2];
-    let want: Vec<i32> = (0..4)
+    let want: Vec<i32> = (0..burin::AXES)
         .map(|i| (last[i] * s.axes[i].steps_per_mm).round() as i32)
         .collect();
     assert_eq!(pos.to_vec(), want);

@@ -19,7 +19,9 @@ pub(super) use letters::{AXIS_KEYS, TRIP_KEYS};
 #[serde(deny_unknown_fields)]
 struct File {
     tick_hz: Option<u32>,
-    start_position_mm: Option<[f32; AXES]>,
+    /// X Y Z and up to [`AXES`] values in all, the rest 0: a file written
+    /// for four axes runs on a build with more.
+    start_position_mm: Option<Vec<f32>>,
     #[serde(default)]
     axes: Axes,
     #[serde(default)]
@@ -260,7 +262,16 @@ fn set_mask(slot: &mut u8, key: &str, v: Option<String>) -> Result<(), ConfigErr
 pub(super) fn apply(text: &str, cfg: &mut MachineConfig) -> Result<(), ConfigError> {
     let f: File = toml::from_str(text).map_err(|e| ConfigError::Parse(e.to_string()))?;
     set(&mut cfg.tick_hz, f.tick_hz);
-    set(&mut cfg.start_position_mm, f.start_position_mm);
+    if let Some(p) = f.start_position_mm {
+        if !(3..=AXES).contains(&p.len()) {
+            return Err(ConfigError::invalid(
+                "start_position_mm",
+                format!("{} values; give X Y Z and at most {AXES} in all", p.len()),
+            ));
+        }
+        cfg.start_position_mm = [0.0; AXES];
+        cfg.start_position_mm[..p.len()].copy_from_slice(&p);
+    }
     let h = f.host;
     set(&mut cfg.host.link_bytes_per_s, h.link_bytes_per_s);
     set(&mut cfg.host.rx_window_bytes, h.rx_window_bytes);

@@ -44,11 +44,13 @@ const WORK_PER_MS: u64 = 20;
 /// The small machine: few steps per mm, a 20 mm envelope.
 pub fn small_machine(soft_limits: bool, probe: bool) -> MachineConfig {
     let mut s = Settings::default();
+    // Per letter X Y Z A B C (the rotary ones alike); the build's first
+    // AXES of them.
     for (i, a) in s.axes.iter_mut().enumerate() {
-        a.steps_per_mm = [5.0, 5.0, 10.0, 2.0][i];
-        a.max_rate = [3000.0, 3000.0, 600.0, 1800.0][i];
-        a.max_accel = [200.0, 200.0, 50.0, 100.0][i];
-        a.max_travel = [20.0, 20.0, 10.0, 0.0][i];
+        a.steps_per_mm = [5.0, 5.0, 10.0, 2.0, 2.0, 2.0][i];
+        a.max_rate = [3000.0, 3000.0, 600.0, 1800.0, 1800.0, 1800.0][i];
+        a.max_accel = [200.0, 200.0, 50.0, 100.0, 100.0, 100.0][i];
+        a.max_travel = [20.0, 20.0, 10.0, 0.0, 0.0, 0.0][i];
     }
     s.soft_limits = soft_limits;
     s.max_step_rate_hz = 50_000.0;

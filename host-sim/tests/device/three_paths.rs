@@ -113,7 +113,8 @@ fn pty_ends_where_the_offline_run_ends() {
         if st.state == "Idle" {
             let mpos = st.mpos.expect("MPos");
             break std::array::from_fn::<i64, { burin::AXES }, _>(|i| {
-                (mpos[i] * spm[i]).round() as i64
+                // Axes the report leaves out (`$208`) stood at 0.
+                (mpos.get(i).copied().unwrap_or(0.0) * spm[i]).round() as i64
             });
         }
         assert!(Instant::now() < end, "never idle: <{body}>");

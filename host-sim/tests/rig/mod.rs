@@ -127,7 +127,7 @@ impl<'r> Rig<'r> {
         assert_eq!(self.status().state, "Idle");
         assert_eq!(self.cmd(&format!("G1 X{x} F1000")), ["ok"]);
         let st = self.until_idle();
-        assert_eq!(st.mpos, Some(vec![x, 0.0, 0.0, 0.0]));
+        assert_eq!(st.mpos, Some(burin::pad([x, 0.0, 0.0, 0.0]).to_vec()));
     }
 }
 

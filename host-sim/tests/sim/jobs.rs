@@ -128,3 +128,34 @@ fn simulate_reports_a_write_error_with_its_file() {
     let e = host_sim::outputs::simulate(&MachineConfig::default(), &src, "demo", &out).unwrap_err();
     assert!(e.to_string().starts_with("/dev/full: "), "{e}");
 }
+
+/// `machines/six-axis.toml` with `jobs/six-axis.gcode` (issue 32): on a
+/// six-axis build `--json`'s `final_work_position_mm` holds all six
+/// commanded positions; a build with fewer axes refuses the machine file
+/// by its first letter past them instead of running it on fewer.
+#[test]
+fn six_axis_job_ends_on_all_six_commanded_positions() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let loaded = MachineConfig::load(dir.join("machines").join("six-axis.toml"));
+    if AXES < 6 {
+        let e = loaded.map(|_| ()).unwrap_err().to_string();
+        let first = protocol::ALL_AXIS_NAMES[AXES].to_ascii_lowercase();
+        assert!(e.contains(&format!("`axes.{first}`")), "{e}");
+        return;
+    }
+    let (cfg, s, _) = run("six-axis.gcode", Some("six-axis.toml"));
+    let mut json = Vec::new();
+    host_sim::report::write_json(&mut json, &cfg.run_info(), &s).unwrap();
+    let v: serde_json::Value = serde_json::from_slice(&json).unwrap();
+    let end: Vec<f64> = v["final_work_position_mm"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    let want = [12.5, -7.25, -3.0, 270.0, -90.0, 120.0];
+    assert_eq!(end.len(), want.len(), "{end:?}");
+    for (got, want) in end.iter().zip(want) {
+        assert!((got - want).abs() < 1e-3, "{end:?}");
+    }
+}

@@ -306,7 +306,7 @@ fn soft_limits_refuse_before_any_step() {
         steps[0] == steps[1] && steps[0] > 0 && steps[0] < 80,
         "{steps:?}"
     );
-    assert_eq!(steps[2..], [0, 0]);
+    assert!(steps[2..].iter().all(|&n| n == 0), "{steps:?}");
 }
 
 #[test]

@@ -174,10 +174,22 @@ fn wrong_types_and_enum_names_are_refused_with_the_key() {
         ("[axes.x]\nsteps_per_mm = \"80\"", "steps_per_mm"),
         ("tick_hz = -5", "tick_hz"),
         ("start_position_mm = [0, 0]", "start_position_mm"),
+        (
+            "start_position_mm = [0, 0, 0, 0, 0, 0, 0]",
+            "start_position_mm",
+        ),
     ] {
         let m = refusal(text);
         assert!(m.contains(key), "{text}: {m}");
     }
+}
+
+/// A machine file written for X Y Z A runs on a build of any axis count:
+/// the axes it leaves out start at 0.
+#[test]
+fn a_start_position_of_fewer_axes_is_padded() {
+    let cfg = MachineConfig::from_toml_str("start_position_mm = [1, 2, 3]").unwrap();
+    assert_eq!(cfg.start_position_mm, burin::pad([1.0, 2.0, 3.0]));
 }
 
 #[test]

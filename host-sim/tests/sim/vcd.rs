@@ -71,7 +71,7 @@ fn parse_vcd(text: &str) -> (String, HashMap<String, Vec<(u64, bool)>>) {
                 .push((now.unwrap(), v));
         }
     }
-    assert_eq!(ids.len(), 8);
+    assert_eq!(ids.len(), 2 * burin::AXES, "a step and a dir wire per axis");
     (timescale, waves)
 }
 

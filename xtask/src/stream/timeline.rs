@@ -203,18 +203,21 @@ impl Profile {
                 .zip(path.get(k + 1))
                 .is_some_and(|(a, b)| a.1 == b.1)
         };
+        // The axes the report gives (`$208` may name fewer than the build
+        // drives): the others cannot place it.
+        let n = AXES.min(mpos.len());
         // (offset, instant, whether the machine stood still there)
         let mut best: Option<(f32, f64, bool)> = None;
         for k in 0..path.len().saturating_sub(1) {
             let ((ta, a), (tb, b)) = (path[k], path[k + 1]);
             let d: [f32; AXES] = std::array::from_fn(|i| b[i] - a[i]);
-            let len2: f32 = d.iter().map(|x| x * x).sum();
+            let len2: f32 = d[..n].iter().map(|x| x * x).sum();
             if len2 == 0.0 {
                 continue;
             }
-            let along: f32 = (0..AXES).map(|i| (mpos[i] - a[i]) * d[i]).sum();
+            let along: f32 = (0..n).map(|i| (mpos[i] - a[i]) * d[i]).sum();
             let u = (along / len2).clamp(0.0, 1.0);
-            let off: f32 = (0..AXES)
+            let off: f32 = (0..n)
                 .map(|i| (a[i] + u * d[i] - mpos[i]).powi(2))
                 .sum::<f32>()
                 .sqrt();
@@ -294,6 +297,16 @@ pub mod tests {
         let moving = p.path.iter().rposition(|q| q.1 != end).unwrap();
         assert_eq!(p.path[moving + 1].0, p.total_s);
         assert!(p.total_s > 2.0, "{}", p.total_s);
+    }
+
+    /// A report of X Y Z only (`$208=3`) on a path that also turns A: placed
+    /// on the axes it names (it indexed past the report before).
+    #[test]
+    fn a_report_naming_fewer_axes_is_placed_on_those() {
+        let p = profile();
+        let s = p.locate(3, &[2.25, 0.0, 0.0], 0.0).unwrap();
+        assert!((s - 2.25).abs() < 1e-6, "{s}");
+        assert_eq!(p.locate(3, &[2.25, 1.0, 0.0], 0.0), None);
     }
 
     #[test]

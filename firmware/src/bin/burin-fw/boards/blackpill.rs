@@ -23,6 +23,27 @@
 //! PC14/PC15 (32 kHz crystal), PB2 (BOOT1), PA9/PA10 (USART1, which the ROM
 //! bootloader also probes; PA10 needs to stay low for USB DFU), PB3/PA15
 //! (JTAG pins with reset pull-ups, spare). PB11 does not exist on this package.
+//!
+//! Six axes (issue 32; not wired yet, this map drives `burin::AXES` = 4):
+//! every step and dir pin must sit on one port (a step event is one BSRR
+//! store of the step pins, a direction event one store of the dir pins and
+//! the step-off levels), and so must the enable (the fault path's store).
+//! Port B has 15 pins here (PB0-PB10, PB12-PB15); six step/dir pairs and
+//! the enable take 13 of them, and PB2 (BOOT1) stays alone, which leaves
+//! one for the four port-B outputs above. So six pairs fit only if
+//! spindle direction, flood and mist leave port B:
+//!
+//! | function | pin | note |
+//! |---|---|---|
+//! | B / C step | PB3 / PB10 | PB3 is JTDO/SWO, free under SWD (it may glitch once at reset) |
+//! | B / C dir | PB1 / PB9 | |
+//! | spindle enable | PB0 | unchanged |
+//! | spindle direction | PA15 | JTDI's reset pull-up: high (CCW) until set, harmless for a direction |
+//! | flood / mist | PA7 / PA9 | the fault path then stores to GPIOA as well; PA9 is USART1 TX, which only the ROM bootloader uses |
+//! | A/B/C limits | none | no EXTI-capable pin is left (PA7 was the last); rotary axes rarely have one |
+//!
+//! That moves three existing outputs (a wiring change for four-axis
+//! users), so it waits for the six-axis build.
 use super::super::outputs::EnablePin;
 use super::super::step::{PortPins, StepPort};
 use burin::seams::StepPins;
