@@ -119,15 +119,19 @@ pub const ALL_AXIS_NAMES: [char; 6] = ['X', 'Y', 'Z', 'A', 'B', 'C'];
 const _: () = assert!(AXES >= 3 && AXES <= ALL_AXIS_NAMES.len());
 
 /// The driven axes' letters, in array order.
-pub const AXIS_NAMES: [char; AXES] = {
-    let mut n = ['X'; AXES];
+pub const AXIS_NAMES: [char; AXES] = first_axes(ALL_AXIS_NAMES);
+
+/// This build's share of a table written for every letter of
+/// [`ALL_AXIS_NAMES`] (its first [`AXES`] entries).
+pub const fn first_axes<T: Copy, const N: usize>(all: [T; N]) -> [T; AXES] {
+    let mut out = [all[0]; AXES];
     let mut i = 0;
     while i < AXES {
-        n[i] = ALL_AXIS_NAMES[i];
+        out[i] = all[i];
         i += 1;
     }
-    n
-};
+    out
+}
 
 /// Axes carried in positions on the wire: all the controller drives.
 /// Devices with fewer axes say so in [`DeviceInfo::axes`] and leave the

@@ -222,25 +222,16 @@ impl Settings {
         spindle_max: 1000.0,
         spindle_min: 0.0,
         laser_mode: false,
-        axes: {
-            // Per letter, X Y Z A B C; the first AXES are this build's.
-            // The rotary letters: 10 steps per degree, no travel limit.
-            let all = [
-                axis(80.0, 5000.0, 500.0, 300.0),
-                axis(80.0, 5000.0, 500.0, 300.0),
-                axis(400.0, 1000.0, 100.0, 100.0),
-                axis(10.0, 3600.0, 300.0, 0.0),
-                axis(10.0, 3600.0, 300.0, 0.0),
-                axis(10.0, 3600.0, 300.0, 0.0),
-            ];
-            let mut axes = [all[0]; AXES];
-            let mut i = 0;
-            while i < AXES {
-                axes[i] = all[i];
-                i += 1;
-            }
-            axes
-        },
+        // Per letter, X Y Z A B C; the first AXES are this build's.
+        // The rotary letters: 10 steps per degree, no travel limit.
+        axes: protocol::first_axes([
+            axis(80.0, 5000.0, 500.0, 300.0),
+            axis(80.0, 5000.0, 500.0, 300.0),
+            axis(400.0, 1000.0, 100.0, 100.0),
+            axis(10.0, 3600.0, 300.0, 0.0),
+            axis(10.0, 3600.0, 300.0, 0.0),
+            axis(10.0, 3600.0, 300.0, 0.0),
+        ]),
         dir_setup_us: 1.0,
         max_step_rate_hz: 200_000.0,
         profile: Profile::Trapezoid,

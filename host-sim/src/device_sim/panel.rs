@@ -80,12 +80,7 @@ impl VirtualDevice<'_> {
         let acted = inp::on_edge(&self.sim.rt, fired, p.levels, &mut |c| self.flags.raise(c));
         p.seen |= acted.inputs;
         p.next_beat.get_or_insert(next);
-        if acted.cut_outputs {
-            self.cut_outputs();
-        }
-        if acted.wake {
-            self.poll();
-        }
+        self.obey(acted);
     }
 
     /// The first heartbeat after `tick`, on the board's 10 ms grid.
@@ -116,6 +111,13 @@ impl VirtualDevice<'_> {
             &mut |c| self.flags.raise(c),
         );
         p.next_beat = (p.masked() != 0).then_some(next);
+        self.obey(acted);
+    }
+
+    /// What the library asked of the shell after an input event: the
+    /// outputs cut (an e-stop), the parse task run now (as the board's
+    /// wake-up does).
+    fn obey(&mut self, acted: inp::Acted) {
         if acted.cut_outputs {
             self.cut_outputs();
         }

@@ -60,11 +60,7 @@ impl<'r> Rig<'r> {
         self.lines()
     }
     pub fn status(&mut self) -> protocol::client::grbl::TextStatus {
-        self.send(b"?");
-        self.run(1);
-        let lines = self.lines();
-        let st = lines.iter().rev().find_map(|l| parse_status(l));
-        st.unwrap_or_else(|| panic!("no status in {lines:?}"))
+        self.status_within(1)
     }
     /// One `?`, answered within `rounds` rounds (the parse task may be
     /// busy with queued lines, as on the board, for a few ms).

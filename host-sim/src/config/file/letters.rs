@@ -36,19 +36,8 @@ pub(super) const ALL_TRIP_KEYS: [&str; 6] = [
     "limits.b_trip_mm",
     "limits.c_trip_mm",
 ];
-pub(in crate::config) const AXIS_KEYS: [[&str; 6]; AXES] = first(ALL_AXIS_KEYS);
-pub(in crate::config) const TRIP_KEYS: [&str; AXES] = first(ALL_TRIP_KEYS);
-
-/// The first [`AXES`] of a table written for every letter.
-const fn first<T: Copy, const N: usize>(all: [T; N]) -> [T; AXES] {
-    let mut out = [all[0]; AXES];
-    let mut i = 0;
-    while i < AXES {
-        out[i] = all[i];
-        i += 1;
-    }
-    out
-}
+pub(in crate::config) const AXIS_KEYS: [[&str; 6]; AXES] = protocol::first_axes(ALL_AXIS_KEYS);
+pub(in crate::config) const TRIP_KEYS: [&str; AXES] = protocol::first_axes(ALL_TRIP_KEYS);
 
 /// Per-letter values of a file (one per `protocol::ALL_AXIS_NAMES` letter)
 /// as this build's axes; a value for a letter past [`AXES`] is refused,
