@@ -101,16 +101,17 @@ pub use rt::Rt;
 pub use session::{LineVerdict, Session};
 
 /// Protocol version exchanged in the handshake. 2: `Status` carries the
-/// accessory bits (`A:`).
-pub const PROTOCOL_VERSION: u16 = 2;
+/// accessory bits (`A:`). 3: six axes (`Status`'s positions are
+/// `[f32; AXES]`, and the `Pn:` bits after the limits moved up by two).
+pub const PROTOCOL_VERSION: u16 = 3;
 
-/// Number of axes the controller drives: X, Y, Z and A. The one place the
+/// Number of axes the controller drives: X, Y, Z, A, B and C. The one place the
 /// count is written: burin (which depends on this crate, never the other
 /// way) re-exports it, and every per-axis array, letter, setting number,
 /// report field and wire position derives from it. It lives here because
 /// the wire layout of [`Status`] depends on it and this crate cannot see
 /// burin's.
-pub const AXES: usize = 4;
+pub const AXES: usize = 6;
 
 /// Every axis letter in grblHAL's order, the order of every per-axis
 /// array; the first [`AXES`] of them are driven.

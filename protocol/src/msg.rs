@@ -77,7 +77,7 @@ pub struct DeviceInfo {
     pub firmware: ShortText,
     /// Board name, e.g. `blackpill-f411`.
     pub board: ShortText,
-    /// Axes the device drives (the first `axes` of X, Y, Z, A).
+    /// Axes the device drives (the first `axes` of X, Y, Z, A, B, C).
     pub axes: u8,
     /// Job lines the device can queue (total line slots).
     pub line_slots: u16,
