@@ -341,7 +341,10 @@ impl MachineConfig {
             finite("start_position_mm", v)?;
         }
         if !(3..=AXES as u8).contains(&s.report_axes) {
-            return Err(ConfigError::invalid("report.axes", "must be 3 or 4"));
+            return Err(ConfigError::invalid(
+                "report.axes",
+                "must be from 3 to the axes this build drives",
+            ));
         }
         Ok(())
     }

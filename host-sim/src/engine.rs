@@ -82,6 +82,9 @@ pub struct Sim<'r> {
     /// Device mode: the sender still has lines for the board (a planned
     /// stop meanwhile is a starved planner).
     pub input_pending: bool,
+    /// Device mode: after the task's last pass the session waits for the
+    /// machine to stop (`Device::syncing`), so a stop is not starvation.
+    pub task_syncing: bool,
     stats: Stats,
 }
 
@@ -177,6 +180,7 @@ impl<'r> Sim<'r> {
             device_mode: false,
             task_wanted: false,
             input_pending: false,
+            task_syncing: false,
             stats,
         }
     }

@@ -190,14 +190,17 @@ impl<S: Storage> Persist<S> {
     /// Reads `out.len()` values stored under `key`. `Ok(false)`: missing,
     /// damaged or of another format.
     fn read(&mut self, key: u16, out: &mut [f32]) -> Result<bool, S::Error> {
+        Ok(self.read_upto(key, out)? == Some(out.len()))
+    }
+
+    /// Reads 1 to `out.len()` values stored under `key` into the front of
+    /// `out` ([`record::decode_upto`]); `Ok(None)` as `read`'s `false`.
+    fn read_upto(&mut self, key: u16, out: &mut [f32]) -> Result<Option<usize>, S::Error> {
         let mut buf = [0u8; MAX_RECORD];
         let Some(len) = self.store.load(key, &mut buf)? else {
-            return Ok(false);
+            return Ok(None);
         };
-        Ok(buf
-            .get(..len)
-            .and_then(|rec| record::decode(rec, out))
-            .is_some())
+        Ok(buf.get(..len).and_then(|rec| record::decode_upto(rec, out)))
     }
 
     /// Reads everything (boot, M501). Items that fall back to their
@@ -254,21 +257,27 @@ impl<S: Storage> Persist<S> {
             }
         }
         let mut offsets = Offsets::default();
+        let mut shorter = false;
         for (k, o) in vectors_mut(&mut offsets).enumerate() {
             let mut v = [0.0; AXES];
-            // k < OFFSET_RECORDS (11): the key stays below 1011.
-            let ok = match self.read(OFFSETS_KEY + k as u16, &mut v) {
-                Ok(found) => found,
+            // k < OFFSET_RECORDS (11): the key stays below 1011. A vector
+            // of fewer axes (a four-axis build's) is kept, the axes it
+            // did not have at 0, and rewritten at this build's length.
+            let held = match self.read_upto(OFFSETS_KEY + k as u16, &mut v) {
+                Ok(held) => held,
                 Err(_) => {
                     report.failed = true;
-                    false
+                    None
                 }
             };
+            let ok = held.is_some();
             if ok {
                 *o = v;
             }
+            let whole = held == Some(AXES);
+            shorter |= ok && !whole;
             if let Some(s) = self.saved_offsets.get_mut(k) {
-                *s = if ok { v } else { [f32::NAN; AXES] };
+                *s = if whole { v } else { [f32::NAN; AXES] };
             }
             report.defaulted += u16::from(!ok);
         }
@@ -311,7 +320,7 @@ impl<S: Storage> Persist<S> {
                 report.failed |= self.save_tool(k, e).is_err();
             }
         }
-        if report.defaulted > 0 {
+        if report.defaulted > 0 || shorter {
             let wrote = self
                 .save_settings(&settings)
                 .and(self.save_offsets(&offsets));

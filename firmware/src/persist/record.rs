@@ -45,18 +45,29 @@ pub fn encode<'b>(values: &[f32], buf: &'b mut [u8; MAX_RECORD]) -> &'b [u8] {
 
 /// Decodes a record of exactly `out.len()` finite values.
 pub fn decode(rec: &[u8], out: &mut [f32]) -> Option<()> {
+    (decode_upto(rec, out)? == out.len()).then_some(())
+}
+
+/// Decodes a record of 1 to `out.len()` finite values into the front of
+/// `out`, returning how many it held: an offset vector written by a build
+/// that drove fewer axes (four before burin drove six) is still that
+/// vector, its missing axes at 0. `out` is untouched when it fails.
+pub fn decode_upto(rec: &[u8], out: &mut [f32]) -> Option<usize> {
     let (&format, body) = rec.split_first()?;
-    if format != FORMAT || body.len() != 4 * out.len() {
+    let n = body.len() / 4;
+    if format != FORMAT || body.len() % 4 != 0 || n == 0 || n > out.len() {
+        return None;
+    }
+    if body
+        .chunks_exact(4)
+        .any(|b| !f32::from_le_bytes([b[0], b[1], b[2], b[3]]).is_finite())
+    {
         return None;
     }
     for (o, b) in out.iter_mut().zip(body.chunks_exact(4)) {
-        let v = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
-        if !v.is_finite() {
-            return None;
-        }
-        *o = v;
+        *o = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
     }
-    Some(())
+    Some(n)
 }
 
 #[cfg(test)]

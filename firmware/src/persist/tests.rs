@@ -128,6 +128,40 @@ fn old_three_value_tool_records_are_migrated() {
     assert_eq!(r.save_offsets(&back.offsets).ok(), Some(0));
 }
 
+/// A build that drove four axes stored offset vectors of four values: an
+/// update keeps them (the axes they lacked at 0), rewrites them at this
+/// build's length once, and a damaged one (a value not finite) still
+/// falls back to its default.
+#[test]
+fn offset_vectors_of_fewer_axes_are_kept_and_rewritten() {
+    let mut p = persist(Board::new());
+    p.load();
+    let mut buf = [0u8; MAX_RECORD];
+    let g55 = record::OFFSETS_KEY + 1;
+    let g28 = record::OFFSETS_KEY + crate::interp::WCS_COUNT as u16;
+    let four = record::encode(&[5.0, -1.5, 2.0, 90.0], &mut buf).to_vec();
+    p.storage().store(g55, &four).expect("store");
+    let mut nan = record::encode(&[1.0; AXES], &mut buf).to_vec();
+    nan[1..5].copy_from_slice(&f32::NAN.to_le_bytes());
+    p.storage().store(g28, &nan).expect("store");
+    let mut q = persist(flash_of(&mut p));
+    let back = q.load();
+    let mut want = [0.0; AXES];
+    want[..4].copy_from_slice(&[5.0, -1.5, 2.0, 90.0]);
+    assert_eq!(back.offsets.wcs[1], want);
+    assert_eq!(back.offsets.g28, [0.0; AXES], "the damaged vector");
+    assert_eq!(back.report.defaulted, 1, "{:?}", back.report);
+    // Rewritten at this build's length: the next boot reads it whole and
+    // has nothing to write.
+    let mut r = persist(flash_of(&mut q));
+    let again = r.load();
+    assert!(again.report.is_clean(), "{:?}", again.report);
+    assert_eq!(again.offsets.wcs[1], want);
+    let mut whole = [0u8; MAX_RECORD];
+    let len = r.storage().load(g55, &mut whole).expect("load");
+    assert_eq!(len, Some(1 + 4 * AXES));
+}
+
 #[test]
 fn values_set_would_refuse_fall_back_to_their_default() {
     let mut p = persist(Board::new());

@@ -205,6 +205,13 @@ impl<S: Storage> Device<S> {
         self.sleep
     }
 
+    /// A line's commands wait for the machine to stop (a sync: `G10`,
+    /// a `(debug,…)` reading the position, a probe): a stop now was
+    /// commanded, not a starved planner.
+    pub fn syncing(&self) -> bool {
+        self.sync
+    }
+
     /// True when nothing is queued in the device.
     pub fn drained(&self) -> bool {
         self.cmds.is_empty() && self.slots.is_empty() && !self.sync && !self.flow.replaying()

@@ -117,8 +117,8 @@ pub struct Settings {
     /// start from rest, never while stepping.
     pub enable_delay_us: f32,
     /// `$208` axes in reports (status positions, `$#`, `$I`'s `AXS`, the
-    /// framed handshake): 3 for an XYZ machine, up to the 4 burin drives.
-    /// GRBL senders size their position displays from it.
+    /// framed handshake): 3 for an XYZ machine, up to the [`AXES`] burin
+    /// drives. GRBL senders size their position displays from it.
     pub report_axes: u8,
     /// `$210` what G28/G30 mean: 0 (default) RS274NGC's and GRBL's stored
     /// positions through an intermediate point, the meaning CAM posts for
@@ -187,6 +187,11 @@ impl Default for Settings {
     }
 }
 
+/// `$208`'s default: the default machine is an XYZA mill (a rotary A), so
+/// GRBL senders show the four positions they showed before burin drove six
+/// axes; a machine that wires B and C sets `$208=6`.
+pub const DEFAULT_REPORT_AXES: u8 = if AXES < 4 { AXES as u8 } else { 4 };
+
 const fn axis(steps: f32, rate: f32, accel: f32, travel: f32) -> AxisSettings {
     AxisSettings {
         steps_per_mm: steps,
@@ -240,7 +245,7 @@ impl Settings {
         verify_home_tolerance: 0.05,
         homing_order: 0x34,
         enable_delay_us: 0.0,
-        report_axes: AXES as u8,
+        report_axes: DEFAULT_REPORT_AXES,
         g28_homes: false,
         tool_change: ToolChange::DEFAULT,
         spindle_delay_s: 4.0,

@@ -124,7 +124,7 @@ fn a_dropped_take_up_step_leaves_the_position_alone() {
     let mut takeup = segment(rt.generation());
     takeup.takeup = true;
     takeup.events = 4;
-    takeup.steps = [4, 0, 0, 0];
+    takeup.steps = crate::pad([4, 0, 0]);
     takeup.count = 4;
     let mut plain = segment(rt.generation());
     plain.new_block = true;

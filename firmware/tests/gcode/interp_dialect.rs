@@ -80,7 +80,15 @@ fn beagleg_g28_then_a_move_on_one_line() {
     let mut it = Interpreter::new();
     it.set_g28_homes(true);
     let c = run(&mut it, "G28 G1 X100 F100");
-    assert!(matches!(c[0], Command::Home { axes: 0b1111 }), "{c:?}");
+    assert!(
+        matches!(
+            c[0],
+            Command::Home {
+                axes: burin::command::ALL_AXES
+            }
+        ),
+        "{c:?}"
+    );
     assert!(
         matches!(c[1], Command::Line { end, .. } if end == burin::pad([100.0, 0.0, 0.0, 0.0])),
         "{c:?}"

@@ -190,7 +190,9 @@ fn session(pacing: Pacing, seed: u64) {
         unreachable!()
     };
     assert_eq!(st.state, "Idle");
-    assert_eq!(st.mpos, Some(vec![0.0; burin::AXES]));
+    // `$208`'s default number of axes.
+    let shown = usize::from(burin::settings::DEFAULT_REPORT_AXES);
+    assert_eq!(st.mpos, Some(vec![0.0; shown]));
 
     // The job: lines of varied length, a status query every 50 lines.
     let job: Vec<String> = (0..600)

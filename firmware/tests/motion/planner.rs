@@ -295,9 +295,9 @@ fn run_steps(
 fn exact_steps_with_smoothing_at_low_rates() {
     let s = Settings::default();
     let moves = [
-        burin::pad([3.3331, 1.2347, -0.1113, 0.0]),
-        burin::pad([0.0001, 2.5, 0.3, 4.55]),
-        burin::pad([-7.77, -1.01, 0.0, 0.0]),
+        protocol::first_axes([3.3331, 1.2347, -0.1113, 0.0, 0.0, 0.0]),
+        protocol::first_axes([0.0001, 2.5, 0.3, 4.55, 1.25, -0.85]),
+        protocol::first_axes([-7.77, -1.01, 0.0, 0.0, 0.3, 0.0]),
     ];
     let (pos, counts, amass) = run_steps(s, &moves);
     let last = moves[2];

@@ -228,6 +228,7 @@ impl<'r> VirtualDevice<'r> {
             log: log.as_mut(),
         };
         if let Some(pass) = sim.controller_pass(task) {
+            self.sim.task_syncing = self.controller.session.syncing();
             self.port_closed = false;
             self.port_opened = false;
             if self.pins != Some(pass.pins) {

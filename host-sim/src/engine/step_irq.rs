@@ -35,7 +35,8 @@ impl Sim<'_> {
             // only there because the next line had not arrived or been parsed.
             let running = self.machine.motion.hold() == burin::stepper::prep::Hold::Running
                 && !self.rt.hold_requested();
-            let waiting = !self.lines.is_empty() || (self.device_mode && self.input_pending);
+            let waiting = !self.lines.is_empty()
+                || (self.device_mode && self.input_pending && !self.task_syncing);
             if running && self.machine.ready() && waiting {
                 self.stats.starved += 1;
             }

@@ -113,10 +113,7 @@ fn jog_beyond_the_soft_limits_is_error_15_without_alarm() {
     assert_eq!(out, ["error:15"]);
     assert_eq!(r.status().state, "Idle");
     assert_eq!(r.cmd("G1 X-5 F1000"), ["ok"]);
-    assert_eq!(
-        r.until_idle().mpos,
-        Some(burin::pad([-5.0, 0.0, 0.0, 0.0]).to_vec())
-    );
+    assert_eq!(r.until_idle().mpos, rig::shown([-5.0, 0.0, 0.0, 0.0]));
 }
 
 /// Framed: the refused line's `Error`, then the alarm; the lines behind it
@@ -179,10 +176,7 @@ fn probe_move_refused_when_planned_stops_the_job() {
     // The probe line's `ok`; the move behind it is refused.
     assert_eq!(out.iter().filter(|l| *l == "ok").count(), 1, "{out:?}");
     assert_eq!(out.iter().filter(|l| *l == "error:9").count(), 1, "{out:?}");
-    assert_eq!(
-        r.status().mpos,
-        Some(burin::pad([0.0, 0.0, 0.0, 0.0]).to_vec())
-    );
+    assert_eq!(r.status().mpos, rig::shown([0.0, 0.0, 0.0, 0.0]));
 }
 
 /// A canned cycle's step refused by the soft limits (its R plane is above

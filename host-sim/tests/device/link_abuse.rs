@@ -170,7 +170,7 @@ fn line_right_behind_a_reset_runs() {
     let ok = out.iter().position(|l| l == "ok");
     assert!(banner.is_some() && banner < ok, "{out:?}");
     let st = r.until_idle();
-    assert_eq!(st.mpos, Some(burin::pad([-8.0, -2.0, 0.0, 0.0]).to_vec()));
+    assert_eq!(st.mpos, rig::shown([-8.0, -2.0, 0.0, 0.0]));
 }
 
 /// Issue 15 item 3: `Hold:1` while decelerating, `Hold:0` once stopped,
@@ -280,7 +280,7 @@ fn reprap_numbering_and_resend() {
     assert_eq!(r.cmd(&reprap("N1 G1 X-2"))[1], "Resend: 2");
     assert_eq!(r.cmd(&reprap("N2 G1 X-4")), ["ok"]);
     let st = r.until_idle();
-    assert_eq!(st.mpos, Some(burin::pad([-7.0, 0.0, 0.0, 0.0]).to_vec()));
+    assert_eq!(st.mpos, rig::shown([-7.0, 0.0, 0.0, 0.0]));
 }
 
 /// Issue 35 item 4: a line number of ten digits was refused as a checksum
@@ -303,7 +303,7 @@ fn reprap_numbers_up_to_2_pow_31_minus_1() {
     let st = r.until_idle();
     assert_eq!(
         st.mpos,
-        Some(burin::pad([-2.0, 0.0, 0.0, 0.0]).to_vec()),
+        rig::shown([-2.0, 0.0, 0.0, 0.0]),
         "the refused line did not run"
     );
 }
@@ -365,10 +365,7 @@ fn sleep_until_reset() {
     assert_eq!(r.status().state, "Alarm");
     assert_eq!(r.cmd("$X"), ["[MSG:Caution: Unlocked]", "ok"]);
     assert_eq!(r.cmd("G0 X-1"), ["ok"]);
-    assert_eq!(
-        r.until_idle().mpos,
-        Some(burin::pad([-1.0, 0.0, 0.0, 0.0]).to_vec())
-    );
+    assert_eq!(r.until_idle().mpos, rig::shown([-1.0, 0.0, 0.0, 0.0]));
     assert_eq!(r.dev.pins().map(|p| p.enable), Some(true));
 }
 

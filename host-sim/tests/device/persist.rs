@@ -93,10 +93,11 @@ fn settings_and_offsets_survive_a_reboot() {
     let mut a = Rig::boot(&cfg, &mut rec, SimFlash::new());
     // Erased flash: every item defaulted, said once after the banner.
     let boot = a.lines();
-    assert!(
-        has(&boot, "[MSG:Stored settings: 138 restored to defaults]"),
-        "{boot:?}"
-    );
+    // Every setting, offset vector and tool slot (138 with four axes).
+    let items =
+        burin::persist::SETTINGS + burin::persist::record::OFFSET_RECORDS + burin::interp::TOOLS;
+    let want = format!("[MSG:Stored settings: {items} restored to defaults]");
+    assert!(has(&boot, &want), "{boot:?}");
     assert_eq!(a.cmd("$110=1234"), ["ok"]);
     assert_eq!(a.cmd("G10 L2 P2 X5"), ["ok"]);
     assert_eq!(a.cmd("M500"), ["ok"]);

@@ -59,18 +59,11 @@ fn status_report_fields_and_motion() {
         "{st:?}"
     );
     let st = r.until_idle();
-    assert_eq!(
-        st.mpos,
-        Some(burin::pad([-95.0, -95.0, -11.0, 0.0]).to_vec())
-    );
+    assert_eq!(st.mpos, rig::shown([-95.0, -95.0, -11.0, 0.0]));
     assert_eq!(st.bf, Some((64, 128)));
     assert_eq!(r.cmd("$10=0"), ["ok"]);
     let st = r.status();
-    assert_eq!(
-        st.wpos,
-        Some(burin::pad([5.0, 5.0, -1.0, 0.0]).to_vec()),
-        "{st:?}"
-    );
+    assert_eq!(st.wpos, rig::shown([5.0, 5.0, -1.0, 0.0]), "{st:?}");
 }
 
 #[test]
@@ -88,7 +81,7 @@ fn check_mode_interprets_without_moving() {
     ));
     r.run(50);
     let st = r.status();
-    assert_eq!(st.mpos, Some(burin::pad([0.0, 0.0, 0.0, 0.0]).to_vec()));
+    assert_eq!(st.mpos, rig::shown([0.0, 0.0, 0.0, 0.0]));
     // GRBL soft-resets as check mode ends: the banner follows the `ok`.
     assert_eq!(
         r.cmd("$C"),
@@ -106,7 +99,7 @@ fn jog_and_jog_cancel() {
     assert_eq!(r.cmd("$J=G91 X-10 F1000"), ["ok"]);
     assert_eq!(r.status().state, "Jog");
     let st = r.until_idle();
-    assert_eq!(st.mpos, Some(burin::pad([-10.0, 0.0, 0.0, 0.0]).to_vec()));
+    assert_eq!(st.mpos, rig::shown([-10.0, 0.0, 0.0, 0.0]));
     // No feed, or a word a jog may not carry: refused, nothing moves.
     assert_eq!(r.cmd("$J=G91 X-10"), ["error:16"]);
     assert_eq!(r.cmd("$J=G91 X-10 M3 F100"), ["error:16"]);
@@ -122,7 +115,7 @@ fn jog_and_jog_cancel() {
     assert!(!r.lines().iter().any(|l| l.starts_with("ALARM")));
     assert_eq!(r.cmd("G1 X-20 F1000"), ["ok"]);
     let st = r.until_idle();
-    assert_eq!(st.mpos, Some(burin::pad([-20.0, 0.0, 0.0, 0.0]).to_vec()));
+    assert_eq!(st.mpos, rig::shown([-20.0, 0.0, 0.0, 0.0]));
 }
 
 #[test]
@@ -235,10 +228,7 @@ fn reset_in_a_finished_hold_keeps_the_position_without_alarm() {
     assert_eq!(after.state, "Idle");
     assert_eq!(after.mpos, st.mpos);
     assert_eq!(r.cmd("G1 X-5 F1000"), ["ok"]);
-    assert_eq!(
-        r.until_idle().mpos,
-        Some(burin::pad([-5.0, 0.0, 0.0, 0.0]).to_vec())
-    );
+    assert_eq!(r.until_idle().mpos, rig::shown([-5.0, 0.0, 0.0, 0.0]));
 }
 
 #[test]

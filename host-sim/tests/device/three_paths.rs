@@ -103,7 +103,7 @@ fn pty_ends_where_the_offline_run_ends() {
         let before = before.unwrap_or_else(|| panic!("no ok for {line:?}: {text:?}"));
         assert!(!before.contains("error"), "{line:?}: {before:?}");
     }
-    let spm = [80.0f32, 80.0, 400.0, 80.0];
+    let spm = burin::pad([80.0f32, 80.0, 400.0, 80.0]);
     let end = Instant::now() + Duration::from_secs(30);
     let got = loop {
         port.write_all(b"?").expect("write");

@@ -102,11 +102,7 @@ fn m6_stops_the_spindle_moves_holds_announces_and_resumes_on_cycle_start() {
     let end = r.until_idle();
     // G43 H2 (-3.5) applies to the move after the change: work Z -10 is
     // machine Z -13.5; the status reports WPos, which the offset is part of.
-    assert_eq!(
-        end.wpos,
-        Some(burin::pad([20.0, 40.0, -10.0, 0.0]).to_vec()),
-        "{end:?}"
-    );
+    assert_eq!(end.wpos, rig::shown([20.0, 40.0, -10.0, 0.0]), "{end:?}");
     let mut params = r.cmd("$#");
     params.retain(|l| l.starts_with("[TLO") || l.starts_with("[T:"));
     assert_eq!(params, ["[TLO:-3.500]", "[T:2|0.000,0.000,-3.500|0.000]"]);
@@ -159,11 +155,7 @@ fn a_tool_setter_measures_each_new_tool_against_the_first() {
         "{out:?}"
     );
     // The measured offset applies to the job's next move.
-    assert_eq!(
-        end.mpos,
-        Some(burin::pad([5.0, 6.0, -6.5, 0.0]).to_vec()),
-        "{end:?}"
-    );
+    assert_eq!(end.mpos, rig::shown([5.0, 6.0, -6.5, 0.0]), "{end:?}");
 }
 
 #[test]
@@ -174,14 +166,7 @@ fn a_peck_cycle_runs_to_its_end_point_on_the_board() {
     ok_all(&mut r, &["G0 Z5", "G91 G99 G83 X3 Y4 Z-6 R1 Q0.5 F600 L2"]);
     let end = r.until_idle();
     // G91: holes at +3/+4 twice, R 1 above the start level, Z 6 below R.
-    assert_eq!(
-        end.mpos,
-        Some(burin::pad([6.0, 8.0, 6.0, 0.0]).to_vec()),
-        "{end:?}"
-    );
+    assert_eq!(end.mpos, rig::shown([6.0, 8.0, 6.0, 0.0]), "{end:?}");
     assert_eq!(r.cmd("G90 G80 G0 X0 Y0"), ["ok"]);
-    assert_eq!(
-        r.until_idle().mpos,
-        Some(burin::pad([0.0, 0.0, 6.0, 0.0]).to_vec())
-    );
+    assert_eq!(r.until_idle().mpos, rig::shown([0.0, 0.0, 6.0, 0.0]));
 }

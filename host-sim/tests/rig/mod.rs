@@ -123,7 +123,7 @@ impl<'r> Rig<'r> {
         assert_eq!(self.status().state, "Idle");
         assert_eq!(self.cmd(&format!("G1 X{x} F1000")), ["ok"]);
         let st = self.until_idle();
-        assert_eq!(st.mpos, Some(burin::pad([x, 0.0, 0.0, 0.0]).to_vec()));
+        assert_eq!(st.mpos, shown([x, 0.0, 0.0, 0.0]));
     }
 }
 
@@ -178,4 +178,12 @@ impl Rig<'_> {
         }
         device_msgs(&out)
     }
+}
+
+/// A position as the status report shows it with the default `$208`: the
+/// first [`burin::settings::DEFAULT_REPORT_AXES`] values of `v` padded to
+/// every axis.
+pub fn shown<const N: usize>(v: [f32; N]) -> Option<Vec<f32>> {
+    let n = usize::from(burin::settings::DEFAULT_REPORT_AXES);
+    Some(burin::pad(v)[..n].to_vec())
 }

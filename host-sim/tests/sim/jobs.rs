@@ -89,7 +89,8 @@ fn simulate_writes_every_requested_file() {
         serde_json::from_slice(&std::fs::read(dir.join("demo.json")).unwrap()).unwrap();
     assert_eq!(json["steps"][0].as_u64(), Some(s.steps[0]));
     let csv = std::fs::read_to_string(dir.join("demo.csv")).unwrap();
-    assert!(csv.starts_with("tick,X,Y,Z,A\n"));
+    let names: String = burin::AXIS_NAMES.iter().map(|c| format!(",{c}")).collect();
+    assert!(csv.starts_with(&format!("tick{names}\n")));
     let last: Vec<i64> = csv
         .lines()
         .last()

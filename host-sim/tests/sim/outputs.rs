@@ -22,15 +22,24 @@ fn csv_header_and_rows_are_exact() {
     ));
     assert_eq!(t.rows(), 3);
     let out = String::from_utf8(t.into_inner().unwrap()).unwrap();
+    // One column per axis this build drives; the axes past A stood still.
+    let rest = ",0".repeat(burin::AXES - 4);
     assert_eq!(
         out,
         format!(
-            "tick,X,Y,Z,A\n100,1,0,0,0\n200,2,-1,0,0\n{},{},-1,7,{}\n",
+            "{}\n100,1,0,0,0{rest}\n200,2,-1,0,0{rest}\n{},{},-1,7,{}{rest}\n",
+            header(),
             u64::MAX,
             i64::MIN,
             i64::MAX
         )
     );
+}
+
+/// `tick` and a column per axis this build drives.
+fn header() -> String {
+    let names: Vec<String> = burin::AXIS_NAMES.iter().map(char::to_string).collect();
+    format!("tick,{}", names.join(","))
 }
 
 #[test]
@@ -39,7 +48,7 @@ fn csv_of_a_run_ends_at_the_final_position() {
     let s = synth::run(&mut t);
     let out = String::from_utf8(t.into_inner().unwrap()).unwrap();
     let mut lines = out.lines();
-    assert_eq!(lines.next(), Some("tick,X,Y,Z,A"));
+    assert_eq!(lines.next(), Some(header().as_str()));
     let rows: Vec<Vec<i64>> = lines
         .map(|l| l.split(',').map(|f| f.parse().unwrap()).collect())
         .collect();
@@ -158,7 +167,7 @@ fn json_has_every_contract_field() {
     let v: serde_json::Value = serde_json::from_slice(&out).unwrap();
     let nums = |k: &str| -> Vec<f64> {
         let a = v[k].as_array().unwrap_or_else(|| panic!("{k} is an array"));
-        assert_eq!(a.len(), 4, "{k}");
+        assert_eq!(a.len(), burin::AXES, "{k}");
         a.iter().map(|x| x.as_f64().unwrap()).collect()
     };
     assert_eq!(nums("final_position_mm"), s.final_position_mm.to_vec());
@@ -187,7 +196,7 @@ fn json_has_every_contract_field() {
         Some("invalid target: \"quoted\" & <odd>")
     );
     let axes = v["machine"]["axes"].as_array().unwrap();
-    assert_eq!(axes.len(), 4);
+    assert_eq!(axes.len(), burin::AXES);
     assert_eq!(axes[0]["name"], "X");
     assert_eq!(axes[3]["name"], "A");
     assert_eq!(axes[2]["steps_per_mm"].as_f64(), Some(400.0));
