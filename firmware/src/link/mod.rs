@@ -69,7 +69,8 @@ pub const RX_RING_HOLDS: usize = RX_RING - 1;
 /// this size, so host-sim's flow control is the board's): realtime bytes
 /// behind that much text still act on arrival. Beyond it the board NAKs
 /// its USB OUT endpoint and host-sim's pty leaves input in the kernel; the
-/// host holds the rest. 8 KiB of the board's RAM, which is nearly full.
+/// host holds the rest. 8 KiB of the F411's RAM (the F401 holds half:
+/// `boards/f401.rs`).
 pub const RX_BACKLOG: usize = 4096;
 
 /// Which protocol the port speaks right now.

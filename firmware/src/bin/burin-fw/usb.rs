@@ -19,11 +19,12 @@ pub static PORT_CLOSED: AtomicBool = AtomicBool::new(false);
 /// banner) before it handles anything the new client sent.
 pub static PORT_OPENED: AtomicBool = AtomicBool::new(false);
 
-/// Received tokens held while the ring is full (`burin::link::RX_BACKLOG`,
-/// 8 KiB of RAM). A static of init's, lent to the link: inside it, the
-/// link was 8 KB that init built on the stack and moved twice (init's
-/// frame was 20.7 KB on the F401).
-pub use burin::link::RX_BACKLOG as BACKLOG;
+/// Received tokens held while the ring is full: the board's
+/// `RX_BACKLOG` (`burin::link::RX_BACKLOG`, 8 KiB, on the F411; half on
+/// the F401, see `f401.rs`). A static of init's, lent to the link: inside
+/// it, the link was 8 KB that init built on the stack and moved twice
+/// (init's frame was 20.7 KB on the F401).
+pub use super::board::RX_BACKLOG as BACKLOG;
 
 /// One full-speed OUT packet.
 const PACKET: usize = 64;

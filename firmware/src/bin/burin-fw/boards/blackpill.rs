@@ -3,12 +3,13 @@
 //!
 //! | function | pin | why there |
 //! |---|---|---|
-//! | X/Y/Z/A step | PB12/PB13/PB14/PB15 | all motion outputs on port B: one BSRR write per event; these four sit together on one header |
-//! | X/Y/Z/A dir | PB4/PB5/PB6/PB7 | port B, also side by side |
+//! | X/Y/Z/A/B/C step | PB12/PB13/PB14/PB15/PB3/PB10 | all motion outputs on port B: one BSRR write per event; X-A sit together on one header |
+//! | X/Y/Z/A/B/C dir | PB4/PB5/PB6/PB7/PB1/PB9 | port B |
 //! | stepper enable (all) | PB8 | port B, so enable also goes through the step port; active low |
 //! | spindle PWM | PA8 | TIM1_CH1, an advanced timer free of the step timer |
-//! | spindle enable / dir | PB0 / PB1 | plain outputs |
-//! | flood / mist coolant | PB9 / PB10 | plain outputs |
+//! | spindle enable | PB0 | plain output |
+//! | spindle direction | PA15 | plain output (JTDI at reset, see below) |
+//! | flood / mist coolant | PA7 / PA9 | plain outputs |
 //! | cycle start | PA0 | the on-board KEY button is wired to it: the board has a start button for free |
 //! | feed hold | PA1 | |
 //! | reset / e-stop | PA2 | |
@@ -19,39 +20,34 @@
 //! invert). PA0–PA6 are EXTI lines 0–6, all distinct, and cycle start, feed
 //! hold, e-stop, probe and X limit get dedicated vectors (EXTI0–EXTI4).
 //!
+//! Why six axes fit only this way: every step and dir pin must sit on one
+//! port (a step event is one BSRR store of the step pins, a direction event
+//! one store of the dir pins and the step-off levels), and so must the
+//! enable (the fault path's store). Port B has 15 pins on this package
+//! (PB0-PB10, PB12-PB15; PB11 is VCAP); six step/dir pairs and the enable
+//! take 13, PB2 (BOOT1) stays alone, and PB0 is left: the spindle enable,
+//! the one output the fault path must cut in the same store as the drivers.
+//! Spindle direction, flood and mist go to port A's last free pins:
+//! PA15 and PB3 are JTDI and JTDO, released to GPIO by writing MODER
+//! (RM0383/RM0368 §8.3.2; SWD on PA13/PA14 keeps working): PA15 has JTDI's
+//! pull-up until configured (high = CCW, harmless for a direction), PB3 is
+//! tri-stated until then. PA9 is USART1 TX, which only the ROM bootloader
+//! uses (it listens on PA10, which stays alone for DFU); PA7 is the last
+//! EXTI-capable pin, so A, B and C have no limit input (rotary axes rarely
+//! have one; homing them is refused by `$206`'s cycles naming X, Y, Z).
+//!
 //! Left alone on purpose: PA11/PA12 (USB), PA13/PA14 (SWD), PC13 (LED),
-//! PC14/PC15 (32 kHz crystal), PB2 (BOOT1), PA9/PA10 (USART1, which the ROM
-//! bootloader also probes; PA10 needs to stay low for USB DFU), PB3/PA15
-//! (JTAG pins with reset pull-ups, spare). PB11 does not exist on this package.
-//!
-//! Six axes (issue 32; not wired yet, this map drives `burin::AXES` = 4):
-//! every step and dir pin must sit on one port (a step event is one BSRR
-//! store of the step pins, a direction event one store of the dir pins and
-//! the step-off levels), and so must the enable (the fault path's store).
-//! Port B has 15 pins here (PB0-PB10, PB12-PB15); six step/dir pairs and
-//! the enable take 13 of them, and PB2 (BOOT1) stays alone, which leaves
-//! one for the four port-B outputs above. So six pairs fit only if
-//! spindle direction, flood and mist leave port B:
-//!
-//! | function | pin | note |
-//! |---|---|---|
-//! | B / C step | PB3 / PB10 | PB3 is JTDO/SWO, free under SWD (it may glitch once at reset) |
-//! | B / C dir | PB1 / PB9 | |
-//! | spindle enable | PB0 | unchanged |
-//! | spindle direction | PA15 | JTDI's reset pull-up: high (CCW) until set, harmless for a direction |
-//! | flood / mist | PA7 / PA9 | the fault path then stores to GPIOA as well; PA9 is USART1 TX, which only the ROM bootloader uses |
-//! | A/B/C limits | none | no EXTI-capable pin is left (PA7 was the last); rotary axes rarely have one |
-//!
-//! That moves three existing outputs (a wiring change for four-axis
-//! users), so it waits for the six-axis build.
+//! PC14/PC15 (32 kHz crystal; these pins may not source current anyway),
+//! PB2 (BOOT1), PA10 (USART1 RX: it needs to stay low for USB DFU).
+//! PB11 does not exist on this package.
 use super::super::outputs::EnablePin;
 use super::super::step::{PortPins, StepPort};
 use burin::seams::StepPins;
 use burin::stepper::Switches;
 use stm32f4xx_hal::{
     gpio::{
-        gpioa, gpiob, gpioc, Edge, ExtiPin, Input, Output, PinState, Speed, PA0, PA1, PA11, PA12,
-        PA2, PA3, PA4, PA5, PA6, PB0, PB1, PB10, PB9, PC13,
+        gpioa, gpiob, gpioc, AnyPin, Edge, ExtiPin, Input, Output, PinState, Speed, PA0, PA1,
+        PA11, PA12, PA2, PA3, PA4, PA5, PA6, PB0, PC13,
     },
     pac,
     prelude::*,
@@ -63,8 +59,8 @@ use stm32f4xx_hal::{
 /// Step, direction and enable pin numbers on port B, one step/dir pair per
 /// axis (`burin::AXES` of them: a new axis count needs its pins here).
 pub const PORT_PINS: PortPins = PortPins {
-    step: [12, 13, 14, 15],
-    dir: [4, 5, 6, 7],
+    step: [12, 13, 14, 15, 3, 10],
+    dir: [4, 5, 6, 7, 1, 9],
     enable: 8,
 };
 
@@ -132,24 +128,29 @@ pub fn closed_now() -> u8 {
 /// E-stop: spindle enable, PWM, flood and mist off in three stores, from
 /// the e-stop interrupt, before the parse task hears of it.
 pub fn kill_aux() {
-    // SAFETY: BSRR is write-only set/reset: this store only resets PB0,
-    // PB9 and PB10 (spindle enable, flood, mist, see `Aux`) and touches no
+    // SAFETY: BSRR is write-only set/reset: these stores only reset PB0
+    // (spindle enable) and PA7/PA9 (flood, mist, see `Aux`) and touch no
     // other pin. CCR1 of TIM1 is the spindle PWM compare value; a single
     // store of 0 is the duty the parse task also writes for "off".
     unsafe {
-        (*pac::GPIOB::ptr()).bsrr().write(|w| w.bits(AUX_OFF));
+        (*pac::GPIOB::ptr()).bsrr().write(|w| w.bits(AUX_OFF_B));
+        (*pac::GPIOA::ptr()).bsrr().write(|w| w.bits(AUX_OFF_A));
         (*pac::TIM1::ptr()).ccr1().write(|w| w.bits(0));
     }
 }
 
-/// Spindle enable (PB0), flood (PB9), mist (PB10): the reset half of BSRR.
-const AUX_OFF: u32 = (1 << 16) | (1 << (16 + 9)) | (1 << (16 + 10));
+/// Spindle enable (PB0): the reset half of GPIOB's BSRR.
+const AUX_OFF_B: u32 = 1 << 16;
+/// Flood (PA7), mist (PA9): the reset half of GPIOA's BSRR. On QEMU's
+/// board PA9 is USART1's TX in its alternate function, where ODR drives
+/// nothing (RM0383 §8.3.7), so the same store is harmless there.
+pub const AUX_OFF_A: u32 = (1 << (16 + 7)) | (1 << (16 + 9));
 
-/// The fault path's GPIOB word: [`AUX_OFF`] and the stepper-enable pin
+/// The fault path's GPIOB word: [`AUX_OFF_B`] and the stepper-enable pin
 /// (PB8) at "drivers off" under `$4` (`enable_active_high`).
 pub const fn outputs_off_word(enable_active_high: bool) -> u32 {
     let pin = PORT_PINS.enable as u32;
-    AUX_OFF
+    AUX_OFF_B
         | if enable_active_high {
             1 << (pin + 16)
         } else {
@@ -161,19 +162,21 @@ pub const fn outputs_off_word(enable_active_high: bool) -> u32 {
 const OC1M_MASK: u32 = 0b111 << 4;
 const OC1M_FORCE_INACTIVE: u32 = 0b100 << 4;
 
-/// The fault path: spindle enable, coolant and drivers off in one GPIOB
-/// store (`word` from [`outputs_off_word`]), then the spindle/laser PWM
-/// forced low at once (CCR1 alone would wait for the preloaded update).
-/// Register stores only: no HAL, nothing that can fault on a sane chip.
+/// The fault path: spindle enable and drivers off in one GPIOB store
+/// (`word` from [`outputs_off_word`]), coolant in one GPIOA store, then
+/// the spindle/laser PWM forced low at once (CCR1 alone would wait for
+/// the preloaded update). Register stores only: no HAL, nothing that can
+/// fault on a sane chip.
 #[inline(always)]
 pub fn outputs_off(word: u32) {
-    // SAFETY: BSRR is write-only set/reset and `word` names only PB0, PB8,
-    // PB9 and PB10 (`outputs_off_word`). TIM1's CCR1 and CCMR1 belong to
-    // the spindle PWM (channel 1); duty 0 and OC1M = force inactive drive
-    // PA8 low now, whatever the preload holds. The RMW of CCMR1 can race
-    // nothing: a fault runs with interrupts masked.
+    // SAFETY: BSRR is write-only set/reset; `word` names only PB0 and PB8
+    // (`outputs_off_word`), `AUX_OFF_A` only PA7 and PA9. TIM1's CCR1 and
+    // CCMR1 belong to the spindle PWM (channel 1); duty 0 and OC1M = force
+    // inactive drive PA8 low now, whatever the preload holds. The RMW of
+    // CCMR1 can race nothing: a fault runs with interrupts masked.
     unsafe {
         (*pac::GPIOB::ptr()).bsrr().write(|w| w.bits(word));
+        (*pac::GPIOA::ptr()).bsrr().write(|w| w.bits(AUX_OFF_A));
         let tim1 = &*pac::TIM1::ptr();
         tim1.ccr1().write(|w| w.bits(0));
         tim1.ccmr1_output()
@@ -220,13 +223,14 @@ pub fn switches() -> Switches {
     }
 }
 
-/// Spindle and coolant outputs.
+/// Spindle and coolant outputs. Direction and coolant are type-erased:
+/// QEMU's board (`qemu.rs`) has USART1 on PA9 and puts mist elsewhere.
 pub struct Aux {
     pub spindle_pwm: PwmChannel<pac::TIM1, 0>,
     pub spindle_enable: PB0<Output>,
-    pub spindle_dir: PB1<Output>,
-    pub flood: PB9<Output>,
-    pub mist: PB10<Output>,
+    pub spindle_dir: AnyPin<Output>,
+    pub flood: AnyPin<Output>,
+    pub mist: AnyPin<Output>,
 }
 
 impl Aux {
@@ -335,6 +339,22 @@ pub fn split(
             .pb7
             .into_push_pull_output_in_state(idle.dir(3))
             .speed(Speed::Medium),
+        gpiob
+            .pb3
+            .into_push_pull_output_in_state(idle.step(4))
+            .speed(Speed::Medium),
+        gpiob
+            .pb10
+            .into_push_pull_output_in_state(idle.step(5))
+            .speed(Speed::Medium),
+        gpiob
+            .pb1
+            .into_push_pull_output_in_state(idle.dir(4))
+            .speed(Speed::Medium),
+        gpiob
+            .pb9
+            .into_push_pull_output_in_state(idle.dir(5))
+            .speed(Speed::Medium),
         gpiob.pb8.into_push_pull_output_in_state(idle.enable_off()),
     );
     // SAFETY: only forms the address of GPIOB's BSRR from the PAC's fixed
@@ -366,9 +386,9 @@ pub fn split(
     let mut aux = Aux {
         spindle_pwm,
         spindle_enable: gpiob.pb0.into_push_pull_output(),
-        spindle_dir: gpiob.pb1.into_push_pull_output(),
-        flood: gpiob.pb9.into_push_pull_output(),
-        mist: gpiob.pb10.into_push_pull_output(),
+        spindle_dir: gpioa.pa15.into_push_pull_output().erase(),
+        flood: gpioa.pa7.into_push_pull_output().erase(),
+        mist: gpioa.pa9.into_push_pull_output().erase(),
     };
     aux.all_off();
 

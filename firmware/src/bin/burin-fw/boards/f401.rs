@@ -20,3 +20,13 @@ pub fn clocks() -> Config {
 
 /// The regulator as the clocks need it: nothing to do (84 MHz is within scale 2, the reset value of `PWR_CR.VOS` (RM0368)).
 pub fn regulator(_pwr: &stm32f4xx_hal::pac::PWR, _rcc: &stm32f4xx_hal::pac::RCC) {}
+
+/// Received tokens the link holds while the token ring is full: 2048
+/// (4 KiB), half the F411's. The F401's statics have 44 KiB (its 64 KiB
+/// SRAM less the 20 KiB stack, whose measured headroom, 9.7 KB, is close
+/// to its 8 KiB floor), and six axes took 2.2 KB more than that left.
+/// What it costs: a sender that writes without counting (no GRBL
+/// character counting, no credits) sees USB NAKs 4 KiB of text sooner;
+/// realtime bytes still act on arrival, and nothing is lost. host-sim
+/// models the F411's 4096.
+pub const RX_BACKLOG: usize = burin::link::RX_BACKLOG / 2;

@@ -6,6 +6,10 @@ use stm32f4xx_hal::{pac, prelude::*, rcc::Config};
 pub use super::blackpill::*;
 pub use super::blackpill_init::*;
 
+/// Received tokens the link holds while the token ring is full: the
+/// size host-sim models (`burin::link::RX_BACKLOG`, 8 KiB).
+pub const RX_BACKLOG: usize = burin::link::RX_BACKLOG;
+
 /// Human-readable board name for the startup log and `$I`.
 pub const NAME: &str = "WeAct Black Pill STM32F411CEU6";
 

@@ -89,6 +89,10 @@ pub fn split(
         gpiob.pb5.into_push_pull_output_in_state(idle.dir(1)),
         gpiob.pb6.into_push_pull_output_in_state(idle.dir(2)),
         gpiob.pb7.into_push_pull_output_in_state(idle.dir(3)),
+        gpiob.pb3.into_push_pull_output_in_state(idle.step(4)),
+        gpiob.pb10.into_push_pull_output_in_state(idle.step(5)),
+        gpiob.pb1.into_push_pull_output_in_state(idle.dir(4)),
+        gpiob.pb9.into_push_pull_output_in_state(idle.dir(5)),
         gpiob.pb8.into_push_pull_output_in_state(idle.enable_off()),
     );
     // SAFETY: only forms the address of GPIOB's BSRR from the PAC's fixed
@@ -120,9 +124,11 @@ pub fn split(
     let mut aux = Aux {
         spindle_pwm,
         spindle_enable: gpiob.pb0.into_push_pull_output(),
-        spindle_dir: gpiob.pb1.into_push_pull_output(),
-        flood: gpiob.pb9.into_push_pull_output(),
-        mist: gpiob.pb10.into_push_pull_output(),
+        spindle_dir: gpioa.pa15.into_push_pull_output().erase(),
+        flood: gpioa.pa7.into_push_pull_output().erase(),
+        // PA9 is the link's TX here: mist on a pin the F405 has spare
+        // (QEMU models no GPIO; the fault path's PA7/PA9 store stands for it).
+        mist: gpioc.pc6.into_push_pull_output().erase(),
     };
     aux.all_off();
 
