@@ -20,6 +20,10 @@ pub(crate) const SENSE_WATCH: u8 = 1;
 pub(crate) const SENSE_HARD: u8 = 2;
 /// A new generation the stepper has not looked at yet.
 pub(crate) const SENSE_FLUSH: u8 = 4;
+/// The segment moves B or C: always set here, so such a segment's every
+/// event takes the out-of-line path, and the common one (X-A) tests
+/// nothing more than the three reasons above.
+pub(crate) const SENSE_EXTRA: u8 = 8;
 
 /// Why the stepper stopped on its own.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -130,7 +134,7 @@ impl Realtime {
             running_speed: AtomicU32::new(0),
             running_line: AtomicU32::new(0),
             running_cut: AtomicU32::new(0),
-            attention: AtomicU8::new(SENSE_WATCH),
+            attention: AtomicU8::new(SENSE_WATCH | SENSE_EXTRA),
             step_config: StepConfigCell::new(),
         }
     }

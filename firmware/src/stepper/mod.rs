@@ -34,7 +34,7 @@ mod tests;
 // because the board app and bench-target name them from the stepper.
 pub use crate::seams::{StepConfig, Switches};
 
-use crate::realtime::{Realtime, Trip, SENSE_FLUSH, SENSE_HARD, SENSE_WATCH};
+use crate::realtime::{Realtime, Trip, SENSE_EXTRA, SENSE_FLUSH, SENSE_HARD, SENSE_WATCH};
 use crate::AXES;
 
 /// Highest smoothing level: at low step rates the Bresenham runs at up to
@@ -92,21 +92,20 @@ pub struct StepEvent {
 
 /// What the interrupt keeps of the running segment, pre-computed once per
 /// segment so an event is a handful of adds and compares.
+///
+/// `repr(C)`, the per-event fields first: with them (and [`Stepper`]'s)
+/// within 124 bytes of the struct's start, Thumb's 16-bit loads and
+/// stores reach them, so the common step is fewer flash lines (each cold
+/// line costs the flash's wait states; bench-target).
 #[derive(Clone, Copy, Debug, Default)]
+#[repr(C)]
 struct Running {
     /// Per-event Bresenham increments (steps << (MAX_AMASS - amass)).
     inc: [u32; AXES],
-    threshold: u32,
-    period: u32,
-    watch: crate::planner::Watch,
-    generation: u32,
-    speed_mm_min: f32,
-    line: u32,
-    /// False for dwells: a switch that is already closed while standing
-    /// still is not a new event.
-    moving: bool,
     /// Position change per step of each axis (±1, from the direction).
     delta: [i32; AXES],
+    threshold: u32,
+    period: u32,
     /// What takes this segment's events off the plain path, against
     /// [`Realtime`]'s attention byte: [`SENSE_WATCH`] (it watches a limit
     /// or the probe), [`SENSE_HARD`] (hard limits apply if armed) and
@@ -115,6 +114,13 @@ struct Running {
     /// The segment steps an axis past the fourth (B, C): only then does
     /// the step event run theirs.
     extra: bool,
+    /// False for dwells: a switch that is already closed while standing
+    /// still is not a new event.
+    moving: bool,
+    watch: crate::planner::Watch,
+    generation: u32,
+    speed_mm_min: f32,
+    line: u32,
 }
 
 impl Running {
@@ -122,19 +128,22 @@ impl Running {
         let w = self.watch;
         let watch = (self.moving && w.limits != 0) || w.probe != 0;
         let hard = self.moving && !w.homing;
-        (u8::from(watch) * SENSE_WATCH) | (u8::from(hard) * SENSE_HARD) | SENSE_FLUSH
+        let extra = u8::from(self.extra) * SENSE_EXTRA;
+        (u8::from(watch) * SENSE_WATCH) | (u8::from(hard) * SENSE_HARD) | SENSE_FLUSH | extra
     }
 }
 
-/// The interrupt half: Bresenham over the current segment.
+/// The interrupt half: Bresenham over the current segment. `repr(C)`,
+/// the per-event fields first (see [`Running`]).
 #[derive(Debug)]
+#[repr(C)]
 pub struct Stepper {
-    pub cfg: StepConfig,
     run: Running,
-    /// Events left in the running segment (0: none running).
-    left: u32,
     acc: [u32; AXES],
     position: [i32; AXES],
+    /// Events left in the running segment (0: none running).
+    left: u32,
+    pub cfg: StepConfig,
     dir: u8,
     halted: Option<u32>,
     last_end: bool,
@@ -330,8 +339,9 @@ impl Stepper {
                 return ev;
             }
         }
-        // A flush or a switch to read: one load, one AND.
+        // A flush, a switch to read or B/C to step: one load, one AND.
         let attention = self.run.sense & rt.attention();
+        let mut mask = 0;
         if attention == SENSE_HARD {
             // Hard limits alone, the common case while they are armed:
             // the switch read and one test stay inline (a closed switch
@@ -346,25 +356,23 @@ impl Stepper {
                 }
             }
         } else if attention != 0 {
-            if let Some(ev) = self.attend(rt, pop, sw) {
-                return ev;
+            match self.attend(rt, pop, sw) {
+                Ok(extra) => mask = extra,
+                Err(ev) => return ev,
             }
         }
         // Written out per axis: the size-optimised build keeps a loop,
-        // and its counter cost more than the axes' own work. Six slots,
-        // those past AXES compile to nothing. B and C run only when the
-        // segment moves them (one predictable branch): unrolled on every
-        // event they cost 36 cycles of bench-target's step path, behind
-        // the branch 24 (346 and 334 with hard limits, 310 on four axes).
+        // and its counter cost more than the axes' own work. B and C
+        // (slots past AXES compile to nothing) step in `attend`, which a
+        // segment moving them always takes ([`SENSE_EXTRA`]): unrolled
+        // here they cost 36 cycles of bench-target's step path, behind a
+        // test of their own 20 (the branch lands on a cold flash line).
         const _: () = assert!(AXES <= 6);
         let t = self.run.threshold;
-        let mut mask = self.axis::<0>(rt, t)
+        mask |= self.axis::<0>(rt, t)
             | self.axis::<1>(rt, t)
             | self.axis::<2>(rt, t)
             | self.axis::<3>(rt, t);
-        if AXES > 4 && self.run.extra {
-            mask |= self.axis::<4>(rt, t) | self.axis::<5>(rt, t);
-        }
         self.left -= 1;
         self.event(mask, self.run.period)
     }
@@ -454,7 +462,8 @@ impl Stepper {
 
     /// The attention byte has one of this segment's reasons: a flush
     /// (the running segment is dropped at once, not at its end), then the
-    /// switches. `Some`: the event to return instead of a step.
+    /// switches, then B and C. `Err`: the event to return instead of a
+    /// step; `Ok`: B's and C's step bits of this event.
     #[inline(never)]
     #[cold]
     fn attend(
@@ -462,16 +471,23 @@ impl Stepper {
         rt: &Realtime,
         pop: &mut impl FnMut() -> Option<Segment>,
         sw: impl FnOnce() -> Switches,
-    ) -> Option<StepEvent> {
+    ) -> Result<u8, StepEvent> {
         if rt.take_flush() && self.run.generation != rt.generation() {
             if let Some(ev) = self.next_segment(rt, pop) {
-                return Some(ev);
+                return Err(ev);
             }
         }
         if self.run.sense & rt.attention() & (SENSE_WATCH | SENSE_HARD) != 0 {
-            return self.check_switches(rt, sw());
+            if let Some(ev) = self.check_switches(rt, sw()) {
+                return Err(ev);
+            }
         }
-        None
+        let t = self.run.threshold;
+        Ok(if self.run.extra {
+            self.axis::<4>(rt, t) | self.axis::<5>(rt, t)
+        } else {
+            0
+        })
     }
 
     /// Homing and probe watches and hard limits, on the levels read now.

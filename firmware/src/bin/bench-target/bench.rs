@@ -486,10 +486,12 @@ fn trace_run(clock: &mut Clock) -> ! {
     exit(true)
 }
 
-/// The board's `StepTask` on the stand-ins.
+/// The board's `StepTask` on the stand-ins (its layout too: `repr(C)`,
+/// the stepper first).
+#[repr(C)]
 struct Task<'q, const HW: bool, const COUNT: bool> {
-    driver: StepDriver,
     stepper: Stepper,
+    driver: StepDriver,
     hw: BenchHw<HW, COUNT>,
     queue: heapless::spsc::Consumer<'q, Segment>,
 }

@@ -407,9 +407,13 @@ impl StepTimer for StepHw {
 
 /// The TIM5 task's state: the core's [`StepDriver`] and [`Stepper`] fed from
 /// the segment queue, on [`StepHw`].
+/// `repr(C)`, the stepper first: its per-event fields then sit within
+/// reach of Thumb's 16-bit loads and stores from the task's base
+/// (`burin::stepper::Stepper`'s layout note; bench-target's `Task` too).
+#[repr(C)]
 pub struct StepTask {
-    driver: StepDriver,
     stepper: Stepper,
+    driver: StepDriver,
     hw: StepHw,
     queue: Consumer<'static, Segment>,
 }
