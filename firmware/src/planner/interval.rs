@@ -57,7 +57,12 @@ pub fn floor_ticks(s: &Settings, tick_hz: u32, steps: &[u32; AXES], count: u32, 
             continue;
         }
         let limit = libm::ceilf(tick_hz / hz).max(ceiling);
-        let k = (events / n as u64).max(1) as f32;
+        // A u32 division where the events fit (always, but for blocks
+        // of more than 2^29 steps): the u64 one is a library call.
+        let k = match u32::try_from(events) {
+            Ok(e) => (e / n).max(1) as f32,
+            Err(_) => (events / n as u64).max(1) as f32,
+        };
         let p = libm::ceilf(limit / k);
         if p.is_finite() && p > floor as f32 {
             floor = p.min(crate::seams::MAX_PERIOD as f32) as u32;

@@ -97,7 +97,9 @@ impl<const N: usize> Planner<N> {
             if d < 0 {
                 b.dir_mask |= 1 << i;
             }
-            mm[i] = d as f32 / s.axes[i].steps_per_mm;
+            // Within MAX_BLOCK_STEPS, so an i32: one VCVT, where an i64
+            // takes a library call (bench-target's plan_block_insns).
+            mm[i] = d as i32 as f32 / s.axes[i].steps_per_mm;
             len2 += mm[i] * mm[i];
         }
         b.count = b.steps.iter().copied().max().unwrap_or(0);

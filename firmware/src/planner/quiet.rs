@@ -146,17 +146,20 @@ impl<const N: usize> Planner<N> {
         let mut after = [0.0f32; AXES];
         let mut c = newest;
         while c >= 2 {
-            let b = *self.at(c);
-            let time = b.min_time();
+            // Three fields, not a copy of the block.
+            let (time, quiet, release) = {
+                let b = self.at(c);
+                (b.min_time(), b.quiet, b.release)
+            };
             for (i, t) in after.iter_mut().enumerate() {
-                *t = if b.quiet & (1 << i) != 0 && *t >= 0.0 {
+                *t = if quiet & (1 << i) != 0 && *t >= 0.0 {
                     *t + time
                 } else {
                     -1.0
                 };
             }
-            if b.release != 0 {
-                let axes = (0..AXES).filter(|i| b.release & (1 << i) != 0);
+            if release != 0 {
+                let axes = (0..AXES).filter(|i| release & (1 << i) != 0);
                 if axes.clone().all(|i| after[i] >= TIME * W) {
                     let prev = *self.at(c - 1);
                     let b = self.at(c);
@@ -169,7 +172,7 @@ impl<const N: usize> Planner<N> {
                     // A loud block came first: this corner keeps its hold.
                     self.at(c).release = 0;
                 } else {
-                    seen |= b.release;
+                    seen |= release;
                 }
             }
             // Corners further back had this much quiet after them at the

@@ -46,8 +46,8 @@ use burin::seams::StepPins;
 use burin::stepper::Switches;
 use stm32f4xx_hal::{
     gpio::{
-        gpioa, gpiob, gpioc, AnyPin, Edge, ExtiPin, Input, Output, PinState, Speed, PA0, PA1,
-        PA11, PA12, PA2, PA3, PA4, PA5, PA6, PB0, PC13,
+        gpioa, gpiob, gpioc, AnyPin, Edge, ExtiPin, Input, Output, PinState, Speed, PA0, PA1, PA11,
+        PA12, PA2, PA3, PA4, PA5, PA6, PB0, PC13,
     },
     pac,
     prelude::*,
