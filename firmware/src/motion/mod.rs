@@ -116,6 +116,7 @@ impl<const N: usize> Pipeline<N> {
                 watch,
                 line,
             } => {
+                let speed = self.rotary_feed(&end, speed);
                 if !self.compensating() {
                     return self.planner.push_line_mm(&end, speed, watch, line);
                 }
@@ -130,6 +131,7 @@ impl<const N: usize> Pipeline<N> {
                 curve,
                 line,
             } => {
+                let speed = self.rotary_feed(&end, speed);
                 if !self.compensating() {
                     return self.planner.push_chord(&end, speed, line, curve);
                 }
@@ -144,6 +146,40 @@ impl<const N: usize> Pipeline<N> {
                 self.planner.push_dwell(ticks, line)
             }
         }
+    }
+
+    /// RS274NGC's feed rule for rotary axes (`$376`), as LinuxCNC and
+    /// grblHAL apply it: F is the speed along the linear axes' path, mm
+    /// per minute, and the rotary axes take the move's time; a move of
+    /// rotary axes alone takes F in degrees per minute along their own
+    /// path. The planner's path is every axis's (its limits hold per
+    /// axis), so a move that turns a rotary axis while a linear one moves
+    /// is given as its time (`Speed::Time`, as G93 gives it): linear
+    /// length / F. Every other move (no rotary axis set, or only one kind
+    /// of axis moving) keeps its feed, so machines without `$376` plan
+    /// exactly as before.
+    fn rotary_feed(&self, end: &Pos, speed: Speed) -> Speed {
+        let rotary = self.settings().rotary_axes;
+        let Speed::Feed(f) = speed else {
+            return speed;
+        };
+        if rotary == 0 {
+            return speed;
+        }
+        let from = self.planner.commanded_mm();
+        let (mut linear, mut turned) = (0.0f32, false);
+        for i in 0..AXES {
+            let d = end[i] - from[i];
+            if rotary & (1 << i) != 0 {
+                turned |= d != 0.0;
+            } else {
+                linear += d * d;
+            }
+        }
+        if !turned || linear <= 0.0 {
+            return speed;
+        }
+        Speed::Time(libm::sqrtf(linear) / f)
     }
 
     /// The next [`submit`](Self::submit) has a planner slot (two while

@@ -135,3 +135,35 @@ fn room_means_room_for_a_take_up_too() {
     }
     assert!(p.planner().len() >= 3, "{}", p.planner().len());
 }
+
+/// `$376`: with A rotary, F is along X alone and A takes the move's time;
+/// A alone keeps F (degrees per second here); without `$376` the path is
+/// every axis's, as GRBL's.
+#[test]
+fn rotary_axes_take_the_linear_move_s_time() {
+    let to = |x: f32, a: f32| Move::Line {
+        end: crate::pad([x, 0.0, 0.0, a]),
+        speed: Speed::Feed(10.0),
+        watch: Watch::default(),
+        line: 1,
+    };
+    let programmed = |p: &Pipeline<16>, k: usize| p.planner().block(k).map(|b| b.programmed);
+    let mut s = Settings::default();
+    s.axes[3].max_rate = 1.0e5;
+    let mut plain = Pipeline::<16>::new(s, 1_000_000);
+    plain.submit(to(10.0, 90.0)).unwrap();
+    assert_eq!(programmed(&plain, 0), Some(10.0));
+
+    s.set(376, 8.0).unwrap();
+    let mut p = Pipeline::<16>::new(s, 1_000_000);
+    // 10 mm of X at 10 mm/s: 1 s, so the 90.55 mm-or-degree path at 90.55.
+    p.submit(to(10.0, 90.0)).unwrap();
+    let v = programmed(&p, 0).unwrap();
+    assert!((v - libm::sqrtf(100.0 + 8100.0)).abs() < 1e-3, "{v}");
+    // A alone: F in degrees per second along A.
+    p.submit(to(10.0, 0.0)).unwrap();
+    assert_eq!(programmed(&p, 1), Some(10.0));
+    // X alone: unchanged.
+    p.submit(to(0.0, 0.0)).unwrap();
+    assert_eq!(programmed(&p, 2), Some(10.0));
+}

@@ -413,6 +413,11 @@ impl<const N: usize> Planner<N> {
         core::array::from_fn(|i| steps[i] as f32 / self.settings.axes[i].steps_per_mm)
     }
     /// Step position at the end of everything planned.
+    /// The last queued move's commanded end, mm (where the next starts).
+    pub fn commanded_mm(&self) -> &Pos {
+        &self.position_mm
+    }
+
     pub fn position(&self) -> [i32; AXES] {
         self.position
     }

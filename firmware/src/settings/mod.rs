@@ -138,6 +138,12 @@ pub struct Settings {
     /// reversal (`motion::Pipeline`), without it showing in the reported
     /// position. 0: no compensation.
     pub backlash_mm: [f32; AXES],
+    /// `$376` rotary axes, bit n = axis n (grblHAL's number): their
+    /// positions are degrees, and a feed move that also moves a linear
+    /// axis takes F along the linear axes' path alone, the rotary ones
+    /// following (RS274NGC's rule, `motion::Pipeline::rotary_feed`).
+    /// 0 (the default): every axis counts in the path length, as GRBL.
+    pub rotary_axes: u8,
 }
 
 /// What M6 does (`$211`-`$219`). Positions are machine mm.
@@ -250,6 +256,7 @@ impl Settings {
         tool_change: ToolChange::DEFAULT,
         spindle_delay_s: 4.0,
         backlash_mm: [0.0; AXES],
+        rotary_axes: 0,
     };
 
     /// Every field zero (enums their first variant): only the board's
@@ -295,5 +302,6 @@ impl Settings {
         tool_change: ToolChange::ZEROED,
         spindle_delay_s: 0.0,
         backlash_mm: [0.0; AXES],
+        rotary_axes: 0,
     };
 }

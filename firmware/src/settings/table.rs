@@ -231,6 +231,9 @@ const SPINDLE: [(u16, Kind); 1] = [(
         max: 20.0,
     },
 )];
+/// `$376`: the rotary axes (grblHAL's number), whose feed rule
+/// `motion::Pipeline` applies.
+const ROTARY: [(u16, Kind); 1] = [(376, Kind::Mask { bits: AXIS_BITS })];
 const POSITION: Kind = Kind::Real {
     min: -BIG,
     max: BIG,
@@ -242,7 +245,8 @@ pub fn kind(n: u16) -> Option<Kind> {
         .iter()
         .chain(BURIN.iter())
         .chain(TOOL.iter())
-        .chain(SPINDLE.iter());
+        .chain(SPINDLE.iter())
+        .chain(ROTARY.iter());
     if let Some(&(_, k)) = own.find(|(m, _)| *m == n) {
         return Some(k);
     }
@@ -260,8 +264,12 @@ pub fn is_integer(n: u16) -> bool {
 /// Every setting number in ascending order (the `$$` listing).
 /// How many settings [`numbers`] lists: the per-axis groups grow with
 /// [`AXES`].
-pub const COUNT: usize =
-    GLOBAL.len() + AXIS_GROUPS.len() * AXES + BURIN.len() + TOOL.len() + SPINDLE.len();
+pub const COUNT: usize = GLOBAL.len()
+    + AXIS_GROUPS.len() * AXES
+    + BURIN.len()
+    + TOOL.len()
+    + SPINDLE.len()
+    + ROTARY.len();
 
 pub fn numbers() -> impl Iterator<Item = u16> {
     let axes = AXIS_GROUPS
@@ -274,6 +282,7 @@ pub fn numbers() -> impl Iterator<Item = u16> {
         .chain(BURIN.iter().map(|(n, _)| *n))
         .chain(TOOL.iter().map(|(n, _)| *n))
         .chain(SPINDLE.iter().map(|(n, _)| *n))
+        .chain(ROTARY.iter().map(|(n, _)| *n))
 }
 
 fn check(k: Kind, v: f32) -> Result<(), SettingError> {
@@ -373,6 +382,7 @@ impl Settings {
             218 => self.tool_change.feed,
             219 => self.tool_change.travel,
             220 => self.spindle_delay_s,
+            376 => f32::from(self.rotary_axes),
             _ => return None,
         })
     }
@@ -473,6 +483,7 @@ impl Settings {
             218 => self.tool_change.feed = v,
             219 => self.tool_change.travel = v,
             220 => self.spindle_delay_s = v,
+            376 => self.rotary_axes = u8v,
             _ => return Err(SettingError::Unknown),
         }
         Ok(())

@@ -12,7 +12,8 @@ fn numbers_are_ascending_unique_and_all_readable() {
     let nums: Vec<u16> = table::numbers().collect();
     assert!(nums.windows(2).all(|w| w[0] < w[1]));
     // Five per-axis groups ($100 $110 $120 $130 $160).
-    assert_eq!(nums.len(), 23 + 5 * burin::AXES + 10 + 9 + 1);
+    // Then burin's ten, the tool change's nine, `$220` and `$376`.
+    assert_eq!(nums.len(), 23 + 5 * burin::AXES + 10 + 9 + 1 + 1);
     for n in &nums {
         let v = s.get(*n).unwrap_or_else(|| panic!("${n} unreadable"));
         let mut t = s;
@@ -30,10 +31,23 @@ fn numbers_are_ascending_unique_and_all_readable() {
         160 + past,
         199,
         209,
+        375,
+        377,
         65535,
     ] {
         assert_eq!(s.get(n), None, "${n}");
     }
+}
+
+#[test]
+fn rotary_axes_are_a_mask_of_the_axes() {
+    let mut s = Settings::default();
+    assert_eq!(s.get(376), Some(0.0));
+    let all = f32::from((1u16 << burin::AXES) as u8 - 1);
+    assert_eq!(s.set(376, all), Ok(()));
+    assert_eq!(s.rotary_axes, (1u16 << burin::AXES) as u8 - 1);
+    assert!(s.set(376, all + 1.0).is_err(), "a bit past the axes");
+    assert!(s.set(376, 1.5).is_err());
 }
 
 #[test]

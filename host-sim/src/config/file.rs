@@ -123,6 +123,8 @@ struct Axis {
     travel_mm: Option<f32>,
     backlash_mm: Option<f32>,
     slack_mm: Option<f32>,
+    /// `$376`'s bit: degrees, and RS274NGC's rotary feed rule.
+    rotary: Option<bool>,
 }
 
 #[derive(Deserialize, Default)]
@@ -302,6 +304,9 @@ pub(super) fn apply(text: &str, cfg: &mut MachineConfig) -> Result<(), ConfigErr
         set(&mut dst.max_travel, src.travel_mm);
         set(&mut s.backlash_mm[i], src.backlash_mm);
         set(&mut cfg.slack_mm[i], src.slack_mm);
+        if let Some(r) = src.rotary {
+            s.rotary_axes = (s.rotary_axes & !(1 << i)) | (u8::from(r) << i);
+        }
     }
 
     if let Some(g) = f.gcode.g28_meaning {

@@ -160,3 +160,32 @@ fn six_axis_job_ends_on_all_six_commanded_positions() {
         assert!((got - want).abs() < 1e-3, "{end:?}");
     }
 }
+
+/// `$376` on the six-axis machine (A, B, C rotary): `G1 X10 A30 F600`
+/// takes X's 10 mm at 600 mm/min, about 1 s plus A's ramps, with A
+/// following at 30 deg/s (within its 60); counted along the whole 31.6
+/// mm-or-degree path, as GRBL does, it took 3.2 s.
+#[test]
+fn a_rotary_axis_follows_the_linear_move_s_feed() {
+    if AXES < 6 {
+        return;
+    }
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut cfg = MachineConfig::load(dir.join("machines").join("six-axis.toml")).unwrap();
+    let job = "G21 G90 G1 X10 A30 F600\n";
+    let mut ext = Extent {
+        lo: [i64::MAX; AXES],
+        hi: [i64::MIN; AXES],
+    };
+    let rotary = host_sim::engine::run_job(&cfg, job, &mut ext);
+    assert!(rotary.errors.is_empty(), "{:?}", rotary.errors);
+    assert!(
+        (1.0..1.3).contains(&rotary.job_time_s),
+        "{}",
+        rotary.job_time_s
+    );
+    cfg.settings.rotary_axes = 0;
+    let linear = host_sim::engine::run_job(&cfg, job, &mut ext);
+    assert!(linear.job_time_s > 3.1, "{}", linear.job_time_s);
+    assert_eq!(rotary.final_position_steps, linear.final_position_steps);
+}
