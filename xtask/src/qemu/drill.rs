@@ -138,13 +138,18 @@ fn is_gpiob(s: &Store) -> bool {
     s.device.ends_with("GPIOB")
 }
 
+/// The Black Pill's step and dir pins on GPIOB, X Y Z A B C
+/// (`boards/blackpill.rs`' `PORT_PINS`).
+const STEP_PINS: [u32; 6] = [12, 13, 14, 15, 3, 10];
+const DIR_PINS: [u32; 6] = [4, 5, 6, 7, 1, 9];
+
 /// Motion pins on GPIOB and their idle level under the drills' inverts:
-/// step PB12-15 (`$2`), dir PB4-7 (`$3`), enable PB8 (off = low with `$4=1`).
+/// step (`$2`), dir (`$3`), enable PB8 (off = low with `$4=1`).
 fn idle_levels() -> Vec<(u32, bool)> {
     let mut pins = Vec::new();
-    for axis in 0..4 {
-        pins.push((12 + axis, STEP_INVERT & (1 << axis) != 0));
-        pins.push((4 + axis, DIR_INVERT & (1 << axis) != 0));
+    for axis in 0..6 {
+        pins.push((STEP_PINS[axis], STEP_INVERT & (1 << axis) != 0));
+        pins.push((DIR_PINS[axis], DIR_INVERT & (1 << axis) != 0));
     }
     pins.push((8, false));
     pins
@@ -194,14 +199,20 @@ pub fn check_boot_levels(stores: &[Store]) -> Result<()> {
     Ok(())
 }
 
-/// The last GPIOB store is the fault path's: spindle enable, flood, mist
-/// and (with `$4=1`) the enable pin all reset; the last TIM1 stores put
-/// CCR1 to 0 and force OC1 inactive.
+/// The last GPIOB store is the fault path's: spindle enable (PB0) and
+/// (with `$4=1`) the enable pin reset; the last GPIOA store resets flood
+/// and mist (PA7, PA9); the last TIM1 stores put CCR1 to 0 and force OC1
+/// inactive.
 pub fn check_fault_stores(stores: &[Store]) -> Result<()> {
-    const OFF: u32 = (1 << 16) | (1 << (16 + 8)) | (1 << (16 + 9)) | (1 << (16 + 10));
+    const OFF: u32 = (1 << 16) | (1 << (16 + 8));
+    const OFF_A: u32 = (1 << (16 + 7)) | (1 << (16 + 9));
     let gpiob = stores.iter().rfind(|s| is_gpiob(s));
     if gpiob.map(|s| (s.offset, s.value)) != Some((0x18, OFF)) {
         bail!("the last GPIOB store is {gpiob:?}, not the fault path's BSRR {OFF:#010x}");
+    }
+    let gpioa = stores.iter().rfind(|s| s.device.ends_with("GPIOA"));
+    if gpioa.map(|s| (s.offset, s.value)) != Some((0x18, OFF_A)) {
+        bail!("the last GPIOA store is {gpioa:?}, not the fault path's BSRR {OFF_A:#010x}");
     }
     let tim1: Vec<&Store> = stores
         .iter()
@@ -308,7 +319,8 @@ mod tests {
     #[test]
     fn fault_stores_must_come_last() {
         let ok = [
-            w("GPIOB", 0x18, 0x0701_0000),
+            w("GPIOB", 0x18, 0x0101_0000),
+            w("GPIOA", 0x18, 0x0280_0000),
             w("TIM1", 0x34, 0),
             w("TIM1", 0x18, 0x48),
         ]
@@ -316,15 +328,26 @@ mod tests {
         assert!(check_fault_stores(&stores(&ok)).is_ok());
         // Drivers left on (PB8 not reset under `$4=1`).
         let on = [
-            w("GPIOB", 0x18, 0x0601_0000),
+            w("GPIOB", 0x18, 0x0001_0000),
+            w("GPIOA", 0x18, 0x0280_0000),
             w("TIM1", 0x34, 0),
             w("TIM1", 0x18, 0x48),
         ]
         .join("\n");
         assert!(check_fault_stores(&stores(&on)).is_err());
+        // Coolant left on (mist, PA9, not reset).
+        let mist = [
+            w("GPIOB", 0x18, 0x0101_0000),
+            w("GPIOA", 0x18, 0x0080_0000),
+            w("TIM1", 0x34, 0),
+            w("TIM1", 0x18, 0x48),
+        ]
+        .join("\n");
+        assert!(check_fault_stores(&stores(&mist)).is_err());
         // PWM only set to 0, not forced.
         let pwm = [
-            w("GPIOB", 0x18, 0x0701_0000),
+            w("GPIOB", 0x18, 0x0101_0000),
+            w("GPIOA", 0x18, 0x0280_0000),
             w("TIM1", 0x34, 0),
             w("TIM1", 0x18, 0x68),
         ]

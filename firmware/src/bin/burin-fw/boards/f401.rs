@@ -22,9 +22,11 @@ pub fn clocks() -> Config {
 pub fn regulator(_pwr: &stm32f4xx_hal::pac::PWR, _rcc: &stm32f4xx_hal::pac::RCC) {}
 
 /// Received tokens the link holds while the token ring is full: 2048
-/// (4 KiB), half the F411's. The F401's statics have 44 KiB (its 64 KiB
-/// SRAM less the 20 KiB stack, whose measured headroom, 9.7 KB, is close
-/// to its 8 KiB floor), and six axes took 2.2 KB more than that left.
+/// (4 KiB), half the F411's. The F401's statics had 44 KiB (its 64 KiB
+/// SRAM less a 20 KiB stack), and six axes took 2.2 KB more than that
+/// left; their wider arrays also deepened the stack (7,956 B of 20 KiB
+/// left unused, under the 8 KiB floor), so the stack took 1 KiB of the
+/// room this made (memory-f401.x: 21 KiB stack, 43 KiB statics).
 /// What it costs: a sender that writes without counting (no GRBL
 /// character counting, no credits) sees USB NAKs 4 KiB of text sooner;
 /// realtime bytes still act on arrival, and nothing is lost. host-sim
