@@ -311,10 +311,12 @@ impl<const N: usize> Planner<N> {
         let mut next_entry = 0.0f32;
         let mut next_m = 0.0f32; // the next corner's hold before it
         let mut k = self.len;
+        // The settings and the ring borrowed apart: a copy of either per
+        // block was most of bench-target's plan_block_insns memcpy.
+        let (st, blocks, tail) = (&self.settings, &mut self.blocks, self.tail);
         while k > 1 {
             k -= 1;
-            let st = self.settings;
-            let b = self.at(k);
+            let b = &mut blocks[(tail + k) % N];
             let mut new = if b.kind == BlockKind::Line {
                 let both = b.hold_m + next_m;
                 let held = if both > 0.0 {
@@ -324,7 +326,7 @@ impl<const N: usize> Planner<N> {
                 };
                 b.max_entry
                     .min(held)
-                    .min(shape_of(b, &st).reach_held(next_entry, b.length, next_m, b.hold_m))
+                    .min(shape_of(b, st).reach_held(next_entry, b.length, next_m, b.hold_m))
             } else {
                 0.0
             };
@@ -348,12 +350,11 @@ impl<const N: usize> Planner<N> {
         // Forward: no block may be entered faster than the previous can reach
         // (in S-curve mode, than the run it ends can, `planner::run`).
         let mut run = self.run_before(self.planned + 1);
+        let (st, blocks, tail) = (&self.settings, &mut self.blocks, self.tail);
         for k in self.planned + 1..self.len {
-            let st = self.settings;
-            let prev = *self.at(k - 1);
-            let b = self.at(k);
+            let (prev, b) = pair(blocks, (tail + k - 1) % N, (tail + k) % N);
             let mut reach = match prev.kind {
-                BlockKind::Line => shape_of(&prev, &st).reach_held(
+                BlockKind::Line => shape_of(prev, st).reach_held(
                     prev.entry,
                     prev.length,
                     prev.hold_m,
@@ -362,11 +363,10 @@ impl<const N: usize> Planner<N> {
                 BlockKind::Dwell { .. } => 0.0,
             };
             if let Some(r) = run.as_mut() {
-                if let Some(v) = r.step(&prev, b, &st) {
+                if let Some(v) = r.step(prev, b, st) {
                     reach = reach.max(v);
                 }
             }
-            let b = self.at(k);
             if reach <= b.entry {
                 b.entry = reach;
                 self.planned = k;
@@ -374,5 +374,17 @@ impl<const N: usize> Planner<N> {
                 self.planned = k;
             }
         }
+    }
+}
+
+/// Block `prev` to read and block `k` to change, of the ring (`prev != k`),
+/// without copying either out.
+fn pair<const N: usize>(blocks: &mut [Block; N], prev: usize, k: usize) -> (&Block, &mut Block) {
+    if prev < k {
+        let (lo, hi) = blocks.split_at_mut(k);
+        (&lo[prev], &mut hi[0])
+    } else {
+        let (lo, hi) = blocks.split_at_mut(prev);
+        (&hi[0], &mut lo[k])
     }
 }

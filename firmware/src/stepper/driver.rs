@@ -165,7 +165,11 @@ impl StepDriver {
         self.run(stepper, hw, rt, pop)
     }
 
+    /// Everything but the plain rise: kicks, spins, stops, the fall
+    /// interrupt. `#[cold]` so that the plain rise is the straight path
+    /// (a taken branch to a cold flash line costs its wait states).
     #[inline(never)]
+    #[cold]
     fn run<H: StepPins + StepTimer>(
         &mut self,
         stepper: &mut Stepper,
