@@ -210,7 +210,11 @@ impl<const N: usize> Planner<N> {
         let still = (0..AXES).fold(0u8, |m, i| {
             m | u8::from(self.still_time[i] >= CANCEL_WINDOW_S) << i
         });
-        let long = (still, b.min_time() >= CANCEL_WINDOW_S);
+        // Its corner, cap, acceleration and length are settled from here
+        // on (the holds change neither): one square root for the three
+        // uses below, where the still-time loop took one per idle axis.
+        let min_time = b.min_time();
+        let long = (still, min_time >= CANCEL_WINDOW_S);
         let m = self.hold_factor(&unit_mm, len_mm, curve, b.corner, 0, long);
         b.hold_fixed = if b.release != 0 {
             self.hold_factor(&unit_mm, len_mm, curve, b.corner, b.release, long)
@@ -225,7 +229,7 @@ impl<const N: usize> Planner<N> {
             let k = self.len - 1;
             self.at(k).quiet &= quiet;
         }
-        self.count_quiet(b.min_time(), quiet);
+        self.count_quiet(min_time, quiet);
         if !merged {
             self.prev2_unit_mm = self.prev_unit_mm;
         }
@@ -244,7 +248,7 @@ impl<const N: usize> Planner<N> {
         };
         for (i, t) in self.still_time.iter_mut().enumerate() {
             *t = if b.steps[i] == 0 {
-                *t + b.min_time()
+                *t + min_time
             } else {
                 0.0
             };
