@@ -247,11 +247,7 @@ impl<const N: usize> Planner<N> {
             len_mm
         };
         for (i, t) in self.still_time.iter_mut().enumerate() {
-            *t = if b.steps[i] == 0 {
-                *t + min_time
-            } else {
-                0.0
-            };
+            *t = if b.steps[i] == 0 { *t + min_time } else { 0.0 };
         }
         self.position = target;
         self.position_mm = *end_mm;
