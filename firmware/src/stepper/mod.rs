@@ -134,7 +134,7 @@ impl Running {
 }
 
 /// The interrupt half: Bresenham over the current segment. `repr(C)`,
-/// the per-event fields first (see [`Running`]).
+/// the per-event fields first (see `Running`).
 #[derive(Debug)]
 #[repr(C)]
 pub struct Stepper {
