@@ -397,6 +397,44 @@ fn reported_axes_follow_208() {
     assert_eq!(r.status().wpos.map(|p| p.len()), Some(3));
 }
 
+/// With `$208` at every axis the build drives, the status report, `$#`
+/// and `$I` carry all of them, and a move of every axis ends on each.
+#[test]
+fn every_axis_reported_with_208_at_all() {
+    let cfg = origin();
+    let mut rec = Discard;
+    let mut r = Rig::new(&cfg, &mut rec);
+    r.lines();
+    let all = burin::AXES;
+    assert_eq!(r.cmd(&format!("$208={all}")), ["ok"]);
+    let names: String = burin::AXIS_NAMES.iter().collect();
+    let axs = format!("[AXS:{all}:{names}]");
+    assert!(r.cmd("$I").iter().any(|l| *l == axs), "{axs}");
+    let want: Vec<f32> = (1..=all).map(|i| i as f32).collect();
+    let words: String = burin::AXIS_NAMES
+        .iter()
+        .zip(&want)
+        .map(|(c, v)| format!(" {c}{v}"))
+        .collect();
+    assert_eq!(r.cmd(&format!("G10 L2 P1{words}")), ["ok"]);
+    let params = r.cmd("$#");
+    let g54 = format!(
+        "[G54:{}]",
+        want.iter()
+            .map(|v| format!("{v:.3}"))
+            .collect::<Vec<_>>()
+            .join(",")
+    );
+    assert!(params.iter().any(|l| *l == g54), "{params:?}");
+    assert_eq!(r.cmd("$10=0"), ["ok"]);
+    assert_eq!(r.cmd(&format!("G90 G1{words} F2000")), ["ok"]);
+    let st = r.until_idle();
+    let two: Vec<f32> = want.iter().map(|v| 2.0 * v).collect();
+    assert_eq!(st.wpos, Some(want), "{st:?}");
+    assert_eq!(r.cmd("$10=1"), ["ok"]);
+    assert_eq!(r.status().mpos, Some(two));
+}
+
 /// Issue 15 item 3: every port open gives the banner before the `ok` of a
 /// line the client wrote at once; the old client's unread input gives the
 /// new one nothing.
