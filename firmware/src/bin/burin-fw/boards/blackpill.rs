@@ -34,7 +34,7 @@
 //! tri-stated until then. PA9 is USART1 TX, which only the ROM bootloader
 //! uses (it listens on PA10, which stays alone for DFU); PA7 is the last
 //! EXTI-capable pin, so A, B and C have no limit input (rotary axes rarely
-//! have one; homing them is refused by `$206`'s cycles naming X, Y, Z).
+//! have one; `$206`'s homing cycles, a nibble each, cannot name B or C).
 //!
 //! Left alone on purpose: PA11/PA12 (USB), PA13/PA14 (SWD), PC13 (LED),
 //! PC14/PC15 (32 kHz crystal; these pins may not source current anyway),
