@@ -146,3 +146,36 @@ fn a_dropped_take_up_step_leaves_the_position_alone() {
     assert_eq!(rt.position(), [0; crate::AXES]);
     assert!(dropped > 0, "no plain step was dropped");
 }
+
+/// B and C step in the out-of-line path (`SENSE_EXTRA`): every step of a
+/// segment moving them lands, with X's, and with hard limits armed a
+/// closed switch still trips before the next step.
+#[test]
+fn b_and_c_step_out_of_line_and_still_trip_a_limit() {
+    if crate::AXES < 6 {
+        return;
+    }
+    let rt = Realtime::new();
+    let mut st = Stepper::new(StepConfig::new(&Settings::default(), 1_000_000));
+    let mut seg = segment(rt.generation());
+    seg.steps = protocol::first_axes([100, 0, 0, 0, 50, 25]);
+    seg.dir_mask = 1 << 5; // C negative
+    let mut queue = [Some(seg), Some(seg)];
+    let mut pop = || queue.iter_mut().find_map(Option::take);
+    let open = Switches::default();
+    let mut masks = 0u8;
+    // A direction event (C turns negative), then the segment's 100.
+    for _ in 0..101 {
+        masks |= st.on_event(&rt, &mut pop, || open).step_mask;
+    }
+    assert_eq!(masks, 0b110001, "X, B and C stepped");
+    assert_eq!(rt.position(), protocol::first_axes([100, 0, 0, 0, 50, -25]));
+    rt.set_limits_armed(true);
+    let closed = Switches {
+        limits: 0b001,
+        probe: false,
+    };
+    let ev = st.on_event(&rt, &mut pop, || closed);
+    assert_eq!((ev.ticks, ev.step_mask), (0, 0), "tripped, no step");
+    assert_eq!(rt.trip(), Trip::HardLimit);
+}
