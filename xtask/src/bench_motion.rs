@@ -63,6 +63,9 @@ struct Totals {
     all_grbl: bool,
     short: u64,
     worst: [[f64; 3]; 6],
+    /// S-curve only: the jerk-limited bounds' sum, the worst segment jerk %.
+    jbound: f64,
+    seg_jerk: f64,
 }
 
 pub fn run(a: BenchMotionArgs) -> Result<i32> {
@@ -121,7 +124,18 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
         jerk_quantum(f64::from(cfg.settings.axes[2].steps_per_mm)),
         host_sim::bench::curvature::MAX_TURN.to_degrees(),
     );
-    println!(
+    let scurve = cfg.settings.profile == burin::settings::Profile::SCurve;
+    if scurve {
+        println!(
+            "S-curve: jbound = the jerk-limited lower bound (the same limits plus $203 as the path's \
+             jerk; host_sim::bench::jerk); seg j = the segments' peak path jerk, third differences of \
+             the path position at their speed changes, points >= {:.1} ms apart (a trapezoid reads >= ~125 %)",
+            1000.0 * (host_sim::bench::axis_limits(&cfg).1.iter().fold(0.0f64, |m, &a| m.max(a))
+                / (4.0 * jmax.max(1.0)))
+            .clamp(0.002, 0.05)
+        );
+    }
+    print!(
         "{:<44} {:>8} {:>8} {:>6} {:>8} {:>8} {:>6} | {:>14} | {:>14} | {:>14} | {:>14} | {:>11} | {:>14} | {:>14}",
         "job",
         "burin s",
@@ -138,6 +152,10 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
         "bound a %",
         "bound curv %"
     );
+    if scurve {
+        print!(" | {:>9} {:>7} {:>7}", "jbound s", "/jbound", "seg j %");
+    }
+    println!();
     let mut corpus = Totals {
         all_grbl: true,
         ..Default::default()
@@ -175,7 +193,7 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
             }
         }
         let short = l.short_intervals;
-        println!(
+        print!(
             "{:<44} {:>8.2} {:>8.2} {:>6.3} {:>8.2} {:>8} {:>6} | {} | {} | {} | {} | {:>3} {:>3} {:>3} | {} | {}",
             name,
             f.time_s,
@@ -194,6 +212,17 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
             three(cols[4]),
             three(cols[5]),
         );
+        if let Some(j) = f.jerk {
+            print!(
+                " | {:>9.2} {:>7.3} {:>7.0}",
+                j.bound_s,
+                f.time_s / j.bound_s.max(1e-9),
+                100.0 * j.peak / jmax.max(1e-9)
+            );
+            tot.jbound += j.bound_s;
+            tot.seg_jerk = tot.seg_jerk.max(100.0 * j.peak / jmax.max(1e-9));
+        }
+        println!();
         if a.losses > 0 {
             print_losses(&f, a.losses);
             for (i, ax) in ["X", "Y", "Z"].iter().enumerate() {
@@ -226,7 +255,7 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
             continue;
         }
         let grbl = tot.all_grbl && tot.grbl > 0.0;
-        println!(
+        print!(
             "{:<44} {:>8.2} {:>8.2} {:>6.3} {:>8.2} {:>8} {:>6} | {} | {} | {} | {} | {:>11} | {} | {}",
             label,
             tot.time,
@@ -251,6 +280,15 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
             three(tot.worst[4]),
             three(tot.worst[5]),
         );
+        if scurve {
+            print!(
+                " | {:>9.2} {:>7.3} {:>7.0}",
+                tot.jbound,
+                tot.time / tot.jbound.max(1e-9),
+                tot.seg_jerk
+            );
+        }
+        println!();
     }
     if failed > 0 {
         println!("{failed} job(s) reported errors");

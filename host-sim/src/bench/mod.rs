@@ -5,6 +5,7 @@
 
 pub mod bound;
 pub mod curvature;
+pub mod jerk;
 pub mod jobs;
 pub mod limits;
 pub mod losses;
@@ -42,12 +43,25 @@ pub struct JobFigures {
     pub bound_curv: curvature::Curvature,
     /// Source line of each piece of the path (for [`curvature::Curvature::at`]).
     pub piece_lines: Vec<u32>,
+    /// In S-curve mode: the jerk-limited lower bound ([`jerk::jerk_bound`]),
+    /// s, and the segments' peak path jerk ([`jerk::JerkMeter`]), mm/s³,
+    /// over points this far apart, s. `None` in trapezoid mode.
+    pub jerk: Option<JerkFigures>,
+}
+
+/// [`JobFigures::jerk`].
+#[derive(Clone, Copy, Debug)]
+pub struct JerkFigures {
+    pub bound_s: f64,
+    pub peak: f64,
+    pub window_s: f64,
 }
 
 struct Both {
     info: Option<RunInfo>,
     meter: LimitMeter,
     bound: Locator,
+    jerk: Option<jerk::JerkMeter>,
 }
 
 impl Recorder for Both {
@@ -66,6 +80,11 @@ impl Recorder for Both {
     fn path(&mut self, ev: &PathEvent) {
         self.bound.path(ev);
     }
+    fn velocity(&mut self, tick: u64, mm_per_min: f32) {
+        if let Some(j) = self.jerk.as_mut() {
+            j.velocity(tick, mm_per_min);
+        }
+    }
     fn finish(&mut self, summary: &Summary) -> std::io::Result<()> {
         self.meter.finish(summary)
     }
@@ -74,6 +93,8 @@ impl Recorder for Both {
 /// Runs `source` on `cfg` (streamed through the virtual board, as `cargo
 /// xtask sim` does) and measures it.
 pub fn run_job(cfg: &MachineConfig, source: &str) -> JobFigures {
+    let scurve = cfg.settings.profile == burin::settings::Profile::SCurve;
+    let jmax = f64::from(cfg.settings.jerk);
     let mut both = Both {
         info: None,
         meter: LimitMeter::new(cfg.settings.max_step_rate_hz),
@@ -81,6 +102,10 @@ pub fn run_job(cfg: &MachineConfig, source: &str) -> JobFigures {
             Bound::new(cfg.settings, cfg.start_position_mm),
             cfg.settings.axes.map(|a| a.steps_per_mm),
         ),
+        jerk: scurve.then(|| {
+            let a = cfg.settings.axes.iter().map(|a| f64::from(a.max_accel));
+            jerk::JerkMeter::new(cfg.tick_hz, a.fold(0.0, f64::max), jmax)
+        }),
     };
     let summary = crate::offline::run_file(cfg, source, &mut both);
     let l = both.meter.out;
@@ -102,6 +127,11 @@ pub fn run_job(cfg: &MachineConfig, source: &str) -> JobFigures {
         bound_end_steps: std::array::from_fn(|i| (end[i] * spm[i]).round() as i64),
         bound_s: prof.last().map_or(0.0, |p| p.end_s),
         curved_ref_s: both.bound.bound().with_curvature_rule().time_s(),
+        jerk: both.jerk.as_ref().map(|m| JerkFigures {
+            bound_s: jerk::jerk_bound(&prof, jmax),
+            peak: m.peak,
+            window_s: m.window_s,
+        }),
         losses: both.bound.losses(&prof),
         bound_limits: match &both.info {
             Some(info) => replay::bound_limits(
