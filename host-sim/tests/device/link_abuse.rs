@@ -409,7 +409,7 @@ fn every_axis_reported_with_208_at_all() {
     assert_eq!(r.cmd(&format!("$208={all}")), ["ok"]);
     let names: String = burin::AXIS_NAMES.iter().collect();
     let axs = format!("[AXS:{all}:{names}]");
-    assert!(r.cmd("$I").iter().any(|l| *l == axs), "{axs}");
+    assert!(r.cmd("$I").contains(&axs), "{axs}");
     let want: Vec<f32> = (1..=all).map(|i| i as f32).collect();
     let words: String = burin::AXIS_NAMES
         .iter()
@@ -425,7 +425,7 @@ fn every_axis_reported_with_208_at_all() {
             .collect::<Vec<_>>()
             .join(",")
     );
-    assert!(params.iter().any(|l| *l == g54), "{params:?}");
+    assert!(params.contains(&g54), "{params:?}");
     assert_eq!(r.cmd("$10=0"), ["ok"]);
     assert_eq!(r.cmd(&format!("G90 G1{words} F2000")), ["ok"]);
     let st = r.until_idle();
