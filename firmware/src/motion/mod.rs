@@ -166,12 +166,21 @@ impl<const N: usize> Pipeline<N> {
         if rotary == 0 {
             return speed;
         }
+        // The planner's last end is the motor's (`push_shifted` adds the
+        // backlash taken up); the move starts at the commanded one.
         let from = self.planner.commanded_mm();
+        let axes = &self.settings().axes;
         let (mut linear, mut turned) = (0.0f32, false);
         for i in 0..AXES {
-            let d = end[i] - from[i];
+            let spm = axes[i].steps_per_mm;
+            let d = end[i] - (from[i] - self.comp[i] as f32 / spm);
+            // Under half a step is rounding (of the shift above, or of a
+            // far coordinate), not a move of the axis.
+            if libm::fabsf(d * spm) < 0.5 {
+                continue;
+            }
             if rotary & (1 << i) != 0 {
-                turned |= d != 0.0;
+                turned = true;
             } else {
                 linear += d * d;
             }

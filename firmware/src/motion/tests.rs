@@ -167,3 +167,28 @@ fn rotary_axes_take_the_linear_move_s_time() {
     p.submit(to(0.0, 0.0)).unwrap();
     assert_eq!(programmed(&p, 2), Some(10.0));
 }
+
+/// The rotary rule measures the linear axes from the last commanded end,
+/// not from the motor's: with backlash taken up on X (the planner's last
+/// end 0.1 mm off the commanded one), a move of A alone keeps F.
+#[test]
+fn rotary_rule_measures_from_the_commanded_end_under_backlash() {
+    let mut s = backlash(0.1, 0.0);
+    s.set(376, 8.0).unwrap();
+    let mut p = Pipeline::<16>::new(s, 1_000_000);
+    let to = |x: f32, a: f32| Move::Line {
+        end: crate::pad([x, 0.0, 0.0, a]),
+        speed: Speed::Feed(10.0),
+        watch: Watch::default(),
+        line: 1,
+    };
+    // X towards negative: a take-up, and the motor 8 steps past X.
+    p.submit(to(-5.0, 0.0)).unwrap();
+    assert_eq!(p.backlash_comp()[0], -8);
+    p.submit(to(-5.0, 30.0)).unwrap();
+    let last = p
+        .planner()
+        .block(p.planner().len() - 1)
+        .map(|b| b.programmed);
+    assert_eq!(last, Some(10.0), "A alone: F in degrees per second");
+}
