@@ -51,21 +51,19 @@ pub fn decode(rec: &[u8], out: &mut [f32]) -> Option<()> {
 /// Decodes a record of 1 to `out.len()` finite values into the front of
 /// `out`, returning how many it held: an offset vector written by a build
 /// that drove fewer axes (four before burin drove six) is still that
-/// vector, its missing axes at 0. `out` is untouched when it fails.
+/// vector, its missing axes at 0. On `None`, `out` may hold part of the
+/// record: the callers discard it.
 pub fn decode_upto(rec: &[u8], out: &mut [f32]) -> Option<usize> {
     let (&format, body) = rec.split_first()?;
     let n = body.len() / 4;
     if format != FORMAT || body.len() % 4 != 0 || n == 0 || n > out.len() {
         return None;
     }
-    if body
-        .chunks_exact(4)
-        .any(|b| !f32::from_le_bytes([b[0], b[1], b[2], b[3]]).is_finite())
-    {
-        return None;
-    }
     for (o, b) in out.iter_mut().zip(body.chunks_exact(4)) {
         *o = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+        if !o.is_finite() {
+            return None;
+        }
     }
     Some(n)
 }
