@@ -5,7 +5,8 @@
 //!
 //! A record is `[FORMAT, f32 LE…]`. A record of another format (an older
 //! firmware's) or length is treated as missing: that item falls back to
-//! its default.
+//! its default. Offset vectors are the exception: a shorter one is a
+//! build's with fewer axes ([`decode_upto`]).
 
 /// Layout version of every record. Bump it when a record's meaning changes.
 pub const FORMAT: u8 = 1;
@@ -43,11 +44,6 @@ pub fn encode<'b>(values: &[f32], buf: &'b mut [u8; MAX_RECORD]) -> &'b [u8] {
     &buf[..len]
 }
 
-/// Decodes a record of exactly `out.len()` finite values.
-pub fn decode(rec: &[u8], out: &mut [f32]) -> Option<()> {
-    (decode_upto(rec, out)? == out.len()).then_some(())
-}
-
 /// Decodes a record of 1 to `out.len()` finite values into the front of
 /// `out`, returning how many it held: an offset vector written by a build
 /// that drove fewer axes (four before burin drove six) is still that
@@ -79,16 +75,16 @@ mod tests {
         let rec = encode(&crate::pad([1.5, -2.0, 0.25, 1e6]), &mut buf).to_vec();
         assert_eq!(rec.len(), 1 + 4 * AXES);
         let mut out = [0.0; AXES];
-        assert_eq!(decode(&rec, &mut out), Some(()));
+        assert_eq!(decode_upto(&rec, &mut out), Some(AXES));
         assert_eq!(out, crate::pad([1.5, -2.0, 0.25, 1e6]));
-        // Wrong length, wrong format, empty, NaN.
+        // Longer than `out`, wrong format, empty, NaN.
         let mut one = [0.0];
-        assert_eq!(decode(&rec, &mut one), None);
+        assert_eq!(decode_upto(&rec, &mut one), None);
         let mut old = rec.clone();
         old[0] = FORMAT + 1;
-        assert_eq!(decode(&old, &mut out), None);
-        assert_eq!(decode(&[], &mut out), None);
+        assert_eq!(decode_upto(&old, &mut out), None);
+        assert_eq!(decode_upto(&[], &mut out), None);
         let nan = encode(&[f32::NAN], &mut buf).to_vec();
-        assert_eq!(decode(&nan, &mut one), None);
+        assert_eq!(decode_upto(&nan, &mut one), None);
     }
 }
