@@ -457,21 +457,10 @@ fn trace_end(kind: u32) {
 /// few hundred steps each, no calibration and no planner (the log of the
 /// timing run would be gigabytes). Tags: 1 boards 1 axis, 2 the same with
 /// hard limits armed, 3 boards 4 axes, 4 the QEMU build's rise and fall.
-/// Per-axis step counts from the first axes' (the rest 0): the benches
-/// measure four axes whatever the build drives.
-const fn first_axes(v: &[u32]) -> [u32; AXES] {
-    let mut out = [0; AXES];
-    let mut i = 0;
-    while i < v.len() && i < AXES {
-        out[i] = v[i];
-        i += 1;
-    }
-    out
-}
-
 fn trace_run(clock: &mut Clock) -> ! {
-    const ONE: [u32; AXES] = first_axes(&[1000]);
-    const FOUR: [u32; AXES] = first_axes(&[1000, 750, 500, 250]);
+    const ONE: [u32; AXES] = protocol::first_axes([1000, 0, 0, 0, 0, 0]);
+    // The benches measure four axes whatever the build drives.
+    const FOUR: [u32; AXES] = protocol::first_axes([1000, 750, 500, 250, 0, 0]);
     let run = |hard_limits, tag| Run {
         chunk: 200,
         chunks: 1,
@@ -649,8 +638,9 @@ pub fn run() -> ! {
     if !(0.16..0.176).contains(&clock.ticks_per_insn) {
         hprintln!("# WARNING: not 0.168; is QEMU running with -icount shift=0?");
     }
-    const ONE: [u32; AXES] = first_axes(&[1000]);
-    const FOUR: [u32; AXES] = first_axes(&[1000, 750, 500, 250]);
+    const ONE: [u32; AXES] = protocol::first_axes([1000, 0, 0, 0, 0, 0]);
+    // The benches measure four axes whatever the build drives.
+    const FOUR: [u32; AXES] = protocol::first_axes([1000, 750, 500, 250, 0, 0]);
     let (off, hard) = (Run::timed(false), Run::timed(true));
     // The boards: one interrupt per step, the pulse ended by DMA.
     let (rise1, _) = step_event::<true, false>(&mut clock, ONE, 0, off);
