@@ -133,11 +133,7 @@ impl<const N: usize> Planner<N> {
         if self.prev2_unit_mm.iter().all(|&u| u == 0.0) {
             return r;
         }
-        let cos2 = unit
-            .iter()
-            .zip(&self.prev2_unit_mm)
-            .map(|(a, b)| a * b)
-            .sum::<f32>();
+        let cos2 = dot(unit, &self.prev2_unit_mm);
         let phi2 = libm::acosf(crate::num::clamp(cos2, -1.0, 1.0)).max(1e-9);
         r.max(2.0 * l / phi2)
     }
@@ -161,11 +157,7 @@ impl<const N: usize> Planner<N> {
         if self.prev_nominal <= 0.0 {
             return none;
         }
-        let cos = unit
-            .iter()
-            .zip(&self.prev_unit_mm)
-            .map(|(a, b)| a * b)
-            .sum::<f32>();
+        let cos = dot(unit, &self.prev_unit_mm);
         if let (Some(c), Some(p)) = (curve, self.prev_curve) {
             let phi = libm::acosf(crate::num::clamp(cos, -1.0, 1.0));
             if c == p && c.radius > 0.0 && phi <= 2.0 * length / c.radius {
@@ -241,7 +233,7 @@ impl<const N: usize> Planner<N> {
     /// `unit` (-1: straight on), and the acceleration the axes allow along
     /// the direction change.
     fn turn(&self, unit: &[f32; AXES], prev: &[f32; AXES]) -> (f32, f32) {
-        let cos = -unit.iter().zip(prev).map(|(a, b)| a * b).sum::<f32>();
+        let cos = -dot(unit, prev);
         let d: [f32; AXES] = core::array::from_fn(|i| unit[i] - prev[i]);
         let dn = libm::sqrtf(d.iter().map(|v| v * v).sum());
         let mut a = f32::INFINITY;
@@ -375,6 +367,11 @@ impl<const N: usize> Planner<N> {
             }
         }
     }
+}
+
+/// The cosine between two unit directions.
+fn dot(a: &[f32; AXES], b: &[f32; AXES]) -> f32 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 /// Block `prev` to read and block `k` to change, of the ring (`prev != k`),
