@@ -8,6 +8,8 @@
 //! appended later can change them. The backward pass stops as soon as an
 //! entry speed stops changing; the forward pass starts at `planned`.
 
+mod cancel;
+mod corner;
 mod curve;
 pub mod interval;
 mod merge;
@@ -255,6 +257,20 @@ pub struct Planner<const N: usize> {
     /// back the one before it (a zigzag, rounding noise) holds only for
     /// what the two leave together.
     prev2_unit_mm: [f32; AXES],
+    /// Whether the newest block's corner (bit 0) and the one before it
+    /// (bit 1) turn by rounding only, their curvature pending
+    /// (`planner::cancel`).
+    pending: u8,
+    /// The turn across the newest block's predecessor chord (from the
+    /// chord before it to the newest), and the newest block's corner's
+    /// turn (`planner::cancel`).
+    prev_phi2: Option<f32>,
+    prev_turn: corner::Turn,
+    /// The share of its hold the previous block's corner kept
+    /// (`planner::cancel`; 1 when nothing took it back).
+    prev_kept: f32,
+    /// The newest block's corner's `Pair::pulse_m` (`planner::cancel`).
+    prev_pulse_m: f32,
     /// Commanded end of the last block pushed, mm: corners are judged on
     /// the commanded geometry, not on the step-rounded one (a chord of a
     /// step or two can look like a 45° corner in steps).
@@ -290,6 +306,15 @@ impl<const N: usize> Planner<N> {
             position: [0; AXES],
             prev_unit_mm: [0.0; AXES],
             prev2_unit_mm: [0.0; AXES],
+            pending: 0,
+            prev_phi2: None,
+            prev_turn: corner::Turn {
+                a: 0.0,
+                phi: 0.0,
+                l: 0.0,
+            },
+            prev_kept: 1.0,
+            prev_pulse_m: 0.0,
             position_mm: [0.0; AXES],
             prev_nominal: 0.0,
             prev_length: 0.0,
@@ -331,6 +356,11 @@ impl<const N: usize> Planner<N> {
             position,
             prev_unit_mm,
             prev2_unit_mm,
+            pending,
+            prev_phi2,
+            prev_turn,
+            prev_kept,
+            prev_pulse_m,
             position_mm,
             prev_nominal,
             prev_length,
@@ -349,6 +379,11 @@ impl<const N: usize> Planner<N> {
         self.position = position;
         self.prev_unit_mm = prev_unit_mm;
         self.prev2_unit_mm = prev2_unit_mm;
+        self.pending = pending;
+        self.prev_phi2 = prev_phi2;
+        self.prev_turn = prev_turn;
+        self.prev_kept = prev_kept;
+        self.prev_pulse_m = prev_pulse_m;
         self.position_mm = position_mm;
         self.prev_nominal = prev_nominal;
         self.prev_length = prev_length;
@@ -426,6 +461,7 @@ impl<const N: usize> Planner<N> {
         self.prev_nominal = 0.0;
         self.prev_unit_mm = [0.0; AXES];
         self.prev2_unit_mm = [0.0; AXES];
+        self.pending = 0;
         // From rest: nothing moved before the next block.
         self.quiet_time = [f32::INFINITY; AXES];
     }

@@ -1,11 +1,14 @@
 //! Junction limits, overrides, and the backward/forward planning passes.
 
+use super::cancel::{Pair, PULSE_SHARE};
 use super::*;
 
 /// The time over which opposite velocity changes at two corners cancel
 /// (`Planner::hold_factor`): the window the step trace's acceleration is
 /// judged over (`host_sim::bench::limits`), s.
 pub(super) const CANCEL_WINDOW_S: f32 = 0.05;
+
+const W: f32 = CANCEL_WINDOW_S;
 
 /// A corner's hold factors, stretched (`v²·m/2` mm each side): `pre` in
 /// the block before the corner, `post` in the block after it.
@@ -70,74 +73,6 @@ pub(super) const HOLD_STRETCH: f32 = 1.17;
 // never has to slow a block it already accepted.
 
 impl<const N: usize> Planner<N> {
-    /// Cornering speed at the junction with the previous block.
-    ///
-    /// Junction deviation: round the corner by a circle tangent to both moves
-    /// whose closest approach to the corner is `δ`. With `c = sin(θ/2)` of the
-    /// corner's half angle (θ = π when straight), the circle's radius is
-    /// `R = δ·c/(1 − c)` and `v = sqrt(a·R)` keeps the centripetal
-    /// acceleration within `a`.
-    ///
-    /// Chords of a curve turn by a small angle φ every chord length `l`, so
-    /// the tool really follows a curve of radius about `l/φ`. Junction
-    /// deviation alone allows `a·δ/tol` there (5× the limit with GRBL's
-    /// defaults); the second limit `v² ≤ a·l/φ` keeps curves honest.
-    ///
-    /// Both judge the commanded geometry (`unit_mm`, `length` in mm), not
-    /// the step-rounded one: a G1 chord of a step or two can look like a
-    /// 45° corner in steps (a radius of 0.016 mm on a 25 mm circle), which
-    /// it is not; the motors' one-step jitter around the commanded line
-    /// averages out like that of any Bresenham line.
-    ///
-    /// `a` is the acceleration the axes allow along the direction change
-    /// (the difference of the two unit vectors), not along either move.
-    pub(super) fn junction_speed(&self, unit_mm: &[f32; AXES], length: f32, curve: bool) -> f32 {
-        if self.prev_nominal <= 0.0 {
-            return 0.0;
-        }
-        let (cos, a) = self.turn(unit_mm, &self.prev_unit_mm);
-        if cos > 0.999_999 {
-            return 0.0;
-        }
-        if cos < -0.999_999 {
-            // Straight on: no corner to limit.
-            return f32::INFINITY;
-        }
-        let sin_half = libm::sqrtf(0.5 * (1.0 - cos));
-        let r = self.settings.junction_deviation * sin_half / (1.0 - sin_half);
-        let v_jd = libm::sqrtf(a * r);
-        let phi = libm::acosf(crate::num::clamp(-cos, -1.0, 1.0)).max(1e-9);
-        let l = length.min(self.prev_length);
-        let a_curve = if curve { self.c_max() * a } else { a };
-        let v_curve = libm::sqrtf(a_curve * l / phi);
-        let v_jerk = if curve || self.settings.profile != crate::settings::Profile::SCurve {
-            f32::INFINITY
-        } else {
-            self.curve_jerk_cap(self.turn_radius(unit_mm, l, phi))
-        };
-        v_jd.min(v_curve).min(v_jerk)
-    }
-
-    /// The radius an S-curve run turns on at a vertex, for the turn's jerk
-    /// (`v³/r²`, [`Self::curve_jerk_cap`]; an arc's chords have their
-    /// arc's cap already): the larger of the vertex's own `l/φ` and the
-    /// turn from the block before the previous one over two chords. Chords
-    /// of a real curve turn alike, and both agree; a zigzag of noise
-    /// (chords a few steps long alternating a few steps across a line,
-    /// inch decimals on a circle) turns back at the next vertex, so its
-    /// axes' acceleration changes sign from chord to chord and averages
-    /// out instead of building up: there the two-chord turn is small and
-    /// does not slow the line down to its noise.
-    fn turn_radius(&self, unit: &[f32; AXES], l: f32, phi: f32) -> f32 {
-        let r = l / phi;
-        if self.prev2_unit_mm.iter().all(|&u| u == 0.0) {
-            return r;
-        }
-        let cos2 = dot(unit, &self.prev2_unit_mm);
-        let phi2 = libm::acosf(crate::num::clamp(cos2, -1.0, 1.0)).max(1e-9);
-        r.max(2.0 * l / phi2)
-    }
-
     /// The hold factor `m` of the corner before a block going `unit` for
     /// `length` mm (see the module's corner holds): 0 after a stop, on a
     /// straight continuation, and between chords of one curve that turn no
@@ -151,9 +86,9 @@ impl<const N: usize> Planner<N> {
         v_corner: f32,
         quiet: u8,
         long: (u8, bool),
-    ) -> Sides {
+    ) -> (Sides, Pair) {
         // `quiet`: axes whose change here needs no hold (`planner::quiet`).
-        let none = Sides::default();
+        let none = (Sides::default(), Pair::NONE);
         if self.prev_nominal <= 0.0 {
             return none;
         }
@@ -184,10 +119,14 @@ impl<const N: usize> Planner<N> {
         // there for its change to add to. `m`: the largest change, as
         // `factor` gives it.
         let p = &self.prev_unit_mm;
-        let (mut m, mut sides) = (0.0f32, none);
+        let (mut m, mut sides, mut small) = (0.0f32, Sides::default(), true);
         for (i, ax) in self.settings.axes.iter().enumerate() {
             let d = libm::fabsf(unit[i] - p[i]);
-            if d <= 1e-6 || quiet & (1 << i) != 0 {
+            if d <= 1e-6 {
+                continue;
+            }
+            small &= d * length <= PULSE_SHARE * W * W * ax.max_accel;
+            if quiet & (1 << i) != 0 {
                 continue;
             }
             m = m.max(d / ax.max_accel);
@@ -209,8 +148,12 @@ impl<const N: usize> Planner<N> {
         }
         // After a chord the turn before this corner was the curve's own
         // (budgeted there), not a change this one could take back.
+        let mut pair = Pair {
+            pulse_m: if small { m } else { 0.0 },
+            ..Pair::NONE
+        };
         if m <= 0.0 || self.prev_curve.is_some() || self.prev2_unit_mm.iter().all(|&u| u == 0.0) {
-            return sides;
+            return (sides, pair);
         }
         // Two corners whose changes oppose (a zigzag, rounding noise) leave
         // together only their sum, plus what the block between them keeps
@@ -222,28 +165,14 @@ impl<const N: usize> Planner<N> {
         } else {
             0.0
         };
-        let kept = m.min(net + m * (t / CANCEL_WINDOW_S).min(1.0)) / m;
-        Sides {
+        let kept = kept_share(m, net, t);
+        let sides = Sides {
             pre: sides.pre * kept,
             post: sides.post * kept,
-        }
-    }
-
-    /// Cosine of the corner between the reversed previous direction and
-    /// `unit` (-1: straight on), and the acceleration the axes allow along
-    /// the direction change.
-    fn turn(&self, unit: &[f32; AXES], prev: &[f32; AXES]) -> (f32, f32) {
-        let cos = -dot(unit, prev);
-        let d: [f32; AXES] = core::array::from_fn(|i| unit[i] - prev[i]);
-        let dn = libm::sqrtf(d.iter().map(|v| v * v).sum());
-        let mut a = f32::INFINITY;
-        for (di, ax) in d.iter().zip(&self.settings.axes) {
-            let c = libm::fabsf(*di) / dn;
-            if c > 1e-6 {
-                a = a.min(ax.max_accel / c);
-            }
-        }
-        (cos, a)
+        };
+        pair.kept = kept;
+        pair.net = Some(net);
+        (sides, pair)
     }
 
     /// Apply new override percentages: every block's nominal speed and
@@ -369,8 +298,18 @@ impl<const N: usize> Planner<N> {
     }
 }
 
+/// The share of a corner's hold that a pair of corners keeps: `m` the
+/// corner's own largest change (as `|Δu_i|/a_i`), `net` what the two
+/// changes leave together, `t` the time between them, s. Over a window `W`
+/// the pair reads as its net change plus the velocity the block between
+/// them holds apart for `t`: at most `net + m·t/W` (module doc of
+/// [`super::cancel`]).
+pub(super) fn kept_share(m: f32, net: f32, t: f32) -> f32 {
+    m.min(net + m * (t / CANCEL_WINDOW_S).min(1.0)) / m
+}
+
 /// The cosine between two unit directions.
-fn dot(a: &[f32; AXES], b: &[f32; AXES]) -> f32 {
+pub(super) fn dot(a: &[f32; AXES], b: &[f32; AXES]) -> f32 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 

@@ -188,17 +188,48 @@ impl<const N: usize> Planner<N> {
         b.nominal = self.nominal(&b);
         Self::curve_limits(&mut b, self.c_max());
         // Corners and curvature on the commanded geometry.
-        b.corner = self.junction_speed(&unit_mm, len_mm, curve.is_some());
+        // The turn across the previous chord, where a rule needs it.
+        let line = &self.prev2_unit_mm;
+        // A chord before the previous one (none after a stop).
+        let before = line.iter().any(|&u| u != 0.0);
+        let phi2 = if (self.pending & 1 != 0
+            || self.settings.profile == crate::settings::Profile::SCurve)
+            && before
+        {
+            Some(corner::angle(passes::dot(line, &unit_mm)))
+        } else {
+            None
+        };
+        let (corner, turn) = self.junction_speed(&unit_mm, len_mm, curve.is_some(), phi2);
+        let limit = corner.limit();
+        // Per axis: whether the corner turns it, and whether the turn
+        // stays within rounding over this chord (one pass for both).
+        let (mut turned, mut rounding) = (0u8, true);
+        for (i, ax) in s.axes.iter().enumerate() {
+            let d = libm::fabsf(unit_mm[i] - self.prev_unit_mm[i]);
+            if d > 1e-6 {
+                turned |= 1 << i;
+                rounding &= len_mm * d * ax.steps_per_mm <= corner::ROUNDING_STEPS;
+            }
+        }
+        if self.prev_nominal <= 0.0 {
+            turned = 0;
+        }
+        // A turn within rounding over this chord may be one that the next
+        // chord takes back: its curvature rule waits for that chord
+        // (`planner::cancel`). Until then the block is the newest, which
+        // must stop within itself: `v² ≤ 2·accel·len`, under the rule's
+        // `a·l/φ` wherever the turn is small enough for that.
+        let pending = curve.is_none()
+            && !takeup
+            && rounding
+            && turn.a > 0.0
+            && turn.phi * 2.0 * b.accel * len_mm <= turn.a * turn.l
+            && before
+            && self.pending_turn();
+        b.corner = if pending { corner.deviation } else { limit };
         b.junction = b.corner;
         let (quiet, release) = self.quiet_axes(&mut b, &unit);
-        let turned = (0..AXES).fold(0u8, |t, i| {
-            let d = libm::fabsf(unit_mm[i] - self.prev_unit_mm[i]);
-            if self.prev_nominal > 0.0 && d > 1e-6 {
-                t | 1 << i
-            } else {
-                t
-            }
-        });
         b.quiet = quiet;
         b.release = release & turned;
         self.release_pending |= b.release;
@@ -215,9 +246,10 @@ impl<const N: usize> Planner<N> {
         // uses below, where the still-time loop took one per idle axis.
         let min_time = b.min_time();
         let long = (still, min_time >= CANCEL_WINDOW_S);
-        let m = self.hold_factor(&unit_mm, len_mm, curve, b.corner, 0, long);
+        let (m, pair) = self.hold_factor(&unit_mm, len_mm, curve, limit, 0, long);
         b.hold_fixed = if b.release != 0 {
-            self.hold_factor(&unit_mm, len_mm, curve, b.corner, b.release, long)
+            self.hold_factor(&unit_mm, len_mm, curve, limit, b.release, long)
+                .0
         } else {
             m
         };
@@ -225,9 +257,26 @@ impl<const N: usize> Planner<N> {
         b.max_entry = b.junction.min(b.nominal).min(self.prev_nominal);
         b.entry = if self.len == 0 { 0.0 } else { b.max_entry };
         let merged = b.junction.is_infinite() && self.merge(&b);
+        // The corner before this one, if this one takes it back.
+        let mut taken_back = self.len;
         if merged {
             let k = self.len - 1;
             self.at(k).quiet &= quiet;
+            // The newest block goes straight on, longer: a pending corner
+            // of its settles now (the stop within it bounds it no more).
+            if self.pending & 1 != 0 {
+                taken_back = self.release_taken_back(limit, phi2, None, before);
+                self.pending &= !1;
+            }
+        } else {
+            if curve.is_none() {
+                taken_back = self.release_taken_back(limit, phi2, pair.net, before);
+            }
+            self.prev_kept = pair.kept;
+            self.prev_pulse_m = pair.pulse_m;
+            self.pending = (self.pending << 1 | u8::from(pending)) & 3;
+            self.prev_phi2 = phi2;
+            self.prev_turn = turn;
         }
         self.count_quiet(min_time, quiet);
         if !merged {
@@ -256,7 +305,7 @@ impl<const N: usize> Planner<N> {
             *self.at(k) = b;
             self.len += 1;
         }
-        let released = self.release_quiet();
+        let released = self.release_quiet().min(taken_back);
         self.replan_to(false, released);
         Ok(())
     }

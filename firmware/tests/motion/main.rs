@@ -6,6 +6,7 @@
 
 mod arc;
 mod arc_props;
+mod cancel;
 mod chord_bound;
 mod extremes;
 mod limit_race;
