@@ -39,6 +39,11 @@ const SPREAD: f32 = 0.75;
 const TIME: f32 = 0.75;
 
 const W: f32 = CANCEL_WINDOW_S;
+/// The share of the shorter block a corner's hold may fill on either
+/// side, leaving the block room for the hold of its other end: filled to
+/// the end, the two together left no entry but a stop (the backward pass
+/// found `w²·m/2` equal to the length, to its last bit).
+const ROOM_SHARE: f32 = 0.9;
 
 impl Block {
     /// Set the corner's hold factors (stretched, see `planner::passes`)
@@ -52,7 +57,7 @@ impl Block {
         let m = m.pre.max(m.post);
         if m > 0.0 {
             self.junction = self.junction.min(0.5 * W * HOLD_STRETCH / m);
-            self.junction = self.junction.min(libm::sqrtf(2.0 * room / m));
+            self.junction = self.junction.min(libm::sqrtf(2.0 * ROOM_SHARE * room / m));
         }
     }
 

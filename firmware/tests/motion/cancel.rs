@@ -116,3 +116,38 @@ fn a_real_curve_of_short_chords_keeps_its_curvature_limit() {
         assert!(c > 22.3, "line {line}: corner {c}");
     }
 }
+
+#[test]
+fn a_circle_in_inch_decimals_never_stops_between_its_chords() {
+    // circle_small's start: a 1 inch radius in 10,000 chords, each end
+    // rounded to four decimals. A corner's hold that filled the block
+    // before it to the end left that block's own hold no room, and the
+    // backward pass no entry but a stop (ten of them in the first 2,700
+    // chords).
+    let mut p: Planner<64> = Planner::new(Settings::default());
+    let round4 = |v: f64| (v * 10_000.0).round() / 10_000.0;
+    for k in 0..1_500u32 {
+        let a = core::f64::consts::TAU * k as f64 / 10_000.0;
+        let (x, y) = (round4(a.sin()) * 25.4, round4(a.cos()) * 25.4);
+        if p.is_full() {
+            p.pop();
+        }
+        p.push_line_mm(
+            &burin::pad([x as f32, y as f32, 0.0]),
+            Speed::Feed(4_000.0),
+            Watch::default(),
+            k + 1,
+        )
+        .unwrap();
+        for i in 1..p.len() {
+            let b = p.block(i).unwrap();
+            assert!(
+                b.entry > 0.0 || b.max_entry <= 0.0 || b.line == 1,
+                "after line {}: line {} planned to stop (limit {})",
+                k + 1,
+                b.line,
+                b.max_entry
+            );
+        }
+    }
+}
