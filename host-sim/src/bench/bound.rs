@@ -293,6 +293,13 @@ impl Bound {
         }
     }
 
+    /// The time-optimal profile on the commanded path: its piece lengths
+    /// are the commanded ones, which the curvature check divides by the
+    /// trace's times to get its speeds (`bench::curvature`).
+    pub fn commanded_profile(&self) -> Vec<PieceProfile> {
+        self.profile_on(|p| &p.cmd)
+    }
+
     /// The time-optimal profile on one geometry.
     fn profile_on(&self, geometry: impl Fn(&Piece) -> &Shape) -> Vec<PieceProfile> {
         let p = &self.pieces;

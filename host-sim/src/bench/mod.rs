@@ -119,8 +119,11 @@ pub fn run_job(cfg: &MachineConfig, source: &str) -> JobFigures {
     let prof = both.bound.bound().profile();
     let step_mm = spm.map(|s| 1.0 / s);
     let bound_hits: Vec<Option<f64>> = prof.iter().map(|p| Some(p.end_s)).collect();
+    // burin's trace against the commanded lengths (the bound may be the
+    // step-rounded path's profile).
+    let commanded = both.bound.bound().commanded_profile();
     JobFigures {
-        curv: curvature::check(&prof, &both.bound.hit_s(), step_mm),
+        curv: curvature::check(&commanded, &both.bound.hit_s(), step_mm),
         bound_curv: curvature::check(&prof, &bound_hits, step_mm),
         piece_lines: both.bound.lines().to_vec(),
         time_s,
