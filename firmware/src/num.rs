@@ -169,6 +169,30 @@ pub fn clamp(v: f32, lo: f32, hi: f32) -> f32 {
     v.max(lo).min(hi)
 }
 
+/// `x` rounded half away from zero, as `libm::roundf` rounds, if within
+/// ±1e9 (`None` beyond, or not a number). One conversion each way and a
+/// compare: `roundf` took about twenty instructions, and the planner
+/// rounds every axis of every move (bench-target's `plan_block_insns`).
+/// Exact: below 2^24 the integer part converts back exactly and `x` less
+/// it is exactly the fraction; above, `x` is a whole number.
+// NaN fails the one comparison too (two tests cost 18 instructions of
+// `plan_block_insns`).
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+pub fn round_i32(x: f32) -> Option<i32> {
+    if !(libm::fabsf(x) <= 1.0e9) {
+        return None;
+    }
+    let t = x as i32;
+    let frac = x - t as f32;
+    Some(if frac >= 0.5 {
+        t + 1
+    } else if frac <= -0.5 {
+        t - 1
+    } else {
+        t
+    })
+}
+
 /// Cube root of `x` ≥ 0 (0 for anything else), in `f32` only: libm's
 /// `cbrtf` finishes in `f64`, soft-float on this FPU (the image check
 /// refuses it). A first guess from the exponent bits, then Newton steps
@@ -279,6 +303,44 @@ fn write_scaled(
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn round_i32_rounds_as_roundf() {
+        let edge = [
+            0.0f32,
+            -0.0,
+            0.5,
+            -0.5,
+            1.5,
+            -1.5,
+            2.5,
+            -2.5,
+            0.499_999_97,
+            -0.499_999_97,
+            0.500_000_06,
+            8_388_607.5,
+            -8_388_607.5,
+            8_388_609.0,
+            16_777_217.0,
+            1.0e9,
+            -1.0e9,
+            123.456,
+            -0.000_001,
+        ];
+        let mut x = 0x1234_5678u32;
+        let randoms = (0..20_000).map(|_| {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            (x as f32 / u32::MAX as f32 - 0.5) * 2.0e4
+        });
+        for v in edge.into_iter().chain(randoms) {
+            assert_eq!(round_i32(v), Some(libm::roundf(v) as i32), "{v}");
+        }
+        for v in [f32::NAN, f32::INFINITY, -f32::INFINITY, 1.1e9, -2.0e9] {
+            assert_eq!(round_i32(v), None, "{v}");
+        }
+    }
+
     use super::*;
     use std::string::String;
 

@@ -53,15 +53,7 @@ const GOALS: [(&str, Option<f64>, &str); 25] = [
     ("qemu_step_rise_insns_1axis", None, "insns"),
     ("qemu_step_fall_insns_1axis", None, "insns"),
     ("line_insns", None, "insns"),
-    // Issue 31: 9,600 until session 20, whose `planner::cancel` (a
-    // rounding step in a chord polyline neither holds nor slows its
-    // corners) costs about 200 per block; 9,700 with the parse's
-    // `line_insns` is under 12,500 instructions a line, which at 2 cycles
-    // each (the step path's model reads 1.9, interrupt entry and bus
-    // stalls included) on a 96 MHz F411 with 32 % taken by 100 kHz of
-    // steps still parses and plans over 2,500 lines a second: the densest
-    // bench job (short_segments, 3,008 lines in 2.65 s) needs 1,135.
-    ("plan_block_insns", Some(9_700.0), "insns"),
+    ("plan_block_insns", Some(9_600.0), "insns"),
     ("plan_chord_scurve_insns", None, "insns"),
 ];
 /// Step rate goal on the 96 MHz F411 with hard limits on (issue 28).

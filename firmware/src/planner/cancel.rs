@@ -130,9 +130,11 @@ impl<const N: usize> Planner<N> {
         if self.pending & 1 != 0 {
             let l = self.prev_turn.l;
             let ahead = phi2.map_or(0.0, |p| two_chords(l, p));
-            let behind = match self.prev_phi2 {
-                Some(p) if self.pending & 2 != 0 => two_chords(l, p),
-                _ => 0.0,
+            // (The chord before pending means its push took that turn.)
+            let behind = if self.pending & 2 != 0 {
+                two_chords(l, self.prev_phi2)
+            } else {
+                0.0
             };
             settled = corner.min(self.prev_turn.speed(ahead.max(behind)));
         }
@@ -149,9 +151,10 @@ impl<const N: usize> Planner<N> {
             let t = if v.is_finite() { length / v } else { 0.0 };
             if v > 0.0 && t <= W {
                 let kept = kept_share(m, net, t);
-                if kept < self.prev_kept {
-                    r = kept / self.prev_kept;
-                    self.prev_kept = kept;
+                let before = 1.0 - self.prev_given_up;
+                if kept < before {
+                    r = kept / before;
+                    self.prev_given_up = 1.0 - kept;
                 }
             }
         }

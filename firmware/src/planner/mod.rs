@@ -262,13 +262,16 @@ pub struct Planner<const N: usize> {
     /// (`planner::cancel`).
     pending: u8,
     /// The turn across the newest block's predecessor chord (from the
-    /// chord before it to the newest), and the newest block's corner's
-    /// turn (`planner::cancel`).
-    prev_phi2: Option<f32>,
+    /// chord before it to the newest; taken whenever that corner was
+    /// pending, `pending` bit 1), and the newest
+    /// block's corner's turn (`planner::cancel`). Zero in `new`, as every
+    /// field: the machine's placeholder stays in .bss.
+    prev_phi2: f32,
     prev_turn: corner::Turn,
-    /// The share of its hold the previous block's corner kept
-    /// (`planner::cancel`; 1 when nothing took it back).
-    prev_kept: f32,
+    /// The share of its hold the previous block's corner gave up
+    /// (`planner::cancel`; 0 when nothing took it back: the machine's
+    /// placeholder, built from `new`, must stay all zero bits, in .bss).
+    prev_given_up: f32,
     /// The newest block's corner's `Pair::pulse_m` (`planner::cancel`).
     prev_pulse_m: f32,
     /// Commanded end of the last block pushed, mm: corners are judged on
@@ -307,13 +310,13 @@ impl<const N: usize> Planner<N> {
             prev_unit_mm: [0.0; AXES],
             prev2_unit_mm: [0.0; AXES],
             pending: 0,
-            prev_phi2: None,
+            prev_phi2: 0.0,
             prev_turn: corner::Turn {
                 a: 0.0,
                 phi: 0.0,
                 l: 0.0,
             },
-            prev_kept: 1.0,
+            prev_given_up: 0.0,
             prev_pulse_m: 0.0,
             position_mm: [0.0; AXES],
             prev_nominal: 0.0,
@@ -359,7 +362,7 @@ impl<const N: usize> Planner<N> {
             pending,
             prev_phi2,
             prev_turn,
-            prev_kept,
+            prev_given_up,
             prev_pulse_m,
             position_mm,
             prev_nominal,
@@ -382,7 +385,7 @@ impl<const N: usize> Planner<N> {
         self.pending = pending;
         self.prev_phi2 = prev_phi2;
         self.prev_turn = prev_turn;
-        self.prev_kept = prev_kept;
+        self.prev_given_up = prev_given_up;
         self.prev_pulse_m = prev_pulse_m;
         self.position_mm = position_mm;
         self.prev_nominal = prev_nominal;
@@ -471,11 +474,8 @@ impl<const N: usize> Planner<N> {
     pub fn to_steps(&self, mm: &Pos) -> Result<[i32; AXES], PlanError> {
         let mut out = [0i32; AXES];
         for i in 0..AXES {
-            let v = libm::roundf(mm[i] * self.settings.axes[i].steps_per_mm);
-            if !v.is_finite() || v.abs() > 1.0e9 {
-                return Err(PlanError::InvalidNumber);
-            }
-            out[i] = v as i32;
+            out[i] = crate::num::round_i32(mm[i] * self.settings.axes[i].steps_per_mm)
+                .ok_or(PlanError::InvalidNumber)?;
         }
         Ok(out)
     }

@@ -92,8 +92,8 @@ impl<const N: usize> Planner<N> {
         if self.prev_nominal <= 0.0 {
             return none;
         }
-        let cos = dot(unit, &self.prev_unit_mm);
         if let (Some(c), Some(p)) = (curve, self.prev_curve) {
+            let cos = dot(unit, &self.prev_unit_mm);
             let phi = libm::acosf(crate::num::clamp(cos, -1.0, 1.0));
             if c == p && c.radius > 0.0 && phi <= 2.0 * length / c.radius {
                 return none;

@@ -272,10 +272,10 @@ impl<const N: usize> Planner<N> {
             if curve.is_none() {
                 taken_back = self.release_taken_back(limit, phi2, pair.net, before);
             }
-            self.prev_kept = pair.kept;
+            self.prev_given_up = 1.0 - pair.kept;
             self.prev_pulse_m = pair.pulse_m;
             self.pending = (self.pending << 1 | u8::from(pending)) & 3;
-            self.prev_phi2 = phi2;
+            self.prev_phi2 = phi2.unwrap_or(0.0);
             self.prev_turn = turn;
         }
         self.count_quiet(min_time, quiet);
