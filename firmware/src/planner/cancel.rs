@@ -151,9 +151,9 @@ impl<const N: usize> Planner<N> {
             let t = if v.is_finite() { length / v } else { 0.0 };
             if v > 0.0 && t <= W {
                 let kept = kept_share(m, net, t);
-                let before = 1.0 - self.prev_given_up;
-                if kept < before {
-                    r = kept / before;
+                let had = 1.0 - self.prev_given_up;
+                if kept < had {
+                    r = kept / had;
                     self.prev_given_up = 1.0 - kept;
                 }
             }
