@@ -322,3 +322,43 @@ fn motion_core_fits_the_f411_ram_budget() {
     // 128 KiB of RAM on the F411: the whole motion core stays under 16 KiB.
     assert!(m + q + st < 16 * 1024);
 }
+
+#[test]
+fn a_helix_ending_in_a_flat_turn_holds_for_z_only_there() {
+    // A 0.1 mm hole milled as a helix, 0.29 mm down a turn, then one flat
+    // turn: the same radius and plane, so one curve to the planner. Its
+    // chords' turns in the plane are the curve's own and hold nothing;
+    // where the descent ends Z stops at once, and that corner holds.
+    let mut p: Planner<64> = Planner::new(Settings::default());
+    let curve = burin::planner::Curve {
+        radius: 0.1,
+        plane: 0b011,
+    };
+    let n = 16;
+    let at = |k: u32, z: f32| {
+        let a = core::f32::consts::TAU * k as f32 / n as f32;
+        burin::pad([0.1 * libm::cosf(a), 0.1 * libm::sinf(a), z])
+    };
+    p.push_line_mm(&at(0, 0.0), Speed::Feed(10.0), Watch::default(), 1)
+        .unwrap();
+    for k in 1..=2 * n {
+        let z = -0.29 * (k.min(n) as f32) / n as f32;
+        p.push_chord(&at(k, z), Speed::Feed(10.0), k + 1, curve)
+            .unwrap();
+    }
+    let held = |line: u32| {
+        let b = (0..p.len())
+            .filter_map(|k| p.block(k))
+            .find(|b| b.line == line)
+            .copied()
+            .expect("block queued");
+        b.hold_m.max(b.hold_pre_m)
+    };
+    for line in 3..=n + 1 {
+        assert_eq!(held(line), 0.0, "helix chord {line}");
+    }
+    assert!(held(n + 2) > 0.0, "the first flat chord's corner holds");
+    for line in n + 3..=2 * n {
+        assert_eq!(held(line), 0.0, "flat chord {line}");
+    }
+}
