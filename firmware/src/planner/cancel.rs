@@ -76,15 +76,6 @@ impl Pair {
 pub(super) const PULSE_SHARE: f32 = 0.02;
 
 impl<const N: usize> Planner<N> {
-    /// Whether a corner whose turn stays within rounding over the block
-    /// after it (`corner::ROUNDING_STEPS`) waits for the next chord to
-    /// settle its curvature ([`Self::release_taken_back`]): between two
-    /// lines (and, the caller checks, with a chord before the previous one
-    /// to judge it by).
-    pub(super) fn pending_turn(&self) -> bool {
-        self.prev_nominal > 0.0 && self.prev_curve.is_none()
-    }
-
     /// Settle the newest queued block's corner now that the block after
     /// it is known, entered at most at `next_corner` mm/s, its direction
     /// turned by `phi2` from the chord before the newest and its corner's

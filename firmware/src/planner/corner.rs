@@ -56,6 +56,13 @@ impl Corner {
 /// curvature check.
 pub(super) const ROUNDING_STEPS: f32 = 0.25;
 
+/// Whether an axis whose unit direction changes by `d` strays within
+/// rounding ([`ROUNDING_STEPS`]) over a chord of `length` mm.
+#[inline]
+pub(super) fn within_rounding(d: f32, length: f32, ax: &crate::settings::AxisSettings) -> bool {
+    d * length * ax.steps_per_mm <= ROUNDING_STEPS
+}
+
 impl<const N: usize> Planner<N> {
     /// Cornering speed at the junction with the previous block.
     ///

@@ -115,7 +115,7 @@ impl<const N: usize> Planner<N> {
                 quiet |= c.plane;
                 for (i, ax) in self.settings.axes.iter().enumerate() {
                     let d = libm::fabsf(unit[i] - self.prev_unit_mm[i]);
-                    if d * length * ax.steps_per_mm <= super::corner::ROUNDING_STEPS {
+                    if super::corner::within_rounding(d, length, ax) {
                         quiet |= 1 << i;
                     }
                 }

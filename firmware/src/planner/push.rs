@@ -209,7 +209,7 @@ impl<const N: usize> Planner<N> {
             let d = libm::fabsf(unit_mm[i] - self.prev_unit_mm[i]);
             if d > 1e-6 {
                 turned |= 1 << i;
-                rounding &= len_mm * d * ax.steps_per_mm <= corner::ROUNDING_STEPS;
+                rounding &= corner::within_rounding(d, len_mm, ax);
             }
         }
         if self.prev_nominal <= 0.0 {
@@ -226,7 +226,7 @@ impl<const N: usize> Planner<N> {
             && turn.a > 0.0
             && turn.phi * 2.0 * b.accel * len_mm <= turn.a * turn.l
             && before
-            && self.pending_turn();
+            && self.prev_curve.is_none();
         b.corner = if pending { corner.deviation } else { limit };
         b.junction = b.corner;
         let (quiet, release) = self.quiet_axes(&mut b, &unit);

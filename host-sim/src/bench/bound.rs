@@ -283,21 +283,22 @@ impl Bound {
     /// The time-optimal profile, piece by piece, on the faster of the two
     /// geometries (the commanded path, or the one rounded to steps).
     pub fn profile(&self) -> Vec<PieceProfile> {
+        self.profiles().0
+    }
+
+    /// [`Self::profile`], and the time-optimal profile on the commanded
+    /// path, whose piece lengths are the commanded ones: the curvature
+    /// check divides them by the trace's times to get its speeds
+    /// (`bench::curvature`). Both from the two profiles computed once.
+    pub fn profiles(&self) -> (Vec<PieceProfile>, Vec<PieceProfile>) {
         let cmd = self.profile_on(|p| &p.cmd);
         let step = self.profile_on(|p| &p.step);
         let end = |p: &[PieceProfile]| p.last().map_or(0.0, |q| q.end_s);
         if end(&step) < end(&cmd) {
-            step
+            (step, cmd)
         } else {
-            cmd
+            (cmd.clone(), cmd)
         }
-    }
-
-    /// The time-optimal profile on the commanded path: its piece lengths
-    /// are the commanded ones, which the curvature check divides by the
-    /// trace's times to get its speeds (`bench::curvature`).
-    pub fn commanded_profile(&self) -> Vec<PieceProfile> {
-        self.profile_on(|p| &p.cmd)
     }
 
     /// The time-optimal profile on one geometry.

@@ -116,12 +116,11 @@ pub fn run_job(cfg: &MachineConfig, source: &str) -> JobFigures {
     let end = both.bound.bound().end_mm();
     let spm = cfg.settings.axes.map(|a| f64::from(a.steps_per_mm));
     // The bound's profile once, for its time, the losses and the replay.
-    let prof = both.bound.bound().profile();
+    let (prof, commanded) = both.bound.bound().profiles();
     let step_mm = spm.map(|s| 1.0 / s);
     let bound_hits: Vec<Option<f64>> = prof.iter().map(|p| Some(p.end_s)).collect();
-    // burin's trace against the commanded lengths (the bound may be the
-    // step-rounded path's profile).
-    let commanded = both.bound.bound().commanded_profile();
+    // burin's trace is checked against the commanded lengths (`prof` may
+    // be the step-rounded path's profile).
     JobFigures {
         curv: curvature::check(&commanded, &both.bound.hit_s(), step_mm),
         bound_curv: curvature::check(&prof, &bound_hits, step_mm),
