@@ -61,6 +61,10 @@ pub struct Pair {
     pub net: Option<f32>,
     /// The share of its hold it kept for that.
     pub kept: f32,
+    /// Chords of one curve that change an axis across its plane (a
+    /// helix meeting its flat turn): the chord after keeps the corner's
+    /// speed (`planner::push`).
+    pub kink: bool,
 }
 
 impl Pair {
@@ -68,6 +72,7 @@ impl Pair {
         pulse_m: 0.0,
         net: None,
         kept: 1.0,
+        kink: false,
     };
 }
 

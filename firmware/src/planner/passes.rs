@@ -93,6 +93,7 @@ impl<const N: usize> Planner<N> {
             return none;
         }
         let mut quiet = quiet;
+        let mut kink = false;
         if let (Some(c), Some(p)) = (curve, self.prev_curve) {
             // A spline (radius unknown) has half of the budget for its
             // turns already; an arc's chords turn by about `l/r`.
@@ -117,6 +118,8 @@ impl<const N: usize> Planner<N> {
                     let d = libm::fabsf(unit[i] - self.prev_unit_mm[i]);
                     if super::corner::within_rounding(d, length, ax) {
                         quiet |= 1 << i;
+                    } else if c.plane & (1 << i) == 0 {
+                        kink = true;
                     }
                 }
             }
@@ -167,6 +170,7 @@ impl<const N: usize> Planner<N> {
         // (budgeted there), not a change this one could take back.
         let mut pair = Pair {
             pulse_m: if small { m } else { 0.0 },
+            kink,
             ..Pair::NONE
         };
         if m <= 0.0 || self.prev_curve.is_some() || self.prev2_unit_mm.iter().all(|&u| u == 0.0) {

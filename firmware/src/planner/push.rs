@@ -247,6 +247,17 @@ impl<const N: usize> Planner<N> {
         let min_time = b.min_time();
         let long = (still, min_time >= CANCEL_WINDOW_S);
         let (m, pair) = self.hold_factor(&unit_mm, len_mm, curve, limit, 0, long);
+        // Where a helix's descent ends (`Pair::kink`) the axis across the
+        // plane stops within the corner: a turn the curvature check reads
+        // as a circle through the chords on both sides, at the slower
+        // side's speed. The chord after keeps the corner's speed, so that
+        // circle is run at most at the corner's curvature limit (a 0.4 mm
+        // hole read Z 132 % of it, the flat chord at the curve's speed).
+        if pair.kink && limit < b.cap {
+            b.cap = limit;
+            b.nominal = self.nominal(&b);
+            Self::curve_limits(&mut b, self.c_max());
+        }
         b.hold_fixed = if b.release != 0 {
             self.hold_factor(&unit_mm, len_mm, curve, limit, b.release, long)
                 .0

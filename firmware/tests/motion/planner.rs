@@ -362,3 +362,56 @@ fn a_helix_ending_in_a_flat_turn_holds_for_z_only_there() {
         assert_eq!(held(line), 0.0, "flat chord {line}");
     }
 }
+
+#[test]
+fn the_chord_after_a_helix_ends_keeps_the_corner_speed() {
+    // The corner where a helix's descent ends turns Z round within a
+    // chord: the curvature check (`host_sim::bench::curvature`) reads it
+    // as a circle through the chords on both sides, at the slower side's
+    // speed, so the flat chord after it is capped at the corner's limit
+    // (milldrilldiatest's 0.4 mm hole read Z 132 % of that check, 98 %
+    // with the cap). The chords before and after it keep the curve's own
+    // speed.
+    // GRBL's settings in grbl-sim (`grbl_match.toml`): Z a fifth of X, Y.
+    let mut s = Settings::default();
+    for (i, ax) in s.axes.iter_mut().take(3).enumerate() {
+        ax.max_accel = if i == 2 { 100.0 } else { 500.0 };
+    }
+    let mut p: Planner<64> = Planner::new(s);
+    let curve = burin::planner::Curve {
+        radius: 0.4,
+        plane: 0b011,
+    };
+    let n = 24;
+    let at = |k: u32, z: f32| {
+        let a = core::f32::consts::TAU * k as f32 / n as f32;
+        burin::pad([0.4 * libm::cosf(a), 0.4 * libm::sinf(a), z])
+    };
+    p.push_line_mm(&at(0, 0.0), Speed::Feed(30.0), Watch::default(), 1)
+        .unwrap();
+    for k in 1..=n + 4 {
+        let z = -0.29 * (k.min(n) as f32) / n as f32;
+        p.push_chord(&at(k, z), Speed::Feed(30.0), k + 1, curve)
+            .unwrap();
+    }
+    let block = |line: u32| {
+        (0..p.len())
+            .filter_map(|k| p.block(k))
+            .find(|b| b.line == line)
+            .copied()
+            .expect("block queued")
+    };
+    let first_flat = block(n + 2);
+    assert!(
+        first_flat.nominal <= first_flat.corner,
+        "the chord after it keeps that speed: {} > {}",
+        first_flat.nominal,
+        first_flat.corner
+    );
+    let helix = block(n);
+    assert!(helix.nominal > 1.3 * first_flat.corner, "helix {}", helix.nominal);
+    // (The two chords after it lose a little more to `planner::quiet`,
+    // whose caps follow the entry speed.)
+    let flat = block(n + 5);
+    assert!(flat.nominal > 1.3 * first_flat.corner, "flat {}", flat.nominal);
+}
