@@ -92,19 +92,18 @@ impl HostModel {
     };
 }
 
-/// The measured on-target costs (`cargo xtask bench-target`: 2,247
-/// instructions per parsed line, 9,303 per planned block with the corner
-/// holds, their passes, the quiet axes and the per-chord arc budget) at
-/// 96 MHz and the step path's assumed 1.3 cycles per instruction: 30.4 µs
-/// and 126.0 µs. (A refactor since moved the block figure to 9,289; the
-/// model keeps 9,303, 0.15 % over: at 9,289 a rig test's status reply,
-/// queued behind 157 lines of `ok`, lands one 2 ms round later.) The link is instant: a job file can be sent at any rate,
-/// so its time is not the controller's.
+/// The measured on-target costs (`cargo xtask bench-target`: 2,769
+/// instructions per parsed line, 11,021 per planned block with the corner
+/// holds, their passes, the quiet axes, the per-chord arc budget and the
+/// straight stretches of `planner::tube`) at 96 MHz and the step path's
+/// assumed 1.3 cycles per instruction: 37.5 µs and 149.2 µs. The link is
+/// instant: a job file can be sent at any rate, so its time is not the
+/// controller's.
 impl Default for HostModel {
     fn default() -> Self {
         HostModel {
-            line_ns: 30_428,
-            block_ns: 125_978,
+            line_ns: 37_497,
+            block_ns: 149_243,
             ..HostModel::INSTANT
         }
     }

@@ -10,6 +10,8 @@ use super::*;
 pub struct Corner {
     pub deviation: f32,
     pub curvature: f32,
+    /// Junction deviation alone (without S-curve's turn jerk).
+    pub jd: f32,
 }
 
 /// A corner's turn, for its curvature rule (`v² ≤ a·r`, `r` at least
@@ -36,10 +38,12 @@ impl Corner {
     const STOP: Corner = Corner {
         deviation: 0.0,
         curvature: 0.0,
+        jd: 0.0,
     };
     const STRAIGHT: Corner = Corner {
         deviation: f32::INFINITY,
         curvature: f32::INFINITY,
+        jd: f32::INFINITY,
     };
 
     /// Both limits.
@@ -136,6 +140,7 @@ impl<const N: usize> Planner<N> {
         let c = Corner {
             deviation: v_jd.min(v_jerk),
             curvature: turn.speed(r_noise),
+            jd: v_jd,
         };
         (c, turn)
     }

@@ -18,6 +18,7 @@ mod push;
 mod quiet;
 pub mod ramp;
 mod run;
+mod tube;
 
 use crate::command::Pos;
 use crate::settings::Settings;
@@ -127,6 +128,9 @@ pub struct Block {
     /// The corner's limit before its hold lowers it (junction deviation
     /// and curvature), mm/s.
     pub corner: f32,
+    /// Junction deviation's limit alone, mm/s: what a corner inside a
+    /// stretch within a step of a line may rise to (`planner::tube`).
+    pub jd: f32,
     /// The hold once the axes in `release` stop holding (`planner::quiet`).
     pub hold_fixed: passes::Sides,
     /// Axes whose velocity the block keeps small (bit per axis), and the
@@ -166,6 +170,7 @@ impl Block {
         hold_m: 0.0,
         hold_pre_m: 0.0,
         corner: 0.0,
+        jd: 0.0,
         hold_fixed: passes::Sides {
             pre: 0.0,
             post: 0.0,
@@ -291,6 +296,9 @@ pub struct Planner<const N: usize> {
     release_pending: u8,
     /// The curve the previous block was a chord of, if any.
     prev_curve: Option<Curve>,
+    /// The stretch of the newest blocks being checked for straightness
+    /// (`planner::tube`).
+    tube: tube::Tube,
     feed_pct: f32,
     rapid_pct: f32,
     /// The step timer's clock; 0 until [`set_tick_hz`](Self::set_tick_hz)
@@ -325,6 +333,7 @@ impl<const N: usize> Planner<N> {
             quiet_time: [f32::INFINITY; AXES],
             release_pending: 0,
             prev_curve: None,
+            tube: tube::Tube::NONE,
             feed_pct: 1.0,
             rapid_pct: 1.0,
             tick_hz: 0,
@@ -371,6 +380,7 @@ impl<const N: usize> Planner<N> {
             quiet_time,
             release_pending,
             prev_curve,
+            tube,
             feed_pct,
             rapid_pct,
             tick_hz,
@@ -394,6 +404,7 @@ impl<const N: usize> Planner<N> {
         self.quiet_time = quiet_time;
         self.release_pending = release_pending;
         self.prev_curve = prev_curve;
+        self.tube = tube;
         self.feed_pct = feed_pct;
         self.rapid_pct = rapid_pct;
         self.tick_hz = tick_hz;
@@ -465,6 +476,7 @@ impl<const N: usize> Planner<N> {
         self.prev_unit_mm = [0.0; AXES];
         self.prev2_unit_mm = [0.0; AXES];
         self.pending = 0;
+        self.tube = tube::Tube::NONE;
         // From rest: nothing moved before the next block.
         self.quiet_time = [f32::INFINITY; AXES];
     }

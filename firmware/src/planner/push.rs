@@ -228,6 +228,7 @@ impl<const N: usize> Planner<N> {
             && before
             && self.prev_curve.is_none();
         b.corner = if pending { corner.deviation } else { limit };
+        b.jd = corner.jd;
         b.junction = b.corner;
         let (quiet, release) = self.quiet_axes(&mut b, &unit);
         b.quiet = quiet;
@@ -309,6 +310,7 @@ impl<const N: usize> Planner<N> {
         for (i, t) in self.still_time.iter_mut().enumerate() {
             *t = if b.steps[i] == 0 { *t + min_time } else { 0.0 };
         }
+        let start = self.position;
         self.position = target;
         self.position_mm = *end_mm;
         if !merged {
@@ -316,7 +318,9 @@ impl<const N: usize> Planner<N> {
             *self.at(k) = b;
             self.len += 1;
         }
-        let released = self.release_quiet().min(taken_back);
+        let plain = curve.is_none() && !takeup;
+        let tubed = self.extend_tube(start, len_mm, plain, merged);
+        let released = self.release_quiet().min(taken_back).min(tubed);
         self.replan_to(false, released);
         Ok(())
     }

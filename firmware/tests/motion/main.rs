@@ -15,3 +15,4 @@ mod planner;
 mod quiet;
 mod ramp_props;
 mod scurve_run;
+mod tube;

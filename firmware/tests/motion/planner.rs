@@ -409,9 +409,17 @@ fn the_chord_after_a_helix_ends_keeps_the_corner_speed() {
         first_flat.corner
     );
     let helix = block(n);
-    assert!(helix.nominal > 1.3 * first_flat.corner, "helix {}", helix.nominal);
+    assert!(
+        helix.nominal > 1.3 * first_flat.corner,
+        "helix {}",
+        helix.nominal
+    );
     // (The two chords after it lose a little more to `planner::quiet`,
     // whose caps follow the entry speed.)
     let flat = block(n + 5);
-    assert!(flat.nominal > 1.3 * first_flat.corner, "flat {}", flat.nominal);
+    assert!(
+        flat.nominal > 1.3 * first_flat.corner,
+        "flat {}",
+        flat.nominal
+    );
 }
