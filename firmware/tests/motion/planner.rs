@@ -1,6 +1,6 @@
 //! Planner and step generation without host-sim: look-ahead, junctions,
 //! ramps, exact step counts through the stepper with smoothing.
-use burin::planner::{Planner, Profile, Shape, Speed, Watch};
+use burin::planner::{Block, Planner, Profile, Shape, Speed, Watch};
 use burin::realtime::Realtime;
 use burin::settings::Settings;
 use burin::stepper::prep::Preparer;
@@ -323,35 +323,45 @@ fn motion_core_fits_the_f411_ram_budget() {
     assert!(m + q + st < 16 * 1024);
 }
 
-#[test]
-fn a_helix_ending_in_a_flat_turn_holds_for_z_only_there() {
-    // A 0.1 mm hole milled as a helix, 0.29 mm down a turn, then one flat
-    // turn: the same radius and plane, so one curve to the planner. Its
-    // chords' turns in the plane are the curve's own and hold nothing;
-    // where the descent ends Z stops at once, and that corner holds.
-    let mut p: Planner<64> = Planner::new(Settings::default());
+/// A hole of `radius` mm milled as a helix of `n` chords a turn, 0.29 mm
+/// down in one turn, then `flat` chords of a flat turn (one curve to the
+/// planner: the same radius and plane), at `feed` mm/s; chord `k` is line
+/// `k + 1`. Returns the queued block of a line.
+fn helical_hole(s: Settings, radius: f32, n: u32, flat: u32, feed: f32) -> impl Fn(u32) -> Block {
+    let mut p: Planner<64> = Planner::new(s);
     let curve = burin::planner::Curve {
-        radius: 0.1,
+        radius,
         plane: 0b011,
     };
-    let n = 16;
     let at = |k: u32, z: f32| {
         let a = core::f32::consts::TAU * k as f32 / n as f32;
-        burin::pad([0.1 * libm::cosf(a), 0.1 * libm::sinf(a), z])
+        burin::pad([radius * libm::cosf(a), radius * libm::sinf(a), z])
     };
-    p.push_line_mm(&at(0, 0.0), Speed::Feed(10.0), Watch::default(), 1)
+    p.push_line_mm(&at(0, 0.0), Speed::Feed(feed), Watch::default(), 1)
         .unwrap();
-    for k in 1..=2 * n {
+    for k in 1..=n + flat {
         let z = -0.29 * (k.min(n) as f32) / n as f32;
-        p.push_chord(&at(k, z), Speed::Feed(10.0), k + 1, curve)
+        p.push_chord(&at(k, z), Speed::Feed(feed), k + 1, curve)
             .unwrap();
     }
-    let held = |line: u32| {
-        let b = (0..p.len())
+    move |line| {
+        (0..p.len())
             .filter_map(|k| p.block(k))
             .find(|b| b.line == line)
             .copied()
-            .expect("block queued");
+            .expect("block queued")
+    }
+}
+
+#[test]
+fn a_helix_ending_in_a_flat_turn_holds_for_z_only_there() {
+    // A 0.1 mm hole: its chords' turns in the plane are the curve's own
+    // and hold nothing; where the descent ends Z stops at once, and that
+    // corner holds.
+    let n = 16;
+    let block = helical_hole(Settings::default(), 0.1, n, n, 10.0);
+    let held = |line: u32| {
+        let b = block(line);
         b.hold_m.max(b.hold_pre_m)
     };
     for line in 3..=n + 1 {
@@ -371,36 +381,14 @@ fn the_chord_after_a_helix_ends_keeps_the_corner_speed() {
     // speed, so the flat chord after it is capped at the corner's limit
     // (milldrilldiatest's 0.4 mm hole read Z 132 % of that check, 98 %
     // with the cap). The chords before and after it keep the curve's own
-    // speed.
-    // GRBL's settings in grbl-sim (`grbl_match.toml`): Z a fifth of X, Y.
+    // speed. GRBL's settings in grbl-sim (`grbl_match.toml`): Z a fifth
+    // of X, Y.
     let mut s = Settings::default();
     for (i, ax) in s.axes.iter_mut().take(3).enumerate() {
         ax.max_accel = if i == 2 { 100.0 } else { 500.0 };
     }
-    let mut p: Planner<64> = Planner::new(s);
-    let curve = burin::planner::Curve {
-        radius: 0.4,
-        plane: 0b011,
-    };
     let n = 24;
-    let at = |k: u32, z: f32| {
-        let a = core::f32::consts::TAU * k as f32 / n as f32;
-        burin::pad([0.4 * libm::cosf(a), 0.4 * libm::sinf(a), z])
-    };
-    p.push_line_mm(&at(0, 0.0), Speed::Feed(30.0), Watch::default(), 1)
-        .unwrap();
-    for k in 1..=n + 4 {
-        let z = -0.29 * (k.min(n) as f32) / n as f32;
-        p.push_chord(&at(k, z), Speed::Feed(30.0), k + 1, curve)
-            .unwrap();
-    }
-    let block = |line: u32| {
-        (0..p.len())
-            .filter_map(|k| p.block(k))
-            .find(|b| b.line == line)
-            .copied()
-            .expect("block queued")
-    };
+    let block = helical_hole(s, 0.4, n, 4, 30.0);
     let first_flat = block(n + 2);
     assert!(
         first_flat.nominal <= first_flat.corner,
