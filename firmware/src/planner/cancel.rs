@@ -180,9 +180,7 @@ impl<const N: usize> Planner<N> {
             pre: b.hold_pre_m,
             post: b.hold_m,
         });
-        b.corner = settled;
-        b.hold(held, room.min(b.length));
-        b.max_entry = b.junction.min(b.nominal).min(prev_nominal);
+        b.set_corner(settled, held, room.min(b.length), prev_nominal);
         lowest
     }
 }

@@ -265,8 +265,7 @@ impl<const N: usize> Planner<N> {
         } else {
             m
         };
-        b.hold(m, room);
-        b.max_entry = b.junction.min(b.nominal).min(self.prev_nominal);
+        b.set_corner(b.corner, m, room, self.prev_nominal);
         b.entry = if self.len == 0 { 0.0 } else { b.max_entry };
         let merged = b.junction.is_infinite() && self.merge(&b);
         // The corner before this one, if this one takes it back.

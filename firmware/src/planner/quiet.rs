@@ -61,6 +61,18 @@ impl Block {
         }
     }
 
+    /// The corner's limit `corner`, its hold `m` within `room` (as
+    /// [`Block::hold`]) and the entry limit that follows, with the block
+    /// before at `prev_nominal`: at the push, and again when a queued
+    /// corner stops holding (`planner::quiet`), is settled by the chord
+    /// after it (`planner::cancel`) or lies in a straight stretch
+    /// (`planner::tube`).
+    pub(super) fn set_corner(&mut self, corner: f32, m: Sides, room: f32, prev_nominal: f32) {
+        self.corner = corner;
+        self.hold(m, room);
+        self.max_entry = self.junction.min(self.nominal).min(prev_nominal);
+    }
+
     /// The least time the block can take: its length at the highest speed
     /// it can reach from its corner's limit (no hold lowers that limit
     /// below `corner`; after a stop `corner` is 0).
@@ -169,9 +181,12 @@ impl<const N: usize> Planner<N> {
                     let prev = *self.at(c - 1);
                     let b = self.at(c);
                     b.release = 0;
-                    b.hold(b.hold_fixed, prev.length.min(b.length));
-                    let prev_nominal = prev.nominal;
-                    b.max_entry = b.junction.min(b.nominal).min(prev_nominal);
+                    b.set_corner(
+                        b.corner,
+                        b.hold_fixed,
+                        prev.length.min(b.length),
+                        prev.nominal,
+                    );
                     lowest = c - 1;
                 } else if axes.clone().any(|i| after[i] < 0.0) {
                     // A loud block came first: this corner keeps its hold.

@@ -245,14 +245,10 @@ impl<const N: usize> Planner<N> {
             {
                 continue;
             }
-            let corner = corner.max(b.corner);
-            b.corner = corner;
-            b.junction = corner;
-            b.hold_m = 0.0;
-            b.hold_pre_m = 0.0;
             b.hold_fixed = Sides::default();
             b.release = 0;
-            b.max_entry = corner.min(b.nominal).min(prev_nominal);
+            // No hold: the room it would need does not matter.
+            b.set_corner(corner.max(b.corner), Sides::default(), 0.0, prev_nominal);
             // The ramps on both sides take the line's acceleration, less
             // the bend's share: a block turned off the line by rounding
             // allows more on the axis it turned from, and a run of them
