@@ -25,7 +25,7 @@ use crate::settings::Settings;
 use crate::AXES;
 pub use curve::Curve;
 pub use ramp::{Phase, Profile, Shape};
-pub use run::{joins, CURVE_RUN_JERK, RUN_BLOCKS};
+pub use run::{nominal_near, RunAhead, CURVE_RUN_JERK, RUN_BLOCKS};
 
 /// Why a block was not queued. The executor maps `Full` onto its `Busy` and
 /// the rest onto its errors of the same name, so the reported codes do not
@@ -53,8 +53,24 @@ pub enum BlockKind {
     Line,
     /// G4: stand still this many timer ticks.
     Dwell {
-        ticks: u64,
+        ticks: Ticks,
     },
+}
+
+/// A dwell's timer ticks, a `u64` kept as two halves: aligned to 8 bytes it
+/// set the whole block's alignment, and the ring's 64 blocks grew by 512 B
+/// of padding when a block gained one byte (`run_pos`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Ticks([u32; 2]);
+
+impl Ticks {
+    pub const fn new(t: u64) -> Self {
+        Ticks([t as u32, (t >> 32) as u32])
+    }
+
+    pub const fn get(self) -> u64 {
+        (self.0[1] as u64) << 32 | self.0[0] as u64
+    }
 }
 
 /// What stops a block early (homing switches, probe).
@@ -144,6 +160,9 @@ pub struct Block {
     /// but do not move the tool, so the step interrupt leaves them out of
     /// the reported position; never merged with a neighbour.
     pub takeup: bool,
+    /// Its place in its S-curve run (`planner::run`), fixed when it was
+    /// queued: 0 starts a run.
+    pub run_pos: u8,
     /// Source line, for errors and traces.
     pub line: u32,
 }
@@ -185,6 +204,7 @@ impl Block {
             homing: false,
         },
         takeup: false,
+        run_pos: 0,
         line: 0,
     };
 
@@ -545,7 +565,9 @@ impl<const N: usize> Planner<N> {
             return Err(PlanError::Full);
         }
         let b = Block {
-            kind: BlockKind::Dwell { ticks },
+            kind: BlockKind::Dwell {
+                ticks: Ticks::new(ticks),
+            },
             target: self.position,
             line,
             ..Block::EMPTY

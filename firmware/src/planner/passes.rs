@@ -1,6 +1,7 @@
 //! Junction limits, overrides, and the backward/forward planning passes.
 
 use super::cancel::{Pair, PULSE_SHARE};
+use super::run::RunAhead;
 use super::*;
 
 /// The time over which opposite velocity changes at two corners cancel
@@ -239,53 +240,25 @@ impl<const N: usize> Planner<N> {
         if full {
             self.planned = 0;
         }
+        let scurve = self.settings.profile == crate::settings::Profile::SCurve;
+        // A corner that stopped holding may complete the promise of every
+        // block before it in its run (`planner::run`): those may rise too.
+        let down_to = if scurve && down_to < self.len {
+            let first =
+                down_to.saturating_sub(usize::from(self.blocks[(self.tail + down_to) % N].run_pos));
+            self.planned = self.planned.min(first.saturating_sub(1));
+            first
+        } else {
+            down_to
+        };
         let shape_of = |b: &Block, s: &Settings| b.shape(s);
-        // Backward: the newest block must be able to stop at its end, and
-        // every block must fit its corners' holds. Appending a block never
-        // lowers an entry without holds (the block before it was planned to
-        // stop, which is the most an exit can ask). With them it can: a
-        // corner whose hold costs more distance than stopping would
-        // (`m > 1/a`) lowers the entry of the block before it. So the pass
-        // may go on below `planned`, only lowering there, and stops at the
-        // first entry that does not change.
-        let planned = self.planned;
-        let mut lowered = None;
-        let mut next_entry = 0.0f32;
-        let mut next_m = 0.0f32; // the next corner's hold before it
-        let mut k = self.len;
-        // The settings and the ring borrowed apart: a copy of either per
-        // block was most of bench-target's plan_block_insns memcpy.
-        let (st, blocks, tail) = (&self.settings, &mut self.blocks, self.tail);
-        while k > 1 {
-            k -= 1;
-            let b = &mut blocks[(tail + k) % N];
-            let mut new = if b.kind == BlockKind::Line {
-                let both = b.hold_m + next_m;
-                let held = if both > 0.0 {
-                    libm::sqrtf(2.0 * b.length / both)
-                } else {
-                    f32::INFINITY
-                };
-                b.max_entry
-                    .min(held)
-                    .min(shape_of(b, st).reach_held(next_entry, b.length, next_m, b.hold_m))
-            } else {
-                0.0
-            };
-            if k <= planned {
-                new = new.min(b.entry);
-                if new != b.entry {
-                    lowered = Some(k);
-                }
-            }
-            let unchanged = new == b.entry;
-            b.entry = new;
-            next_entry = new;
-            next_m = b.hold_pre_m;
-            if unchanged && k < down_to && (k <= planned || (!full && k + 1 < self.len)) {
-                break;
-            }
-        }
+        // One backward pass for each profile, so that trapezoid mode pays
+        // nothing for S-curve runs (bench-target's plan_block_insns).
+        let lowered = if scurve {
+            self.backward::<true>(full, down_to)
+        } else {
+            self.backward::<false>(full, down_to)
+        };
         if let Some(k) = lowered {
             self.planned = k - 1;
         }
@@ -305,7 +278,7 @@ impl<const N: usize> Planner<N> {
                 BlockKind::Dwell { .. } => 0.0,
             };
             if let Some(r) = run.as_mut() {
-                if let Some(v) = r.step(prev, b, st) {
+                if let Some(v) = r.step(prev, b, st, reach <= b.entry) {
                     reach = reach.max(v);
                 }
             }
@@ -316,6 +289,93 @@ impl<const N: usize> Planner<N> {
                 self.planned = k;
             }
         }
+    }
+
+    /// The backward pass of [`Planner::replan_to`] (`S`: in S-curve mode,
+    /// reckoning runs, `planner::run`); returns the lowest block it lowered
+    /// at or below `planned`.
+    fn backward<const S: bool>(&mut self, full: bool, down_to: usize) -> Option<usize> {
+        // Backward: the newest block must be able to stop at its end, and
+        // every block must fit its corners' holds. Appending a block never
+        // lowers an entry without holds (the block before it was planned to
+        // stop, which is the most an exit can ask). With them it can: a
+        // corner whose hold costs more distance than stopping would
+        // (`m > 1/a`) lowers the entry of the block before it. So the pass
+        // may go on below `planned`, only lowering there, and stops at the
+        // first entry that does not change.
+        let planned = self.planned;
+        let mut lowered = None;
+        let mut next_entry = 0.0f32;
+        let mut next_m = 0.0f32; // the next corner's hold before it
+        let mut k = self.len;
+        // The settings and the ring borrowed apart: a copy of either per
+        // block was most of bench-target's plan_block_insns memcpy.
+        let (st, blocks, tail) = (&self.settings, &mut self.blocks, self.tail);
+        // In S-curve mode, the rest of block `k`'s run and the block after
+        // it (`planner::run`), carried down the pass.
+        let mut ahead: Option<(RunAhead, Option<usize>)> = None;
+        // Whether the entry of that block after the run changed in this
+        // pass, and whether the last block's did.
+        let (mut exit_moved, mut moved) = (false, false);
+        while k > 1 {
+            k -= 1;
+            let exit = if S {
+                let (run, exit) = run_down(blocks, tail, k, self.len, ahead);
+                if exit == Some(k + 1) {
+                    exit_moved = moved;
+                }
+                ahead = Some((run, exit));
+                exit.map(|e| {
+                    let x = &blocks[(tail + e) % N];
+                    (x.entry, x.hold_pre_m)
+                })
+            } else {
+                None
+            };
+            let b = &mut blocks[(tail + k) % N];
+            let mut new = if b.kind == BlockKind::Line {
+                let both = b.hold_m + next_m;
+                let held = if both > 0.0 {
+                    libm::sqrtf(2.0 * b.length / both)
+                } else {
+                    f32::INFINITY
+                };
+                let alone = held.min(
+                    b.shape(st)
+                        .reach_held(next_entry, b.length, next_m, b.hold_m),
+                );
+                // The run's promise, where its cap leaves it room to be
+                // the faster.
+                let run = match (exit, ahead) {
+                    (Some((x, x_m)), Some((run, _))) if run.cap() > alone => {
+                        run.promise(x, x_m, b.hold_m, st)
+                    }
+                    _ => None,
+                };
+                b.max_entry.min(run.map_or(alone, |p| p.max(alone)))
+            } else {
+                0.0
+            };
+            if k <= planned {
+                new = new.min(b.entry);
+                if new != b.entry {
+                    lowered = Some(k);
+                }
+            }
+            let unchanged = new == b.entry;
+            b.entry = new;
+            next_entry = new;
+            next_m = b.hold_pre_m;
+            moved = !unchanged;
+            // The blocks before read this entry and, in S-curve mode, the
+            // entry after this block's run.
+            let settled = !S || !exit_moved;
+            if unchanged && settled && k < down_to && (k <= planned || (!full && k + 1 < self.len))
+            {
+                break;
+            }
+        }
+        lowered
     }
 }
 
@@ -343,5 +403,27 @@ fn pair<const N: usize>(blocks: &mut [Block; N], prev: usize, k: usize) -> (&Blo
     } else {
         let (lo, hi) = blocks.split_at_mut(prev);
         (&hi[0], &mut lo[k])
+    }
+}
+
+/// The rest of block `k`'s run for the backward pass: `ahead` (the rest of
+/// block `k + 1`'s, and its run's next first block) with block `k` put in
+/// front when both are in one run, else block `k` alone; and the queued
+/// block after the run, if any (the last run may still grow).
+fn run_down<const N: usize>(
+    blocks: &[Block; N],
+    tail: usize,
+    k: usize,
+    len: usize,
+    ahead: Option<(RunAhead, Option<usize>)>,
+) -> (RunAhead, Option<usize>) {
+    let b = &blocks[(tail + k) % N];
+    match ahead {
+        Some((mut run, exit)) if blocks[(tail + k + 1) % N].run_pos != 0 => {
+            run.junction(&blocks[(tail + k + 1) % N]);
+            run.block(b);
+            (run, exit)
+        }
+        _ => (RunAhead::start(b), (k + 1 < len).then_some(k + 1)),
     }
 }

@@ -312,8 +312,19 @@ impl<const N: usize> Planner<N> {
         let start = self.position;
         self.position = target;
         self.position_mm = *end_mm;
-        if !merged {
+        // S-curve runs (`planner::run`); in trapezoid mode every block is
+        // its own.
+        let scurve = self.settings.profile == crate::settings::Profile::SCurve;
+        if merged {
+            if scurve {
+                self.regroup_newest();
+            }
+        } else {
             let k = self.len;
+            b.run_pos = match k.checked_sub(1) {
+                Some(j) if scurve => run::next_pos(self.at(j), &b),
+                _ => 0,
+            };
             *self.at(k) = b;
             self.len += 1;
         }

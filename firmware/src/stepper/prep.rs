@@ -329,7 +329,7 @@ impl Preparer {
         self.s_done = 0.0;
         match b.kind {
             BlockKind::Dwell { ticks } => {
-                self.dwell_left = ticks;
+                self.dwell_left = ticks.get();
                 self.v = 0.0;
             }
             BlockKind::Line if self.run_blocks > 0 && self.hold == Hold::Running => {

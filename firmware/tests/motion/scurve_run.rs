@@ -69,3 +69,108 @@ fn s_curve_ramps_run_on_across_the_chords_of_a_curve() {
         v[7]
     );
 }
+
+/// A chain of 0.02 mm chords, straight but for a tenth of a degree per
+/// chord, at F3000: the planner's entries after 400 chords, the oldest
+/// popped as they would run, with a full ring queued.
+fn entries_along_short_chords(profile: Profile) -> Vec<f32> {
+    let settings = Settings {
+        profile,
+        ..Settings::default()
+    };
+    let mut p: Planner<64> = Planner::new(settings);
+    let (mut x, mut y, mut dir) = (0.0f32, 0.0f32, 0.0f32);
+    for k in 1..=400u32 {
+        if p.is_full() {
+            p.pop();
+        }
+        dir += 0.1f32.to_radians();
+        x += 0.02 * dir.cos();
+        y += 0.02 * dir.sin();
+        p.push_line_mm(
+            &burin::pad([x, y, 0.0, 0.0]),
+            Speed::Feed(50.0),
+            Default::default(),
+            k,
+        )
+        .unwrap();
+    }
+    (0..p.len()).map(|k| p.block(k).unwrap().entry).collect()
+}
+
+/// The backward pass reckons a run's rest as one S ramp (`planner::run`):
+/// with a ramp per chord, each from zero acceleration, the 64 chords
+/// queued (1.3 mm) stop from 4.6 mm/s, where one ramp over each run of
+/// 17 stops from about twice that.
+#[test]
+fn a_ring_of_short_chords_stops_in_a_ramp_per_run() {
+    let e = entries_along_short_chords(Profile::SCurve);
+    let sh = Shape {
+        accel: 500.0,
+        jerk: 5000.0,
+        drop: 0.0,
+    };
+    let mut chain = 0.0;
+    for _ in 1..e.len() {
+        chain = sh.reach(chain, 0.02);
+    }
+    assert!(
+        e[1] > 1.6 * chain,
+        "entry of the second chord {:.2} mm/s, a ramp per chord stops from {chain:.2}: {e:?}",
+        e[1]
+    );
+    // Never above what a trapezoid with the same acceleration allows.
+    let t = entries_along_short_chords(Profile::Trapezoid);
+    assert!(
+        e.iter().zip(&t).all(|(s, t)| *s <= *t * 1.0001),
+        "{e:?} {t:?}"
+    );
+}
+
+/// Runs are fixed as blocks are queued, but a block that grows by a merge
+/// (`planner::merge`) leaves a run it no longer belongs in: the 0.025 mm
+/// steps of short_segments.ngc merge into one 25 mm line, which had stayed
+/// in the run of the short block before it and so at that one's speed
+/// (its Y leg at 11 % of the rate limit; 3.26 s became 5.46 s).
+#[test]
+fn a_block_grown_by_merges_leaves_a_run_it_no_longer_fits() {
+    let settings = Settings {
+        profile: Profile::SCurve,
+        ..Settings::default()
+    };
+    let mut p: Planner<64> = Planner::new(settings);
+    let mut line = 0;
+    let mut push = |p: &mut Planner<64>, x: f32, y: f32| {
+        line += 1;
+        p.push_line_mm(
+            &burin::pad([x, y, 0.0, 0.0]),
+            Speed::Feed(423.0),
+            Default::default(),
+            line,
+        )
+        .unwrap();
+    };
+    for k in 1..=40 {
+        push(&mut p, 0.0254 * k as f32, 0.0);
+    }
+    for k in 1..=40 {
+        push(&mut p, 1.016, 0.0254 * k as f32);
+    }
+    let mut grown = 0;
+    for k in 1..p.len() {
+        let (a, b) = (p.block(k - 1).unwrap(), p.block(k).unwrap());
+        if b.length > 0.5 {
+            grown += 1;
+        }
+        if b.run_pos != 0 && b.length > 0.1 {
+            assert!(
+                burin::planner::nominal_near(a.nominal, b.nominal),
+                "block {k} ({:.3} mm at {:.1} mm/s) in the run of one at {:.1} mm/s",
+                b.length,
+                b.nominal,
+                a.nominal
+            );
+        }
+    }
+    assert!(grown >= 1, "no move merged");
+}

@@ -409,3 +409,24 @@ fn generated_bench_jobs_keep_the_limits_and_the_curvature_check() {
         }
     }
 }
+
+/// A long arc at the rate limit into a 0.75 mm one (plasmatest.ngc,
+/// N3840-N3870) in S-curve mode. The planner's limits ahead can fall a
+/// little after a plan that brought the tool to them (an S ramp's length
+/// is not monotone in where it ends); block by block, an S ramp per
+/// 0.7 mm chord then slowed 0.1 mm/s a chord, and the tool ran on at
+/// 81 mm/s into the small arc's 14 mm/s (X at 258 %). It slows over the
+/// rest of its run instead (`stepper::prep::run`).
+#[test]
+fn s_curve_slows_over_its_run_when_a_limit_ahead_fell() {
+    let src = "G21 G90 G17\nG0 X378.8665 Y101.9348\nG1 F5840\n\
+               G3 X360.2318 Y159.2867 I-9.3174 J28.6760\n\
+               G2 X359.4047 Y159.5438 I-0.2318 J0.7133\n\
+               G1 X326.2568 Y202.8062\n\
+               G2 X326.6386 Y203.9813 I0.5953 J0.4562\n\
+               G1 X378.8848 Y219.4975\n";
+    let mut cfg = machine();
+    cfg.settings.profile = Profile::SCurve;
+    let f = check(&cfg, "arc-into-hole", src);
+    check_jerk(&cfg, "arc-into-hole", &f);
+}

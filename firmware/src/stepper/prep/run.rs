@@ -4,97 +4,155 @@
 //! On a curve cut into chords of a few tenths of a millimetre that leaves
 //! each chord a ramp too short to change the speed much: a 10 mm circle
 //! from rest took 2.61 s, against 1.36 s with trapezoids, the speed
-//! climbing in a staircase of chord-long ramps. So the oldest block and
-//! the blocks after it, up to the first junction that needs a corner
-//! hold, are planned as one run: its ramps go on across the junctions,
-//! and the acceleration returns to zero only where the run ends. The jerk
-//! stays bounded across the junctions (the acceleration is continuous)
-//! and no corner that needs a hold is crossed on a ramp.
+//! climbing in a staircase of chord-long ramps. So a profile may span
+//! several blocks as one ramp: its acceleration goes on across the
+//! junctions inside and returns to zero only where it ends, at the planned
+//! entry of the block after it. The preparer plans, from where the tool
+//! is, the first of these that fits:
 //!
-//! A run ends before a block that is not a line, watches other inputs,
-//! or has a nominal speed more than 5 % away from the first block's
-//! (`planner::joins`: an arc's chords differ by a little as their
-//! direction turns the axes' rate caps; the run cruises at the lowest of
-//! its blocks', so every block's cap holds in all of it), after
-//! [`MAX_RUN`] blocks, and before the newest block in the ring: the
-//! planner may still merge the next collinear move into that one
-//! (`planner::merge`), and a run planned on its old length ran on at speed
-//! into a corner it had planned as the end of the path (1,225 % of X's
-//! acceleration on short_segments when the host took 145 µs a line).
+//! 1. **Free**: the blocks ahead up to the first corner that holds, of
+//!    nominal speeds near the running block's, cruising at their least
+//!    nominal speed and cut short before the first junction the profile
+//!    would pass too fast (the runs of the first S-curve preparer).
+//! 2. **The block alone**, where it runs faster than the run's caps: it
+//!    leaves faster than the run's ramp would cross the junction, or a
+//!    block of the run is long enough for a ramp of its own.
+//! 3. **The rest of its run** (`planner::run`): no faster than the run's
+//!    cap, so no junction inside needs a check, to the next run's first
+//!    block. What the planner's backward pass promised besides the block
+//!    alone, so it fits where the block alone does not (a chain of short
+//!    chords: circle_small.ngc at 5000 mm/s³, 39.3 s before, 23.2 s).
 //!
-//! It is planned from the speed the tool has to the planned entry of the
-//! block after it. The planner's forward pass reckons that entry with the
-//! same kind of run (`planner::run`), counted from the last junction
-//! that ends one; a run that starts elsewhere, or is cut short (fewer
-//! blocks queued, the newest excluded), may not reach it and enters the
-//! next block slower, which is always safe: every entry stays within what
-//! the backward pass allows for stopping. The path acceleration is the
-//! smallest of the run's blocks. Then each junction inside is checked on
-//! the profile: if the run passes one faster than its limit
-//! (`max_entry`), the run ends at that junction, at its planned entry, and
-//! is planned again.
+//! When none fits, a limit ahead fell after the plan that brought the tool
+//! here (`planner::run` says how); the rest of the run then slows the
+//! most, where one block's ramp barely slows at all.
 
 use super::{Hold, Preparer};
 use crate::planner::ramp::PHASES;
 use crate::planner::{
-    joins, Block, BlockKind, Phase, Planner, Profile, Shape, CURVE_RUN_JERK, RUN_BLOCKS,
+    nominal_near, Block, BlockKind, Phase, Planner, Profile, RunAhead, Shape, CURVE_RUN_JERK,
+    RUN_BLOCKS,
 };
 
-/// Most blocks after the running one that a run takes in: 16 chords of
-/// 0.4 mm (a 10 mm radius at `$12` = 0.002) are 6.4 mm, more than a ramp
-/// from rest to 50 mm/s takes at 500 mm/s² and 5000 mm/s³ (5 mm).
-pub const MAX_RUN: usize = RUN_BLOCKS - 1;
+/// A profile over one or more blocks: the profile, the shape it was
+/// planned with, the speed it ends at, and how many blocks after the
+/// running one it covers.
+type Plan = (Profile, Shape, f32, usize);
 
 impl Preparer {
-    /// The running block's profile from where the tool is: over a run in
-    /// S-curve mode (see the module doc), else to the next block's entry.
-    /// Returns the profile, the shape it was planned with, the speed it
-    /// ends at, and how many blocks after the running one it covers.
-    pub(super) fn plan_run<const N: usize>(
+    /// The running block's profile from where the tool is: in S-curve
+    /// mode over part or the rest of its run where one of those fits and
+    /// is the faster (see the module doc), else to the next block's entry.
+    pub(super) fn plan_run<const N: usize>(&self, pl: &Planner<N>, b: &Block) -> Plan {
+        let rest = b.length - self.s_done;
+        let hold0 = self.entry_hold_left();
+        // The block alone.
+        let base = self.shape();
+        let (exit, exit_m) = exit_of(pl, 1);
+        let shape = Profile::held_shape(&base, self.v, b.nominal, exit, rest, hold0);
+        let alone = Profile::plan_held(&shape, self.v, b.nominal, exit, rest, hold0, exit_m);
+        if base.jerk <= 0.0 || self.hold != Hold::Running {
+            return (alone, shape, exit, 0);
+        }
+        if let Some(free) = self.plan_free(pl, b, rest, hold0) {
+            return free;
+        }
+        let Some(run) = pl.run_ahead(b).filter(|r| r.extra > 0) else {
+            return (alone, shape, exit, 0);
+        };
+        let cap = run.cap();
+        let alone_fits = fits(&alone, exit);
+        if alone_fits && (alone.phases[2].v0 > cap || self.outgrows(pl, b, &run, rest)) {
+            return (alone, shape, exit, 0);
+        }
+        // The rest of the run as one ramp, within its caps.
+        let (run_exit, run_exit_m) = exit_of(pl, run.extra + 1);
+        let run_shape = run.shape(&self.settings);
+        let len = run.len - b.length + rest;
+        let top = cap.max(self.v);
+        let p = Profile::plan_held(&run_shape, self.v, top, run_exit, len, hold0, run_exit_m);
+        if self.v <= cap * (1.0 + 1e-4) && fits(&p, run_exit) {
+            return (p, run_shape, run_exit, run.extra);
+        }
+        // Neither fits: the tool is above what the planner now allows here
+        // (a limit lowered after the plan that brought it here: a straight
+        // stretch's ramps, `planner::tube`). One block's S ramp barely
+        // slows on a short chord (0.1 mm/s on 0.7 mm at 2500 mm/s³), and a
+        // chain of them ran on at 81 mm/s into a 14 mm/s corner; the run's
+        // one ramp slows the most.
+        if !alone_fits && fits_better(&p, run_exit, &alone, exit) {
+            return (p, run_shape, run_exit, run.extra);
+        }
+        (alone, shape, exit, 0)
+    }
+
+    /// Whether a block of the run is long enough, and allowed fast enough,
+    /// for a ramp of its own to gain a tenth on the run's caps: one ramp
+    /// over the run would cross it at the least corner's speed, where block
+    /// by block runs faster (an S ramp over `L` from `v` gains about
+    /// `j·(L/2v)²`).
+    fn outgrows<const N: usize>(
         &self,
         pl: &Planner<N>,
         b: &Block,
-    ) -> (Profile, Shape, f32, usize) {
-        let base = self.shape();
+        run: &RunAhead,
+        rest: f32,
+    ) -> bool {
+        let cap = run.cap();
+        let j = run.shape(&self.settings).jerk;
+        let long = 2.0 * cap * libm::sqrtf(0.1 * cap / j);
+        let grows = |len: f32, n: &Block| len > long && n.nominal > 1.1 * cap;
+        grows(rest, b)
+            || (1..=run.extra)
+                .filter_map(|k| pl.block(k))
+                .any(|n| grows(n.length, n))
+    }
+
+    /// The blocks after the running one up to the first corner that holds
+    /// (of nominal speeds near its own, at most a run's worth, and never
+    /// the newest, which may still grow: `planner::merge`) as one ramp that
+    /// cruises at their least nominal speed, cut short before the first
+    /// junction inside it passes too fast, and taken only if it spans two
+    /// blocks or more and ends no faster than planned. Where corners inside
+    /// allow more than the least of them, this goes faster than the rest
+    /// of the run within its caps.
+    fn plan_free<const N: usize>(
+        &self,
+        pl: &Planner<N>,
+        b: &Block,
+        rest: f32,
+        hold0: f32,
+    ) -> Option<Plan> {
         let mut r = 0;
-        if base.jerk > 0.0 && self.hold == Hold::Running {
-            while r < MAX_RUN {
-                match pl.block(r + 1) {
-                    Some(n) if joins(b, n) && pl.block(r + 2).is_some() => r += 1,
-                    _ => break,
-                }
+        while r + 1 < RUN_BLOCKS {
+            let Some(n) = pl.block(r + 1) else { break };
+            let free = n.kind == BlockKind::Line && n.hold_m <= 0.0 && n.hold_pre_m <= 0.0;
+            let same = n.watch == b.watch && nominal_near(n.nominal, b.nominal);
+            if !(free && same && pl.block(r + 2).is_some()) {
+                break;
             }
+            r += 1;
         }
-        let rest = b.length - self.s_done;
-        let hold0 = self.entry_hold_left();
-        loop {
-            let mut shape = base;
-            let mut len = rest;
-            let mut curve = b.curve_ar > 0.0;
-            let mut cruise = b.nominal;
+        while r > 0 {
+            let mut shape = self.shape();
+            let (mut len, mut curve, mut cruise) = (rest, b.curve_ar > 0.0, b.nominal);
             for k in 1..=r {
-                if let Some(n) = pl.block(k) {
-                    shape.accel = shape.accel.min(n.accel);
-                    len += n.length;
-                    curve |= n.curve_ar > 0.0;
-                    cruise = cruise.min(n.nominal);
-                }
+                let n = pl.block(k)?;
+                shape.accel = shape.accel.min(n.accel);
+                len += n.length;
+                curve |= n.curve_ar > 0.0;
+                cruise = cruise.min(n.nominal);
             }
-            if r > 0 && curve {
+            if curve {
                 shape.jerk *= CURVE_RUN_JERK;
             }
-            let (exit, exit_m) = match pl.block(r + 1) {
-                Some(n) if n.kind == BlockKind::Line => (n.entry, n.hold_pre_m),
-                _ => (0.0, 0.0),
-            };
-            // A trapezoid chord ramps at what its top speed allows.
-            let shape = Profile::held_shape(&shape, self.v, cruise, exit, len, hold0);
+            let (exit, exit_m) = exit_of(pl, r + 1);
             let p = Profile::plan_held(&shape, self.v, cruise, exit, len, hold0, exit_m);
             // The first junction inside that the profile passes too fast.
             let mut at = rest;
             let mut over = None;
             for k in 1..=r {
-                let Some(n) = pl.block(k) else { break };
+                let n = pl.block(k)?;
                 if speed_at(&shape, &p, at) > n.max_entry * (1.0 + 1e-4) {
                     over = Some(k);
                     break;
@@ -103,9 +161,11 @@ impl Preparer {
             }
             match over {
                 Some(k) => r = k - 1,
-                None => return (p, shape, exit, r),
+                None if fits(&p, exit) => return Some((p, shape, exit, r)),
+                None => return None,
             }
         }
+        None
     }
 
     /// Speed and distance into the profile at `tau` s into phase `phase`
@@ -154,6 +214,25 @@ pub(super) fn phase_at(sh: &Shape, ph: &Phase, tau: f32) -> (f32, f32) {
     } else {
         sh.eval(ph.v0, ph.v1, tau)
     }
+}
+
+/// The planned entry of the `k`-th block from the oldest and its corner's
+/// hold on the near side (none and a stop if it is not a line).
+fn exit_of<const N: usize>(pl: &Planner<N>, k: usize) -> (f32, f32) {
+    match pl.block(k) {
+        Some(n) if n.kind == BlockKind::Line => (n.entry, n.hold_pre_m),
+        _ => (0.0, 0.0),
+    }
+}
+
+/// Whether a profile ends no faster than `exit`, give or take rounding.
+fn fits(p: &Profile, exit: f32) -> bool {
+    p.exit_speed() <= exit * (1.0 + 1e-4) + 1e-4
+}
+
+/// Whether `p` misses its `exit` by less than `q` misses its own.
+fn fits_better(p: &Profile, exit: f32, q: &Profile, q_exit: f32) -> bool {
+    p.exit_speed() - exit < q.exit_speed() - q_exit
 }
 
 /// The profile's speed `d` mm from its start.
