@@ -31,8 +31,11 @@ use super::{Hold, Preparer};
 use crate::planner::ramp::PHASES;
 use crate::planner::{
     nominal_near, Block, BlockKind, Phase, Planner, Profile, RunAhead, Shape, CURVE_RUN_JERK,
-    RUN_BLOCKS,
 };
+
+/// Most blocks a free run spans: each junction inside is checked on its
+/// profile, by bisection.
+const FREE_BLOCKS: usize = 17;
 
 /// A profile over one or more blocks: the profile, the shape it was
 /// planned with, the speed it ends at, and how many blocks after the
@@ -124,7 +127,7 @@ impl Preparer {
         hold0: f32,
     ) -> Option<Plan> {
         let mut r = 0;
-        while r + 1 < RUN_BLOCKS {
+        while r + 1 < FREE_BLOCKS {
             let Some(n) = pl.block(r + 1) else { break };
             let free = n.kind == BlockKind::Line && n.hold_m <= 0.0 && n.hold_pre_m <= 0.0;
             let same = n.watch == b.watch && nominal_near(n.nominal, b.nominal);
