@@ -1,7 +1,7 @@
 //! Junction limits, overrides, and the backward/forward planning passes.
 
 use super::cancel::{Pair, PULSE_SHARE};
-use super::run::RunAhead;
+use super::run::{run_down, RunAhead};
 use super::*;
 
 /// The time over which opposite velocity changes at two corners cancel
@@ -403,27 +403,5 @@ fn pair<const N: usize>(blocks: &mut [Block; N], prev: usize, k: usize) -> (&Blo
     } else {
         let (lo, hi) = blocks.split_at_mut(prev);
         (&hi[0], &mut lo[k])
-    }
-}
-
-/// The rest of block `k`'s run for the backward pass: `ahead` (the rest of
-/// block `k + 1`'s, and its run's next first block) with block `k` put in
-/// front when both are in one run, else block `k` alone; and the queued
-/// block after the run, if any (the last run may still grow).
-fn run_down<const N: usize>(
-    blocks: &[Block; N],
-    tail: usize,
-    k: usize,
-    len: usize,
-    ahead: Option<(RunAhead, Option<usize>)>,
-) -> (RunAhead, Option<usize>) {
-    let b = &blocks[(tail + k) % N];
-    match ahead {
-        Some((mut run, exit)) if blocks[(tail + k + 1) % N].run_pos != 0 => {
-            run.junction(&blocks[(tail + k + 1) % N]);
-            run.block(b);
-            (run, exit)
-        }
-        _ => (RunAhead::start(b), (k + 1 < len).then_some(k + 1)),
     }
 }

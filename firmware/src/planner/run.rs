@@ -238,6 +238,28 @@ impl<const N: usize> Planner<N> {
     }
 }
 
+/// The rest of block `k`'s run for the backward pass: `ahead` (the rest of
+/// block `k + 1`'s, and its run's next first block) with block `k` put in
+/// front when both are in one run, else block `k` alone; and the queued
+/// block after the run, if any (the last run may still grow).
+pub(super) fn run_down<const N: usize>(
+    blocks: &[Block; N],
+    tail: usize,
+    k: usize,
+    len: usize,
+    ahead: Option<(RunAhead, Option<usize>)>,
+) -> (RunAhead, Option<usize>) {
+    let b = &blocks[(tail + k) % N];
+    match ahead {
+        Some((mut run, exit)) if blocks[(tail + k + 1) % N].run_pos != 0 => {
+            run.junction(&blocks[(tail + k + 1) % N]);
+            run.block(b);
+            (run, exit)
+        }
+        _ => (RunAhead::start(b), (k + 1 < len).then_some(k + 1)),
+    }
+}
+
 /// The run that ends before the block the forward pass is at.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct RunAcc {
