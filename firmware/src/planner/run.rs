@@ -79,9 +79,9 @@ pub fn nominal_near(a: f32, b: f32) -> bool {
     a.min(b) >= 0.95 * a.max(b)
 }
 
-/// The share of the jerk a run keeps when it spans a curve's chords: the
-/// tangential ramp's jerk adds to the turning acceleration's own (`v³/r²`,
-/// and `3·v·a_t/r`).
+/// The share of the jerk a run keeps when it spans a curve's chords, or
+/// corners it does not hold for: the tangential ramp's jerk adds to the
+/// turning acceleration's own (`v³/r²`, and `3·v·a_t/r`).
 pub const CURVE_RUN_JERK: f32 = 0.5;
 
 /// The share of the acceleration a run leaves for the corners inside it

@@ -77,12 +77,14 @@ impl Preparer {
         if self.v <= cap * (1.0 + 1e-4) && fits(&p, run_exit) {
             return (p, run_shape, run_exit, run.extra);
         }
-        // Neither fits: the tool is above what the planner now allows here
-        // (a limit lowered after the plan that brought it here: a straight
-        // stretch's ramps, `planner::tube`). One block's S ramp barely
-        // slows on a short chord (0.1 mm/s on 0.7 mm at 2500 mm/s³), and a
-        // chain of them ran on at 81 mm/s into a 14 mm/s corner; the run's
-        // one ramp slows the most.
+        // Neither fits: the tool is above what the planner now allows here,
+        // a limit that fell after the plan that brought it here
+        // (`planner::run`: an S ramp's length is not monotone in where it
+        // ends, and a straight stretch's ramps take less, `planner::tube`).
+        // One block's S ramp barely slows on a short chord (0.1 mm/s on
+        // 0.7 mm at 2500 mm/s³), and a chain of them ran on at 81 mm/s into
+        // a 14 mm/s corner; the run's one ramp slows the most, from above
+        // its cap if need be.
         if !alone_fits && fits_better(&p, run_exit, &alone, exit) {
             return (p, run_shape, run_exit, run.extra);
         }
