@@ -86,7 +86,7 @@ pub const CURVE_RUN_JERK: f32 = 0.5;
 
 /// The share of the acceleration a run leaves for the corners inside it
 /// whose holds it does not keep (module doc).
-pub const HOLD_SHARE: f32 = 0.1;
+const HOLD_SHARE: f32 = 0.1;
 
 /// Whether `n`, queued after `p`, goes into `p`'s run (module doc). A
 /// run's ramp keeps going across its junctions, so it may not start or
@@ -151,6 +151,11 @@ impl RunAhead {
     pub fn junction(&mut self, n: &Block) {
         self.corner = self.corner.min(n.max_entry);
         self.held += 0.5 * (n.hold_m + n.hold_pre_m);
+    }
+
+    /// The least nominal speed of its blocks, mm/s.
+    pub fn cruise(&self) -> f32 {
+        self.cruise
     }
 
     /// The speed the ramp may neither start nor pass a junction above: the

@@ -29,9 +29,7 @@
 
 use super::{Hold, Preparer};
 use crate::planner::ramp::PHASES;
-use crate::planner::{
-    nominal_near, Block, BlockKind, Phase, Planner, Profile, RunAhead, Shape, CURVE_RUN_JERK,
-};
+use crate::planner::{nominal_near, Block, BlockKind, Phase, Planner, Profile, RunAhead, Shape};
 
 /// Most blocks a free run spans: each junction inside is checked on its
 /// profile, by bisection.
@@ -139,20 +137,17 @@ impl Preparer {
             r += 1;
         }
         while r > 0 {
-            let mut shape = self.shape();
-            let (mut len, mut curve, mut cruise) = (rest, b.curve_ar > 0.0, b.nominal);
+            // The blocks' least acceleration and nominal speed and their
+            // length, as the rest of a run has them (no junction inside
+            // holds, so the whole acceleration).
+            let mut run = RunAhead::start(b);
             for k in 1..=r {
-                let n = pl.block(k)?;
-                shape.accel = shape.accel.min(n.accel);
-                len += n.length;
-                curve |= n.curve_ar > 0.0;
-                cruise = cruise.min(n.nominal);
+                run.block(pl.block(k)?);
             }
-            if curve {
-                shape.jerk *= CURVE_RUN_JERK;
-            }
+            let shape = run.shape(&self.settings);
+            let len = run.len - b.length + rest;
             let (exit, exit_m) = exit_of(pl, r + 1);
-            let p = Profile::plan_held(&shape, self.v, cruise, exit, len, hold0, exit_m);
+            let p = Profile::plan_held(&shape, self.v, run.cruise(), exit, len, hold0, exit_m);
             // The first junction inside that the profile passes too fast.
             let mut at = rest;
             let mut over = None;
