@@ -12,6 +12,9 @@ pub struct Corner {
     pub curvature: f32,
     /// Junction deviation alone (without S-curve's turn jerk).
     pub jd: f32,
+    /// S-curve: the speed at which the turn takes the whole jerk
+    /// ([`Planner::curve_jerk_cap`]; infinite if not reckoned).
+    pub turn: f32,
 }
 
 /// A corner's turn, for its curvature rule (`v² ≤ a·r`, `r` at least
@@ -39,11 +42,13 @@ impl Corner {
         deviation: 0.0,
         curvature: 0.0,
         jd: 0.0,
+        turn: f32::INFINITY,
     };
     const STRAIGHT: Corner = Corner {
         deviation: f32::INFINITY,
         curvature: f32::INFINITY,
         jd: f32::INFINITY,
+        turn: f32::INFINITY,
     };
 
     /// Both limits.
@@ -141,6 +146,7 @@ impl<const N: usize> Planner<N> {
             deviation: v_jd.min(v_jerk),
             curvature: turn.speed(r_noise),
             jd: v_jd,
+            turn: v_jerk,
         };
         (c, turn)
     }

@@ -153,6 +153,16 @@ impl<const N: usize> Planner<N> {
     }
 }
 
+impl Block {
+    /// Take in a turn whose jerk cap is `v` ([`Planner::curve_jerk_cap`]):
+    /// `turn_v` keeps the least finite one.
+    pub(super) fn turn_at(&mut self, v: f32) {
+        if v.is_finite() && (self.turn_v <= 0.0 || v < self.turn_v) {
+            self.turn_v = v;
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

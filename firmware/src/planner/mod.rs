@@ -163,6 +163,12 @@ pub struct Block {
     /// Its place in its S-curve run (`planner::run`), fixed when it was
     /// queued: 0 starts a run.
     pub run_pos: u8,
+    /// S-curve: the least speed at which a turn of its (its entry corner,
+    /// an arc's chord) takes the whole jerk, `cbrt(j·r²)`
+    /// (`Planner::curve_jerk_cap`), mm/s; 0 where none does (zero bits,
+    /// so an empty ring needs no load image). `planner::run` caps runs
+    /// that turn below it.
+    pub turn_v: f32,
     /// Source line, for errors and traces.
     pub line: u32,
 }
@@ -205,6 +211,7 @@ impl Block {
         },
         takeup: false,
         run_pos: 0,
+        turn_v: 0.0,
         line: 0,
     };
 

@@ -347,8 +347,11 @@ impl<const N: usize> Planner<N> {
                 // The run's promise, where its cap leaves it room to be
                 // the faster.
                 let run = match (exit, ahead) {
-                    (Some((x, x_m)), Some((run, _))) if run.cap() > alone => {
-                        run.promise(x, x_m, b.hold_m, st)
+                    (Some((x, x_m)), Some((run, _))) => {
+                        let cap = run.cap();
+                        (cap > alone)
+                            .then(|| run.promise(cap, x, x_m, b.hold_m, st))
+                            .flatten()
                     }
                     _ => None,
                 };

@@ -158,7 +158,9 @@ impl<const N: usize> Planner<N> {
         match curve.map(|c| (c, c.budget(s, &unit))) {
             Some((c, Some(cb))) => {
                 (b.curve_ar, b.curve_an, b.curve_tangent) = (cb.ar, cb.an, cb.tangent);
-                b.cap = b.cap.min(self.curve_jerk_cap(c.radius));
+                let v = self.curve_jerk_cap(c.radius);
+                b.cap = b.cap.min(v);
+                b.turn_at(v);
             }
             // Unknown radius: half the budget each way (the sum stays
             // within every axis limit).
@@ -229,6 +231,7 @@ impl<const N: usize> Planner<N> {
             && self.prev_curve.is_none();
         b.corner = if pending { corner.deviation } else { limit };
         b.jd = corner.jd;
+        b.turn_at(corner.turn);
         b.junction = b.corner;
         let (quiet, release) = self.quiet_axes(&mut b, &unit);
         b.quiet = quiet;

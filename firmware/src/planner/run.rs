@@ -29,14 +29,25 @@
 //!
 //! **Corners inside.** A run's ramp does not stop for a corner hold inside
 //! it (`planner::passes`, corner holds): the corners' velocity changes
-//! instead take at most [`HOLD_SHARE`] of the meter's window together at
+//! instead take at most [`HOLD_SHARE`] of any of the meter's windows at
 //! the cap, and the ramp keeps to the rest of the acceleration, so a window
-//! sees at most the axis's limit. On circle_small the holds left after
-//! `planner::tube` are 10⁻⁷ s²/mm a corner, and the cap is far above any
-//! speed there; on Cereal's 3-D corners it is a few mm/s, and no run crosses
-//! them. The ramp also keeps half the jerk where it turns ([`CURVE_RUN_JERK`]):
-//! on the plotter polylines the tangential ramp's jerk added to the turns'
-//! and read X 110 % of `$203` at 5000 mm/s³.
+//! sees at most the axis's limit. A window sees all the run's corners where
+//! the run takes less than a window, else its share of them and one more,
+//! the largest, for where they bunch ([`RunAhead::cap`]). Summed over the
+//! whole run instead, a pen plotter's 17 corners of 0.26 mm capped its
+//! runs at 2 mm/s, and no run counted there; without the one more, Cereal
+//! read Z 110 % after a feed override drop (host-sim `override_limits`).
+//! On circle_small the holds left after `planner::tube` are 10⁻⁷ s²/mm a
+//! corner, and the cap is far above any speed there.
+//!
+//! **Turns inside.** The ramp keeps half the jerk where it turns
+//! ([`CURVE_RUN_JERK`]): on the plotter polylines the tangential ramp's
+//! jerk added to the turns' and read X 110 % of `$203` at 5000 mm/s³. The
+//! turns keep the other half: going round a radius `r` at `v`, each axis's
+//! acceleration turns with a jerk of `v³/r²`, so the cap keeps
+//! `v ≤ cbrt(j·r²/2)` at the least radius inside (`Block::turn_v`). Without
+//! it, the plotter runs read Y 112 % once their corners took 0.3 of the
+//! window.
 //!
 //! **Why the preparer can keep it.** Entered at `v` no faster than block
 //! `k`'s entry, either the block alone fits or `v` is within the run's
@@ -84,9 +95,28 @@ pub fn nominal_near(a: f32, b: f32) -> bool {
 /// turning acceleration's own (`v³/r²`, and `3·v·a_t/r`).
 pub const CURVE_RUN_JERK: f32 = 0.5;
 
-/// The share of the acceleration a run leaves for the corners inside it
+/// `cbrt(1 − CURVE_RUN_JERK)`: the speed at which a turn takes the share of
+/// the jerk a run's ramp leaves it, as a share of the speed at which it
+/// takes all of it (`v³/r² ≤ share·j`).
+const TURN_SHARE_V: f32 = 0.793_700_5;
+const _: () = assert!(CURVE_RUN_JERK == 0.5);
+
+/// A block's `turn_v`, infinite for none.
+const fn turn_v(b: &Block) -> f32 {
+    if b.turn_v > 0.0 {
+        b.turn_v
+    } else {
+        f32::INFINITY
+    }
+}
+
+/// The most of the meter's window the corners inside a run may take,
 /// whose holds it does not keep (module doc).
-const HOLD_SHARE: f32 = 0.1;
+const HOLD_SHARE: f32 = 0.3;
+
+/// The least share of the acceleration a run leaves its corners, however
+/// few: a margin for their holds falling unevenly over the run.
+const HOLD_MARGIN: f32 = 0.1;
 
 /// Whether `n`, queued after `p`, goes into `p`'s run (module doc). A
 /// run's ramp keeps going across its junctions, so it may not start or
@@ -123,6 +153,10 @@ pub struct RunAhead {
     /// The corner holds inside, summed: at speed `v` they would take
     /// `v·held` seconds.
     held: f32,
+    /// The largest of them.
+    hold_max: f32,
+    /// Least `Block::turn_v`, mm/s (infinite: none).
+    turn_v: f32,
 }
 
 impl RunAhead {
@@ -135,6 +169,8 @@ impl RunAhead {
             cruise: b.nominal,
             corner: f32::INFINITY,
             held: 0.0,
+            hold_max: 0.0,
+            turn_v: turn_v(b),
         }
     }
 
@@ -145,12 +181,15 @@ impl RunAhead {
         self.accel = self.accel.min(b.accel);
         self.curve |= b.curve_ar > 0.0;
         self.cruise = self.cruise.min(b.nominal);
+        self.turn_v = self.turn_v.min(turn_v(b));
     }
 
     /// Take in the junction at the start of block `n`, inside the run.
     pub fn junction(&mut self, n: &Block) {
         self.corner = self.corner.min(n.max_entry);
-        self.held += 0.5 * (n.hold_m + n.hold_pre_m);
+        let h = 0.5 * (n.hold_m + n.hold_pre_m);
+        self.held += h;
+        self.hold_max = self.hold_max.max(h);
     }
 
     /// The least nominal speed of its blocks, mm/s.
@@ -159,27 +198,51 @@ impl RunAhead {
     }
 
     /// The speed the ramp may neither start nor pass a junction above: the
-    /// least nominal speed and corner limit inside, and where corners
-    /// inside would hold, the speed at which all their changes together
-    /// take at most `HOLD_SHARE` of the acceleration meter's window
-    /// (`v·held ≤ share·W`), which the ramp leaves them.
+    /// least nominal speed and corner limit inside; where it turns, the
+    /// turns' share of the jerk; and where corners inside would hold, the
+    /// speed at which they take at most `HOLD_SHARE` of any window
+    /// (module doc).
     pub fn cap(&self) -> f32 {
-        let c = self.cruise.min(self.corner);
+        let mut c = self.cruise.min(self.corner);
+        if self.turns() {
+            c = c.min(TURN_SHARE_V * self.turn_v);
+        }
         if self.held > 0.0 {
-            c.min(HOLD_SHARE * super::passes::CANCEL_WINDOW_S / self.held)
+            // `v·held ≤ s·W`, or `v·(h + held·W·v/L) ≤ s·W`: the larger root
+            // of `(held·W/L)·v² + h·v − s·W = 0`.
+            let w = super::passes::CANCEL_WINDOW_S;
+            let all = HOLD_SHARE * w / self.held;
+            let a = self.held * w / self.len;
+            let (b, c4) = (self.hold_max, 4.0 * a * HOLD_SHARE * w);
+            let spread = (libm::sqrtf(b * b + c4) - b) / (2.0 * a);
+            c.min(all.max(spread))
         } else {
             c
         }
     }
 
-    /// The ramp's shape: the least acceleration (less the corners' share
-    /// where they would hold), and a share of the jerk on a curve's
-    /// chords.
-    pub fn shape(&self, s: &Settings) -> Shape {
-        let turns = self.curve || self.held > 0.0;
-        let jerk = s.jerk.max(1e-3) * if turns { CURVE_RUN_JERK } else { 1.0 };
+    /// The share of a window the corners' holds take at speed `v`: all of
+    /// them if the run takes less than a window, else a window's share of
+    /// them (spread over blocks of alike speeds) and one corner more, the
+    /// largest, for where they bunch (module doc).
+    fn window_holds(&self, v: f32) -> f32 {
+        let w = super::passes::CANCEL_WINDOW_S;
+        let spread = self.hold_max + self.held * w * v / self.len.max(1e-6);
+        v * self.held.min(spread) / w
+    }
+
+    fn turns(&self) -> bool {
+        self.curve || self.held > 0.0
+    }
+
+    /// The ramp's shape (`cap`: [`RunAhead::cap`]): the least
+    /// acceleration, less the share of a window the corners take at the
+    /// cap (at least `HOLD_MARGIN` where they would hold), and a share of
+    /// the jerk where it turns.
+    pub fn shape(&self, s: &Settings, cap: f32) -> Shape {
+        let jerk = s.jerk.max(1e-3) * if self.turns() { CURVE_RUN_JERK } else { 1.0 };
         let share = if self.held > 0.0 {
-            1.0 - HOLD_SHARE
+            1.0 - self.window_holds(cap).clamp(HOLD_MARGIN, 1.0)
         } else {
             1.0
         };
@@ -192,9 +255,11 @@ impl RunAhead {
 
     /// The fastest entry the run promises (module doc): slowing to
     /// `exit` (its hold factor `exit_m`) with the first block's entry hold
-    /// `entry_m`; `None` for a single block.
+    /// `entry_m`, within its `cap` ([`RunAhead::cap`]); `None` for a
+    /// single block.
     pub(super) fn promise(
         &self,
+        cap: f32,
         exit: f32,
         exit_m: f32,
         entry_m: f32,
@@ -203,8 +268,10 @@ impl RunAhead {
         if self.extra == 0 {
             return None;
         }
-        let reach = self.shape(s).reach_held(exit, self.len, exit_m, entry_m);
-        Some(reach.min(self.cap()))
+        let reach = self
+            .shape(s, cap)
+            .reach_held(exit, self.len, exit_m, entry_m);
+        Some(reach.min(cap))
     }
 }
 
@@ -319,7 +386,8 @@ impl RunAcc {
         let run = &self.run;
         let reach = (needed && run.extra >= 1).then(|| {
             let avail = run.len - 0.5 * self.hold_m * self.entry * self.entry;
-            run.shape(s).reach(self.entry, avail).min(run.cap())
+            let cap = run.cap();
+            run.shape(s, cap).reach(self.entry, avail).min(cap)
         });
         self.open = b.run_pos != 0;
         reach

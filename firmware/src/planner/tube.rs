@@ -231,7 +231,8 @@ impl<const N: usize> Planner<N> {
     fn release_tube(&mut self, first: usize, newest: usize, total: f32, line: Straight) -> usize {
         let mut lowest = self.len;
         let r = total * total / (8.0 * (TUBE_STEPS + 1.0) * line.step_mm);
-        let v = libm::sqrtf(CENTRIPETAL * line.a * r).min(self.curve_jerk_cap(r));
+        let turn_v = self.curve_jerk_cap(r);
+        let v = libm::sqrtf(CENTRIPETAL * line.a * r).min(turn_v);
         let ramp = (1.0 - CENTRIPETAL) * line.a_line;
         // Not the newest block's corner (`planner::cancel` settles it), nor
         // the ones whose block before may be the preparer's.
@@ -249,6 +250,8 @@ impl<const N: usize> Planner<N> {
             b.release = 0;
             // No hold: the room it would need does not matter.
             b.set_corner(corner.max(b.corner), Sides::default(), 0.0, prev_nominal);
+            b.turn_v = 0.0;
+            b.turn_at(turn_v);
             // The ramps on both sides take the line's acceleration, less
             // the bend's share: a block turned off the line by rounding
             // allows more on the axis it turned from, and a run of them

@@ -174,3 +174,57 @@ fn a_block_grown_by_merges_leaves_a_run_it_no_longer_fits() {
     }
     assert!(grown >= 1, "no move merged");
 }
+
+/// A run's corners take their share of each of the meter's windows, not
+/// of one window for the whole run (`planner::run`): a pen plotter's
+/// 0.26 mm strokes turning 0.1 rad each (a radius of 2.6 mm) hold a
+/// little at every corner, and summed over a run of 17 the holds capped
+/// it at 1.5 mm/s, far below the 20.8 the blocks alone enter at, so no
+/// run counted. Its turns keep half the jerk: `v ≤ cbrt(j·r²/2)`.
+#[test]
+fn a_plotter_run_counts_its_corners_per_window() {
+    let mut settings = Settings {
+        profile: Profile::SCurve,
+        jerk: 5000.0,
+        junction_deviation: 0.01,
+        ..Settings::default()
+    };
+    for ax in &mut settings.axes[..2] {
+        (ax.steps_per_mm, ax.max_rate, ax.max_accel) = (80.0, 5000.0, 500.0);
+    }
+    let mut p: Planner<64> = Planner::new(settings);
+    let (mut x, mut y, mut dir) = (0.0f32, 0.0f32, 0.0f32);
+    for k in 1..=300u32 {
+        if p.is_full() {
+            p.pop();
+        }
+        dir += 0.1;
+        x += 0.26 * dir.cos();
+        y += 0.26 * dir.sin();
+        p.push_line_mm(
+            &burin::pad([x, y, 0.0, 0.0]),
+            Speed::Feed(2500.0 / 60.0),
+            Default::default(),
+            k,
+        )
+        .unwrap();
+    }
+    let b: Vec<_> = (0..p.len()).map(|k| *p.block(k).unwrap()).collect();
+    // The old cap: 0.1 of one 50 ms window for the holds of a whole run.
+    let held: f32 = b[1..17]
+        .iter()
+        .map(|b| 0.5 * (b.hold_m + b.hold_pre_m))
+        .sum();
+    assert!(held > 0.0, "the corners hold: {held}");
+    let old_cap = 0.1 * 0.05 / held;
+    let turn_cap = (0.5f32 * 5000.0 * 2.6 * 2.6).cbrt();
+    let e = b[8].entry;
+    // The blocks alone (the old cap far below them) enter at 20.8 mm/s.
+    assert!(old_cap < 2.0, "{old_cap}");
+    assert!(e > 22.5, "entry {e:.2} mm/s");
+    assert!(
+        e <= turn_cap * 1.01,
+        "entry {e:.2} mm/s over the turns' cap {turn_cap:.2}"
+    );
+    assert!(b.iter().all(|b| b.entry <= b.max_entry * 1.0001));
+}

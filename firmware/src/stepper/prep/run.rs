@@ -68,9 +68,11 @@ impl Preparer {
         }
         // The rest of the run as one ramp, within its caps.
         let (run_exit, run_exit_m) = exit_of(pl, run.extra + 1);
-        let run_shape = run.shape(&self.settings);
-        let len = run.len - b.length + rest;
+        // Its corners' share at the fastest it runs: above the cap where a
+        // limit fell under the tool (the fallback below).
         let top = cap.max(self.v);
+        let run_shape = run.shape(&self.settings, top);
+        let len = run.len - b.length + rest;
         let p = Profile::plan_held(&run_shape, self.v, top, run_exit, len, hold0, run_exit_m);
         if self.v <= cap * (1.0 + 1e-4) && fits(&p, run_exit) {
             return (p, run_shape, run_exit, run.extra);
@@ -102,7 +104,7 @@ impl Preparer {
         rest: f32,
     ) -> bool {
         let cap = run.cap();
-        let j = run.shape(&self.settings).jerk;
+        let j = run.shape(&self.settings, cap).jerk;
         let long = 2.0 * cap * libm::sqrtf(0.1 * cap / j);
         let grows = |len: f32, n: &Block| len > long && n.nominal > 1.1 * cap;
         grows(rest, b)
@@ -144,7 +146,8 @@ impl Preparer {
             for k in 1..=r {
                 run.block(pl.block(k)?);
             }
-            let shape = run.shape(&self.settings);
+            // No corner inside holds: the cap leaves the ramp as it is.
+            let shape = run.shape(&self.settings, run.cruise());
             let len = run.len - b.length + rest;
             let (exit, exit_m) = exit_of(pl, r + 1);
             let p = Profile::plan_held(&shape, self.v, run.cruise(), exit, len, hold0, exit_m);
