@@ -65,6 +65,7 @@ struct Totals {
     worst: [[f64; 3]; 6],
     /// S-curve only: the jerk-limited bounds' sum, the worst segment jerk %.
     jbound: f64,
+    jrest: f64,
     seg_jerk: f64,
 }
 
@@ -129,7 +130,9 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
         println!(
             "S-curve: jbound = the jerk-limited lower bound (the same limits plus $203 as the path's \
              jerk; host_sim::bench::jerk); seg j = the segments' peak path jerk, third differences of \
-             the path position at their speed changes, points >= {:.1} ms apart (a trapezoid reads >= ~125 %)",
+             the path position at their speed changes, points >= {:.1} ms apart (a trapezoid reads >= ~125 %); \
+             jrest = a reference, not a bound: jbound with the path acceleration zero at every valley \
+             (what carrying acceleration through corners can gain at most is jrest - jbound)",
             1000.0 * (host_sim::bench::axis_limits(&cfg).1.iter().fold(0.0f64, |m, &a| m.max(a))
                 / (4.0 * jmax.max(1.0)))
             .clamp(0.002, 0.05)
@@ -153,7 +156,10 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
         "bound curv %"
     );
     if scurve {
-        print!(" | {:>9} {:>7} {:>7}", "jbound s", "/jbound", "seg j %");
+        print!(
+            " | {:>9} {:>7} {:>7} {:>8}",
+            "jbound s", "/jbound", "seg j %", "jrest s"
+        );
     }
     println!();
     let mut corpus = Totals {
@@ -214,12 +220,14 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
         );
         if let Some(j) = f.jerk {
             print!(
-                " | {:>9.2} {:>7.3} {:>7.0}",
+                " | {:>9.2} {:>7.3} {:>7.0} {:>8.2}",
                 j.bound_s,
                 f.time_s / j.bound_s.max(1e-9),
-                100.0 * j.peak / jmax.max(1e-9)
+                100.0 * j.peak / jmax.max(1e-9),
+                j.rest_ref_s
             );
             tot.jbound += j.bound_s;
+            tot.jrest += j.rest_ref_s;
             tot.seg_jerk = tot.seg_jerk.max(100.0 * j.peak / jmax.max(1e-9));
         }
         println!();
@@ -282,10 +290,11 @@ pub fn run(a: BenchMotionArgs) -> Result<i32> {
         );
         if scurve {
             print!(
-                " | {:>9.2} {:>7.3} {:>7.0}",
+                " | {:>9.2} {:>7.3} {:>7.0} {:>8.2}",
                 tot.jbound,
                 tot.time / tot.jbound.max(1e-9),
-                tot.seg_jerk
+                tot.seg_jerk,
+                tot.jrest
             );
         }
         println!();

@@ -134,6 +134,20 @@ struct Cell {
 /// is `prof` (`Bound::profile`, dwells included), at path jerk `jerk`
 /// mm/s³; seconds. See the module doc.
 pub fn jerk_bound(prof: &[PieceProfile], jerk: f64) -> f64 {
+    bound_with(prof, jerk, true)
+}
+
+/// A reference, not a bound: [`jerk_bound`] with the path acceleration
+/// zero at every valley (each corner or stop that is the slowest point
+/// between two peaks of the trapezoid bound's profile), as where each S
+/// ramp starts and ends at a corner. What the bound has below it is what
+/// carrying acceleration through those corners could gain at most.
+pub fn jerk_rest_ref(prof: &[PieceProfile], jerk: f64) -> f64 {
+    bound_with(prof, jerk, false)
+}
+
+/// `free`: the valley's acceleration minimised over `[−a, a]`, else 0.
+fn bound_with(prof: &[PieceProfile], jerk: f64, free: bool) -> f64 {
     let n = prof.len();
     if n == 0 || jerk <= 0.0 {
         return prof.last().map_or(0.0, |p| p.end_s);
@@ -234,6 +248,7 @@ pub fn jerk_bound(prof: &[PieceProfile], jerk: f64) -> f64 {
             vertex_v(valley),
             a,
             jerk,
+            free,
         );
         lo_cell = hi_cell;
         lo_vertex = hi_vertex + 1;
@@ -242,12 +257,15 @@ pub fn jerk_bound(prof: &[PieceProfile], jerk: f64) -> f64 {
 }
 
 /// Least time over `before` (walked backwards from the valley) and
-/// `after`, the valley passed at `w` with some acceleration in `[−a, a]`.
-fn region_time(before: &[Cell], after: &[Cell], w: f64, a: f64, j: f64) -> f64 {
-    if w <= 0.0 {
-        // Speed zero: the acceleration is too (it cannot be negative
-        // after, nor positive before, a point where the speed is zero).
-        return walk(before.iter().rev(), 0.0, 0.0, a, j) + walk(after.iter(), 0.0, 0.0, a, j);
+/// `after`, the valley passed at `w` with some acceleration in `[−a, a]`
+/// (`free`), or none.
+fn region_time(before: &[Cell], after: &[Cell], w: f64, a: f64, j: f64, free: bool) -> f64 {
+    if w <= 0.0 || !free {
+        // At speed zero the acceleration is zero too (it cannot be
+        // negative after, nor positive before, a point where the speed is
+        // zero).
+        let w = w.max(0.0);
+        return walk(before.iter().rev(), w, 0.0, a, j) + walk(after.iter(), w, 0.0, a, j);
     }
     let alphas: Vec<f64> = (0..=2 * GRID)
         .map(|i| a * (i as f64 / GRID as f64 - 1.0))
@@ -355,6 +373,36 @@ mod tests {
         assert!(b >= 0.99 * exact, "{b} far below {exact}");
         // And above the trapezoid's.
         assert!(b > line(len, v, a).end_s + 0.5 * a / j);
+    }
+
+    /// The reference with no acceleration at the valleys is the bound
+    /// itself where the valley is a stop, and above it at a corner passed
+    /// at speed, where the bound may carry acceleration through.
+    #[test]
+    fn the_rest_reference_pins_the_valleys_acceleration() {
+        let (a, j) = (500.0, 5000.0);
+        let one = [line(20.0, 50.0, a)];
+        assert_eq!(jerk_bound(&one, j), jerk_rest_ref(&one, j));
+        // Two 2 mm lines meeting at 10 mm/s.
+        let first = PieceProfile {
+            v1: 10.0,
+            ..line(2.0, 50.0, a)
+        };
+        let first = PieceProfile {
+            end_s: first.time_s(),
+            ..first
+        };
+        let second = PieceProfile {
+            v0: 10.0,
+            ..line(2.0, 50.0, a)
+        };
+        let second = PieceProfile {
+            end_s: first.end_s + second.time_s(),
+            ..second
+        };
+        let prof = [first, second];
+        let (b, r) = (jerk_bound(&prof, j), jerk_rest_ref(&prof, j));
+        assert!(r > b * 1.001, "reference {r} not above the bound {b}");
     }
 
     /// A meter fed a trapezoid's speed reads its acceleration step as far

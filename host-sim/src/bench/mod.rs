@@ -53,6 +53,8 @@ pub struct JobFigures {
 #[derive(Clone, Copy, Debug)]
 pub struct JerkFigures {
     pub bound_s: f64,
+    /// [`jerk::jerk_rest_ref`], s.
+    pub rest_ref_s: f64,
     pub peak: f64,
     pub window_s: f64,
 }
@@ -131,6 +133,7 @@ pub fn run_job(cfg: &MachineConfig, source: &str) -> JobFigures {
         curved_ref_s: both.bound.bound().with_curvature_rule().time_s(),
         jerk: both.jerk.as_ref().map(|m| JerkFigures {
             bound_s: jerk::jerk_bound(&prof, jmax),
+            rest_ref_s: jerk::jerk_rest_ref(&prof, jmax),
             peak: m.peak,
             window_s: m.window_s,
         }),
