@@ -88,6 +88,9 @@ impl<Q: SegmentSink, const N: usize> MotionPort for Core<'_, Q, N> {
     fn ready(&self) -> bool {
         self.machine.ready()
     }
+    fn may_plan(&self) -> bool {
+        self.machine.may_plan()
+    }
     fn submit(&mut self, cmd: &Command, line: u32) -> Result<(), MachineError> {
         let (outputs, laser, obs) = (&mut *self.outputs, &mut *self.laser, &mut *self.obs);
         self.machine

@@ -293,6 +293,14 @@ impl<const N: usize> Machine<N> {
     pub fn ready(&self) -> bool {
         matches!(self.pending, Pending::None) && self.script.is_none() && self.motion.has_room()
     }
+
+    /// [`ready`](Self::ready), and the planner may take more before the
+    /// next [`poll`](Self::poll) fills the segment queue
+    /// ([`crate::motion::PLAN_BURST_SCURVE`]): what a caller feeding
+    /// commands in a loop checks.
+    pub fn may_plan(&self) -> bool {
+        self.ready() && self.motion.may_plan()
+    }
     pub fn alarm(&self) -> Option<MachineError> {
         self.alarm
     }

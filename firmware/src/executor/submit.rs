@@ -257,7 +257,7 @@ impl<const N: usize> Machine<N> {
     /// poll; the device keeps answering meanwhile.
     pub(super) fn feed_chords(&mut self, obs: &mut dyn FnMut(Note)) -> Result<(), MachineError> {
         for _ in 0..CHORDS_PER_CALL {
-            if !self.motion.has_room() {
+            if !self.motion.may_plan() {
                 break;
             }
             let Pending::Chords {

@@ -69,7 +69,20 @@ pub struct Pipeline<const N: usize> {
     /// Motor steps minus commanded steps per axis at the end of what is
     /// planned: the backlash taken up away from the homing direction.
     comp: [i32; AXES],
+    /// Moves queued since the segment queue was last filled.
+    burst: u8,
 }
+
+/// Moves the planner takes between two fills of the segment queue in
+/// S-curve mode: each costs about 2.1 ms on the board when the look-ahead
+/// binds (`cargo xtask bench-target`, `plan_chord_scurve_insns`, 153,835
+/// instructions), and the preparer runs 30 ms ahead of the step interrupt
+/// (`stepper::prep`). A full ring planned in one go, 64 of them, left the
+/// step interrupt without segments in the middle of a move (host-sim with
+/// that cost: Z at 119 % of its acceleration on a helix after a rapid).
+/// Four take about 8 ms, 12 ms beside 100 kHz of stepping. Trapezoid
+/// mode's 64 take 9.5 ms (`plan_block_insns`), so it has no bound.
+pub const PLAN_BURST_SCURVE: u8 = 4;
 
 impl<const N: usize> Pipeline<N> {
     pub fn new(settings: Settings, tick_hz: u32) -> Self {
@@ -81,6 +94,7 @@ impl<const N: usize> Pipeline<N> {
             prep: Preparer::new(settings, cfg),
             cfg,
             comp: [0; AXES],
+            burst: 0,
         }
     }
 
@@ -92,6 +106,7 @@ impl<const N: usize> Pipeline<N> {
             prep: Preparer::zeroed(),
             cfg: StepConfig::UNSET,
             comp: [0; AXES],
+            burst: 0,
         }
     }
 
@@ -107,8 +122,14 @@ impl<const N: usize> Pipeline<N> {
     }
 
     /// The gateway: queue one move. The caller checks
-    /// [`has_room`](Self::has_room) first (a full planner refuses it).
+    /// [`has_room`](Self::has_room) first (a full planner refuses it), and
+    /// [`may_plan`](Self::may_plan) where it has more to queue.
     pub fn submit(&mut self, mv: Move) -> Result<(), PlanError> {
+        self.burst = self.burst.saturating_add(1);
+        self.submit_move(mv)
+    }
+
+    fn submit_move(&mut self, mv: Move) -> Result<(), PlanError> {
         match mv {
             Move::Line {
                 end,
@@ -196,6 +217,14 @@ impl<const N: usize> Pipeline<N> {
     pub fn has_room(&self) -> bool {
         let need = if self.compensating() { 2 } else { 1 };
         self.planner.len() + need <= N
+    }
+
+    /// Room, and the segment queue filled since the last
+    /// [`PLAN_BURST_SCURVE`] moves in S-curve mode.
+    pub fn may_plan(&self) -> bool {
+        self.has_room()
+            && (self.settings().profile != crate::settings::Profile::SCurve
+                || self.burst < PLAN_BURST_SCURVE)
     }
 
     /// Backlash is set on some axis or still taken up (a path that only
@@ -350,6 +379,7 @@ impl<const N: usize> Pipeline<N> {
     /// Prepare segments for the step interrupt (see [`Preparer::fill`]).
     pub fn fill(&mut self, rt: &Realtime, sink: &mut impl SegmentSink) {
         self.prep.fill(&mut self.planner, rt, sink);
+        self.burst = 0;
     }
 }
 

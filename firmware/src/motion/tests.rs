@@ -192,3 +192,33 @@ fn rotary_rule_measures_from_the_commanded_end_under_backlash() {
         .map(|b| b.programmed);
     assert_eq!(last, Some(10.0), "A alone: F in degrees per second");
 }
+
+/// In S-curve mode the planner takes at most `PLAN_BURST_SCURVE` moves
+/// between two fills of the segment queue, however much room it has, so a
+/// long run of planning never leaves the step interrupt without segments;
+/// trapezoid mode fills its whole ring.
+#[test]
+fn s_curve_planning_stops_for_a_segment_fill_every_few_moves() {
+    let scurve = Settings {
+        profile: crate::settings::Profile::SCurve,
+        ..Settings::default()
+    };
+    for (settings, burst) in [
+        (scurve, usize::from(super::PLAN_BURST_SCURVE)),
+        (Settings::default(), 64),
+    ] {
+        let mut p = Pipeline::<64>::new(settings, 1_000_000);
+        let mut n = 0;
+        while p.may_plan() {
+            n += 1;
+            p.submit(line(n as f32, (n % 2) as f32)).unwrap();
+        }
+        assert_eq!(n, burst, "{:?}", settings.profile);
+        let rt = Realtime::new();
+        let mut q: heapless::spsc::Queue<crate::stepper::Segment, 16> =
+            heapless::spsc::Queue::new();
+        p.fill(&rt, &mut q);
+        assert!(p.may_plan() || !p.has_room());
+        assert!(!q.is_empty(), "the fill queued segments");
+    }
+}

@@ -355,7 +355,7 @@ impl<S: Storage> Device<S> {
     fn feed(&mut self, m: &mut impl MotionPort, tx: &mut impl Tx, framed: bool) {
         let mut budget = REPLAY_STEPS;
         loop {
-            while m.ready() {
+            while m.may_plan() {
                 let Some((line, cmd)) = self.cmds.pop_front() else {
                     break;
                 };

@@ -35,6 +35,9 @@ pub trait MotionPort {
     fn rt(&self) -> &Realtime;
     /// The executor takes a command now.
     fn ready(&self) -> bool;
+    /// `ready`, and the planner may take more before the segment queue is
+    /// filled again (`Machine::may_plan`).
+    fn may_plan(&self) -> bool;
     fn submit(&mut self, cmd: &Command, line: u32) -> Result<(), MachineError>;
     /// `e` was found after line `line` was acknowledged: stop the job
     /// (`executor::Machine::fault`).

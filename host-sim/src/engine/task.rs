@@ -74,7 +74,8 @@ impl Sim<'_> {
                 }
             }
         }
-        let cost = self.task.cost(taken, self.stats.blocks - blocks0);
+        let scurve = self.machine.settings().profile == burin::settings::Profile::SCurve;
+        let cost = self.task.cost(taken, self.stats.blocks - blocks0, scurve);
         if cost > 0 {
             self.task.busy_until = self.now + cost;
             self.task.wake = Some(self.task.busy_until);
@@ -112,7 +113,7 @@ pub(super) fn submit_lines(
     once: bool,
 ) -> u64 {
     let mut taken = 0;
-    while machine.ready() {
+    while machine.may_plan() {
         let Some(l) = lines.front_mut() else { break };
         if !l.taken {
             if l.arrival > now || !l.sent || (once && taken > 0) {
@@ -236,9 +237,10 @@ impl Sim<'_> {
         }
         let s = t.controller.session.stats;
         let lines = (s.lines_ok + s.lines_err).wrapping_sub(stats0.lines_ok + stats0.lines_err);
+        let scurve = self.machine.settings().profile == burin::settings::Profile::SCurve;
         let cost = self
             .task
-            .cost(u64::from(lines), self.stats.blocks - blocks0);
+            .cost(u64::from(lines), self.stats.blocks - blocks0, scurve);
         if cost > 0 {
             self.task.busy_until = self.now + cost;
         }
