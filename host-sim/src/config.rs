@@ -80,8 +80,10 @@ pub struct HostModel {
     pub line_ns: u32,
     /// Planning time per planner block (line, chord, homing or probe move), ns.
     pub block_ns: u32,
-    /// The same in S-curve mode (`$202`), whose passes reckon S ramps.
-    pub scurve_block_ns: u32,
+    /// In S-curve mode (`$202`), besides `block_ns`: planning time per
+    /// block the planner's passes visit (`Planner::work`), each reckoning
+    /// S ramps, ns.
+    pub scurve_visit_ns: u32,
 }
 
 impl HostModel {
@@ -91,26 +93,28 @@ impl HostModel {
         rx_window_bytes: 128,
         line_ns: 0,
         block_ns: 0,
-        scurve_block_ns: 0,
+        scurve_visit_ns: 0,
     };
 }
 
 /// The measured on-target costs (`cargo xtask bench-target`: 2,769
 /// instructions per parsed line, 11,021 per planned block with the corner
 /// holds, their passes, the quiet axes, the per-chord arc budget and the
-/// straight stretches of `planner::tube`; 153,835 per block in S-curve
-/// mode, `plan_chord_scurve_insns`, where every pass reckons S ramps over
-/// the whole ring when the look-ahead binds) at 96 MHz and the step path's
-/// assumed 1.3 cycles per instruction: 37.5 µs, 149.2 µs and 2.08 ms.
-/// Both block figures are a full ring's, the case where planning time
-/// matters (short blocks, the look-ahead binding). The link is instant: a
-/// job file can be sent at any rate, so its time is not the controller's.
+/// straight stretches of `planner::tube`) at 96 MHz and the step path's
+/// assumed 1.3 cycles per instruction: 37.5 µs and 149.2 µs. In S-curve
+/// mode a block costs 153,835 (`plan_chord_scurve_insns`) on the same
+/// full ring, whose passes visit 120.0 blocks a push there (counted with
+/// `Planner::work` on the same pushes): the 142,814 more, 1,190 a visit,
+/// 16.1 µs. Charged by visit, since the walk varies a hundredfold: a
+/// merged step of short_segments.ngc visits one or two blocks, a chord on
+/// a full ring all of them twice. The link is instant: a job file can be
+/// sent at any rate, so its time is not the controller's.
 impl Default for HostModel {
     fn default() -> Self {
         HostModel {
             line_ns: 37_497,
             block_ns: 149_243,
-            scurve_block_ns: 2_083_183,
+            scurve_visit_ns: 16_115,
             ..HostModel::INSTANT
         }
     }

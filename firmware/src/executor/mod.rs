@@ -301,6 +301,11 @@ impl<const N: usize> Machine<N> {
     pub fn may_plan(&self) -> bool {
         self.ready() && self.motion.may_plan()
     }
+
+    /// The planner's passes' work so far ([`crate::planner::Planner::work`]).
+    pub fn plan_work(&self) -> u32 {
+        self.motion.planner().work()
+    }
     pub fn alarm(&self) -> Option<MachineError> {
         self.alarm
     }

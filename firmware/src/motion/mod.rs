@@ -74,14 +74,17 @@ pub struct Pipeline<const N: usize> {
 }
 
 /// Moves the planner takes between two fills of the segment queue in
-/// S-curve mode: each costs about 2.1 ms on the board when the look-ahead
-/// binds (`cargo xtask bench-target`, `plan_chord_scurve_insns`, 153,835
-/// instructions), and the preparer runs 30 ms ahead of the step interrupt
-/// (`stepper::prep`). A full ring planned in one go, 64 of them, left the
-/// step interrupt without segments in the middle of a move (host-sim with
-/// that cost: Z at 119 % of its acceleration on a helix after a rapid).
-/// Four take about 8 ms, 12 ms beside 100 kHz of stepping. Trapezoid
-/// mode's 64 take 9.5 ms (`plan_block_insns`), so it has no bound.
+/// S-curve mode. Where the look-ahead binds, each costs up to 2.1 ms on
+/// the board (`cargo xtask bench-target`, `plan_chord_scurve_insns`,
+/// 153,835 instructions: its passes walk the ring twice, 120 blocks at
+/// 1,190 instructions each), and the preparer runs only 30 ms ahead of the
+/// step interrupt (`stepper::prep`): 64 moves planned in one go into such
+/// a ring walk about 4,000 blocks, 67 ms, and the step interrupt would run
+/// out of segments in the middle of a move (host-sim charging 2.1 ms for
+/// every block showed it: Z at 119 % of its acceleration on a helix after
+/// a rapid). Four take at most about 8 ms, 12 ms beside 100 kHz of
+/// stepping. Trapezoid mode's 64 take 9.5 ms (`plan_block_insns`), so it
+/// has no bound.
 pub const PLAN_BURST_SCURVE: u8 = 4;
 
 impl<const N: usize> Pipeline<N> {

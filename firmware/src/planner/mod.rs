@@ -281,6 +281,11 @@ pub struct Planner<const N: usize> {
     len: usize,
     /// Offset from the tail of the first block whose entry may still rise.
     planned: usize,
+    /// Blocks the passes have visited, wrapping: what planning costs, for
+    /// host-sim's model of the task's time (`Planner::work`; off the board
+    /// only).
+    #[cfg(not(target_os = "none"))]
+    work: u32,
     /// Step position at the end of the last block pushed.
     position: [i32; AXES],
     /// The previous block's commanded direction (see `position_mm`).
@@ -341,6 +346,8 @@ impl<const N: usize> Planner<N> {
             tail: 0,
             len: 0,
             planned: 0,
+            #[cfg(not(target_os = "none"))]
+            work: 0,
             position: [0; AXES],
             prev_unit_mm: [0.0; AXES],
             prev2_unit_mm: [0.0; AXES],
@@ -392,6 +399,8 @@ impl<const N: usize> Planner<N> {
             tail,
             len,
             planned,
+            #[cfg(not(target_os = "none"))]
+                work: _,
             position,
             prev_unit_mm,
             prev2_unit_mm,
@@ -448,6 +457,30 @@ impl<const N: usize> Planner<N> {
 
     pub fn len(&self) -> usize {
         self.len
+    }
+
+    /// Blocks the backward and forward passes have visited since power-up,
+    /// wrapping (kept through [`Planner::reset`]): S-curve planning costs
+    /// about that many S ramps. Counted off the board only (host-sim's
+    /// model of the task's time); 0 on it, where the count would only move
+    /// the code (bench-target's step path is timed with its flash lines
+    /// cold, and shifted by the count's few instructions it read 321
+    /// cycles against 311).
+    pub fn work(&self) -> u32 {
+        #[cfg(not(target_os = "none"))]
+        return self.work;
+        #[cfg(target_os = "none")]
+        0
+    }
+
+    #[inline(always)]
+    fn count_work(&mut self, visits: usize) {
+        #[cfg(not(target_os = "none"))]
+        {
+            self.work = self.work.wrapping_add(visits as u32);
+        }
+        #[cfg(target_os = "none")]
+        let _ = visits;
     }
     pub fn is_empty(&self) -> bool {
         self.len == 0

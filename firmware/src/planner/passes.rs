@@ -265,8 +265,10 @@ impl<const N: usize> Planner<N> {
         // Forward: no block may be entered faster than the previous can reach
         // (in S-curve mode, than the run it ends can, `planner::run`).
         let mut run = self.run_before(self.planned + 1);
+        let first = self.planned + 1;
+        self.count_work(self.len.saturating_sub(first));
         let (st, blocks, tail) = (&self.settings, &mut self.blocks, self.tail);
-        for k in self.planned + 1..self.len {
+        for k in first..self.len {
             let (prev, b) = pair(blocks, (tail + k - 1) % N, (tail + k) % N);
             let mut reach = match prev.kind {
                 BlockKind::Line => shape_of(prev, st).reach_held(
@@ -317,6 +319,7 @@ impl<const N: usize> Planner<N> {
         // Whether the entry of that block after the run changed in this
         // pass, and whether the last block's did.
         let (mut exit_moved, mut moved) = (false, false);
+        let top = k;
         while k > 1 {
             k -= 1;
             let exit = if S {
@@ -378,6 +381,7 @@ impl<const N: usize> Planner<N> {
                 break;
             }
         }
+        self.count_work(top - k);
         lowered
     }
 }

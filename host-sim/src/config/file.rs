@@ -101,7 +101,7 @@ struct Host {
     rx_window_bytes: Option<u32>,
     line_ns: Option<u32>,
     block_ns: Option<u32>,
-    scurve_block_ns: Option<u32>,
+    scurve_visit_ns: Option<u32>,
 }
 
 #[derive(Deserialize, Default)]
@@ -280,7 +280,7 @@ pub(super) fn apply(text: &str, cfg: &mut MachineConfig) -> Result<(), ConfigErr
     set(&mut cfg.host.rx_window_bytes, h.rx_window_bytes);
     set(&mut cfg.host.line_ns, h.line_ns);
     set(&mut cfg.host.block_ns, h.block_ns);
-    set(&mut cfg.host.scurve_block_ns, h.scurve_block_ns);
+    set(&mut cfg.host.scurve_visit_ns, h.scurve_visit_ns);
     apply_interrupts(cfg, f.interrupts)?;
     let s = &mut cfg.settings;
 

@@ -42,7 +42,7 @@ pub(super) struct Task {
     window: u32,
     line_ticks: u64,
     block_ticks: u64,
-    scurve_block_ticks: u64,
+    scurve_visit_ticks: u64,
     /// Bytes sent and not yet taken by the parser.
     in_window: u32,
     /// Lines at the front of the queue already sent.
@@ -66,7 +66,7 @@ impl Task {
             window: h.rx_window_bytes.max(1),
             line_ticks: ns(h.line_ns),
             block_ticks: ns(h.block_ns),
-            scurve_block_ticks: ns(h.scurve_block_ns),
+            scurve_visit_ticks: ns(h.scurve_visit_ns),
             in_window: 0,
             sent: 0,
             link_free: 0,
@@ -77,17 +77,13 @@ impl Task {
 
     /// The task takes virtual time.
     pub fn costed(&self) -> bool {
-        self.line_ticks > 0 || self.block_ticks > 0 || self.scurve_block_ticks > 0
+        self.line_ticks > 0 || self.block_ticks > 0 || self.scurve_visit_ticks > 0
     }
 
-    /// `scurve`: the planner runs in S-curve mode.
-    pub fn cost(&self, lines: u64, blocks: u64, scurve: bool) -> u64 {
-        let block = if scurve {
-            self.scurve_block_ticks
-        } else {
-            self.block_ticks
-        };
-        lines * self.line_ticks + blocks * block
+    /// `visits`: blocks the planner's passes visited in S-curve mode
+    /// (`Planner::work`; 0 in trapezoid mode).
+    pub fn cost(&self, lines: u64, blocks: u64, visits: u64) -> u64 {
+        lines * self.line_ticks + blocks * self.block_ticks + visits * self.scurve_visit_ticks
     }
 
     /// Start sending every line the receive window has room for.

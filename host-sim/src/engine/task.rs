@@ -16,6 +16,17 @@ use super::{host, machine_error, note, Sim, Stats, PLANNER_BLOCKS};
 use crate::record::Recorder;
 
 impl Sim<'_> {
+    /// Blocks the planner's passes visited since `work0` in S-curve mode,
+    /// which the task's model charges (`HostModel::scurve_visit_ns`); 0 in
+    /// trapezoid mode.
+    fn s_curve_visits(&self, work0: u32) -> u64 {
+        if self.machine.settings().profile == burin::settings::Profile::SCurve {
+            u64::from(self.machine.plan_work().wrapping_sub(work0))
+        } else {
+            0
+        }
+    }
+
     /// Prio 1: feed queued commands to the executor and refill the segment
     /// queue. With a task cost it first refills, then takes one line, and is
     /// busy for the line's and its blocks' time; a refill requested
@@ -33,6 +44,7 @@ impl Sim<'_> {
         self.stats.work += 1;
         self.task.send(&mut self.lines, self.now);
         let blocks0 = self.stats.blocks;
+        let work0 = self.machine.plan_work();
         let costed = self.task.costed();
         let Sim {
             machine,
@@ -74,8 +86,8 @@ impl Sim<'_> {
                 }
             }
         }
-        let scurve = self.machine.settings().profile == burin::settings::Profile::SCurve;
-        let cost = self.task.cost(taken, self.stats.blocks - blocks0, scurve);
+        let visits = self.s_curve_visits(work0);
+        let cost = self.task.cost(taken, self.stats.blocks - blocks0, visits);
         if cost > 0 {
             self.task.busy_until = self.now + cost;
             self.task.wake = Some(self.task.busy_until);
@@ -204,6 +216,7 @@ impl Sim<'_> {
         };
         let stats0 = t.controller.session.stats;
         let blocks0 = self.stats.blocks;
+        let work0 = self.machine.plan_work();
         let Sim {
             machine,
             rt,
@@ -237,10 +250,10 @@ impl Sim<'_> {
         }
         let s = t.controller.session.stats;
         let lines = (s.lines_ok + s.lines_err).wrapping_sub(stats0.lines_ok + stats0.lines_err);
-        let scurve = self.machine.settings().profile == burin::settings::Profile::SCurve;
+        let visits = self.s_curve_visits(work0);
         let cost = self
             .task
-            .cost(u64::from(lines), self.stats.blocks - blocks0, scurve);
+            .cost(u64::from(lines), self.stats.blocks - blocks0, visits);
         if cost > 0 {
             self.task.busy_until = self.now + cost;
         }
