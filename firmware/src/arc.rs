@@ -41,7 +41,7 @@ pub fn max_chord_angle(r: f32, tol: f32) -> f32 {
     if r <= tol {
         return PI / 2.0;
     }
-    let x = libm::sqrtf(tol / (2.0 * r)).min(1.0);
+    let x = crate::num::sqrt(tol / (2.0 * r)).min(1.0);
     (4.0 * crate::num::trig::asin(x)).min(PI / 2.0)
 }
 
@@ -222,7 +222,7 @@ impl SplineChords {
         let p0 = [start[0], start[1]];
         let p3 = [s.end[0], s.end[1]];
         let l = d(p0, s.p1, s.p2).max(d(s.p1, s.p2, p3));
-        let n = libm::ceilf(libm::sqrtf(0.75 * l / tol)).max(1.0);
+        let n = libm::ceilf(crate::num::sqrt(0.75 * l / tol)).max(1.0);
         if n > MAX_CHORDS as f32 {
             return Err(ArcError::TooManySegments);
         }

@@ -193,6 +193,50 @@ pub fn round_i32(x: f32) -> Option<i32> {
     })
 }
 
+/// Square root, correctly rounded: the FPU's `VSQRT.F32` on the board,
+/// libm's elsewhere (both IEEE 754, so host-sim computes the same bits).
+/// core has no float square root on stable Rust, and libm's for this
+/// target is its software one: every square root of the planner's passes
+/// cost a hundred instructions or so, a third of `plan_block_insns` and
+/// two fifths of `plan_chord_scurve_insns` (`cargo xtask bench-target`:
+/// 11,052 -> 7,532 and 153,835 -> 96,317). A call, not inlined: inlined
+/// at its forty-odd call sites it took 2 % fewer instructions but 3.4 KB
+/// more flash (99.9 % of the budget). The asm names no FPU register
+/// class (that needs the `vfp2` target feature, which the
+/// `thumbv7em-none-eabihf` spec leaves out of Rust's view although the
+/// FPU is there): it moves `x` through a core register into `s0`, saved
+/// and restored around it. clippy refuses `libm::sqrtf` elsewhere
+/// (`clippy.toml`).
+#[inline(never)]
+#[allow(unsafe_code)]
+pub fn sqrt(x: f32) -> f32 {
+    #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+    {
+        let r: u32;
+        // SAFETY: register level only: VSQRT.F32 on `s0`, which is
+        // pushed before and popped after, between two core registers; no
+        // memory but those two stack words, no flags.
+        unsafe {
+            core::arch::asm!(
+                "vpush {{s0}}",
+                "vmov s0, {x}",
+                "vsqrt.f32 s0, s0",
+                "vmov {r}, s0",
+                "vpop {{s0}}",
+                x = in(reg) x.to_bits(),
+                r = lateout(reg) r,
+                options(pure, nomem, preserves_flags),
+            );
+        }
+        f32::from_bits(r)
+    }
+    #[cfg(not(all(target_arch = "arm", target_abi = "eabihf")))]
+    {
+        #[allow(clippy::disallowed_methods)]
+        libm::sqrtf(x)
+    }
+}
+
 /// Cube root of `x` ≥ 0 (0 for anything else), in `f32` only: libm's
 /// `cbrtf` finishes in `f64`, soft-float on this FPU (the image check
 /// refuses it). A first guess from the exponent bits, then Newton steps

@@ -98,23 +98,24 @@ impl HostModel {
 }
 
 /// The measured on-target costs (`cargo xtask bench-target`: 2,769
-/// instructions per parsed line, 11,021 per planned block with the corner
+/// instructions per parsed line, 7,532 per planned block with the corner
 /// holds, their passes, the quiet axes, the per-chord arc budget and the
-/// straight stretches of `planner::tube`) at 96 MHz and the step path's
-/// assumed 1.3 cycles per instruction: 37.5 µs and 149.2 µs. In S-curve
-/// mode a block costs 153,835 (`plan_chord_scurve_insns`) on the same
-/// full ring, whose passes visit 120.0 blocks a push there (counted with
-/// `Planner::work` on the same pushes): the 142,814 more, 1,190 a visit,
-/// 16.1 µs. Charged by visit, since the walk varies a hundredfold: a
-/// merged step of short_segments.ngc visits one or two blocks, a chord on
-/// a full ring all of them twice. The link is instant: a job file can be
-/// sent at any rate, so its time is not the controller's.
+/// straight stretches of `planner::tube`, 11,052 before the FPU's square
+/// root, session 23) at 96 MHz and the step path's assumed 1.3 cycles per
+/// instruction: 37.5 µs and 102.0 µs. In S-curve mode a block costs
+/// 96,317 (`plan_chord_scurve_insns`) on the same full ring, whose passes
+/// visit 120.0 blocks a push there (counted with `Planner::work` on the
+/// same pushes): the 88,785 more, 740 a visit, 10.0 µs. Charged by visit,
+/// since the walk varies a hundredfold: a merged step of
+/// short_segments.ngc visits one or two blocks, a chord on a full ring all
+/// of them twice. The link is instant: a job file can be sent at any rate,
+/// so its time is not the controller's.
 impl Default for HostModel {
     fn default() -> Self {
         HostModel {
             line_ns: 37_497,
-            block_ns: 149_243,
-            scurve_visit_ns: 16_115,
+            block_ns: 101_996,
+            scurve_visit_ns: 10_018,
             ..HostModel::INSTANT
         }
     }

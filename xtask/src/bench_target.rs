@@ -26,7 +26,7 @@ mod trace;
 /// and 500 kHz were set on an assumed 1.3 cycles per instruction and
 /// zero-wait flash; the model shows no step path with a pulse end, hard
 /// limits and cold flash lines fits them, so they are gone.
-const GOALS: [(&str, Option<f64>, &str); 25] = [
+const GOALS: [(&str, Option<f64>, &str); 26] = [
     ("step_path_cycles_1axis_hard_limits", Some(320.0), "cyc"),
     ("cpu_percent_at_100khz_hard_limits", Some(35.0), "%"),
     // A floor, checked separately below.
@@ -53,15 +53,17 @@ const GOALS: [(&str, Option<f64>, &str); 25] = [
     ("qemu_step_rise_insns_1axis", None, "insns"),
     ("qemu_step_fall_insns_1axis", None, "insns"),
     ("line_insns", None, "insns"),
-    // The straight stretches of `planner::tube` replan the corners they
-    // release (11,021 on this loop, whose 0.1 mm chords are rounded to
-    // steps and every corner gets released; 9,578 before). 11,100 is
-    // about 17,800 cycles at 1.6 per instruction: 5,400 blocks/s with
-    // the CPU to itself, 3,600 beside 100 kHz of stepping (32 % of the
-    // CPU), where circle_small's 0.016 mm chords at their speed now need
-    // 1,600 and this loop's 0.1 mm at 10,000 mm/min 1,670.
-    ("plan_block_insns", Some(11_100.0), "insns"),
+    // Issue 31's budget, met again since the planner's square roots run
+    // on the FPU (`burin::num::sqrt`: 7,532; 11,052 on libm's software
+    // one, under a goal of 11,100 then). 9,600 is about 15,400 cycles at
+    // 1.6 per instruction: 6,200 blocks/s with the CPU to itself, 4,200
+    // beside 100 kHz of stepping (32 % of the CPU).
+    ("plan_block_insns", Some(9_600.0), "insns"),
     ("plan_chord_scurve_insns", None, "insns"),
+    // `burin::num::sqrt` (VSQRT.F32 on the chip) differing from libm's
+    // software root on some input: both are IEEE 754's correctly rounded
+    // root, so host-sim and the board would plan apart.
+    ("sqrt_mismatches", Some(0.0), "count"),
 ];
 /// Step rate goal on the 96 MHz F411 with hard limits on (issue 28).
 const STEP_RATE_GOAL_HZ: f64 = 300_000.0;

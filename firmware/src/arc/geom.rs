@@ -155,5 +155,5 @@ fn wrap(x: f32) -> f32 {
 /// float on the board, to be safe from overflow at 1e19, far beyond any
 /// length in mm (a larger radius is refused as not finite).
 pub(super) fn hypot(a: f32, b: f32) -> f32 {
-    libm::sqrtf(a * a + b * b)
+    crate::num::sqrt(a * a + b * b)
 }

@@ -7,7 +7,7 @@ use crate::command::{Arc, ArcDir, Command, Pos};
 use crate::gcode::ErrorKind;
 use crate::num::trig::sin_cos;
 use core::f32::consts::{FRAC_PI_2, PI};
-use libm::{atan2f, sqrtf};
+use libm::atan2f;
 
 /// A point in the plane. The core is `f32` throughout (no soft-float
 /// `f64` on the board); near a tangent an intersection is ill-conditioned
@@ -30,7 +30,7 @@ pub(super) fn tan(a: f32) -> f32 {
 }
 
 pub(super) fn sqrt(x: f32) -> f32 {
-    sqrtf(x)
+    crate::num::sqrt(x)
 }
 
 pub(super) fn atan2(y: f32, x: f32) -> f32 {

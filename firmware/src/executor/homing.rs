@@ -130,7 +130,7 @@ impl Homing {
                 n += 1;
             }
         }
-        let rate = rate / 60.0 * libm::sqrtf(n.max(1) as f32);
+        let rate = rate / 60.0 * crate::num::sqrt(n.max(1) as f32);
         Action::Move {
             target,
             rate,

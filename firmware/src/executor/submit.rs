@@ -235,7 +235,7 @@ impl<const N: usize> Machine<N> {
         let mut prev = self.commanded;
         let mut len = 0.0f32;
         let mut add = |p: Pos| {
-            len += libm::sqrtf(p.iter().zip(&prev).map(|(a, b)| (a - b) * (a - b)).sum());
+            len += crate::num::sqrt(p.iter().zip(&prev).map(|(a, b)| (a - b) * (a - b)).sum());
             prev = p;
         };
         match ch {

@@ -17,7 +17,7 @@ use super::lexer::{blank, Cursor, LexResult};
 use super::params::{Name, ParamStore, PARAM_READ_MAX};
 use crate::num::trig::{asin, sin_cos_deg};
 use crate::num::Decimal;
-use libm::{atan2f, ceilf, expf, floorf, fmodf, logf, powf, roundf, sqrtf};
+use libm::{atan2f, ceilf, expf, floorf, fmodf, logf, powf, roundf};
 
 /// Pending brackets, binary operators and prefixes (`-`, `#`) one value
 /// may have open at once (8 bytes each on the stack): 127 brackets, as
@@ -610,7 +610,7 @@ impl Func {
             }
             Func::Sqrt => {
                 dom(a >= 0.0)?;
-                sqrtf(a)
+                crate::num::sqrt(a)
             }
             // Handled by the caller: it takes a second bracket.
             Func::Atan => a,

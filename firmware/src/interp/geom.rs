@@ -1,7 +1,6 @@
 //! Arc centres and spline control points, in the arc plane's two axes.
 
 use crate::gcode::ErrorKind;
-use libm::sqrtf;
 
 type P2 = [f32; 2];
 
@@ -9,7 +8,7 @@ fn sub(a: P2, b: P2) -> P2 {
     [a[0] - b[0], a[1] - b[1]]
 }
 fn len(a: P2) -> f32 {
-    sqrtf(a[0] * a[0] + a[1] * a[1])
+    crate::num::sqrt(a[0] * a[0] + a[1] * a[1])
 }
 
 /// Start and end closer than this (mm) are the same point: a full circle
@@ -57,7 +56,7 @@ pub(crate) fn centre_r(s: P2, e: P2, r: f32, cw: bool) -> Result<P2, ErrorKind> 
     if h2 < 0.0 && half - ar > R_SHORTFALL {
         return Err(ErrorKind::ArcRadius);
     }
-    let h = sqrtf(h2.max(0.0));
+    let h = crate::num::sqrt(h2.max(0.0));
     let u = [chord[0] / d, chord[1] / d];
     let left = [-u[1], u[0]];
     let m = [(s[0] + e[0]) * 0.5, (s[1] + e[1]) * 0.5];

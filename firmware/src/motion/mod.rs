@@ -74,17 +74,17 @@ pub struct Pipeline<const N: usize> {
 }
 
 /// Moves the planner takes between two fills of the segment queue in
-/// S-curve mode. Where the look-ahead binds, each costs up to 2.1 ms on
+/// S-curve mode. Where the look-ahead binds, each costs up to 1.3 ms on
 /// the board (`cargo xtask bench-target`, `plan_chord_scurve_insns`,
-/// 153,835 instructions: its passes walk the ring twice, 120 blocks at
-/// 1,190 instructions each), and the preparer runs only 30 ms ahead of the
-/// step interrupt (`stepper::prep`): 64 moves planned in one go into such
-/// a ring walk about 4,000 blocks, 67 ms, and the step interrupt would run
-/// out of segments in the middle of a move (host-sim charging 2.1 ms for
-/// every block showed it: Z at 119 % of its acceleration on a helix after
-/// a rapid). Four take at most about 8 ms, 12 ms beside 100 kHz of
-/// stepping. Trapezoid mode's 64 take 9.5 ms (`plan_block_insns`), so it
-/// has no bound.
+/// 96,317 instructions: its passes walk the ring twice, 120 blocks at 740
+/// instructions each), and the preparer runs only 30 ms ahead of the step
+/// interrupt (`stepper::prep`): 64 moves planned in one go into such a
+/// ring walk about 4,000 blocks, 40 ms, and the step interrupt would run
+/// out of segments in the middle of a move (host-sim charging the then
+/// 2.1 ms of a block to every block showed it: Z at 119 % of its
+/// acceleration on a helix after a rapid). Four take at most about 5 ms,
+/// 8 ms beside 100 kHz of stepping. Trapezoid mode's 64 take 6.5 ms
+/// (`plan_block_insns`), so it has no bound.
 pub const PLAN_BURST_SCURVE: u8 = 4;
 
 impl<const N: usize> Pipeline<N> {
@@ -212,7 +212,7 @@ impl<const N: usize> Pipeline<N> {
         if !turned || linear <= 0.0 {
             return speed;
         }
-        Speed::Time(libm::sqrtf(linear) / f)
+        Speed::Time(crate::num::sqrt(linear) / f)
     }
 
     /// The next [`submit`](Self::submit) has a planner slot (two while

@@ -159,7 +159,7 @@ fn rotary_axes_take_the_linear_move_s_time() {
     // 10 mm of X at 10 mm/s: 1 s, so the 90.55 mm-or-degree path at 90.55.
     p.submit(to(10.0, 90.0)).unwrap();
     let v = programmed(&p, 0).unwrap();
-    assert!((v - libm::sqrtf(100.0 + 8100.0)).abs() < 1e-3, "{v}");
+    assert!((v - crate::num::sqrt(100.0 + 8100.0)).abs() < 1e-3, "{v}");
     // A alone: F in degrees per second along A.
     p.submit(to(10.0, 0.0)).unwrap();
     assert_eq!(programmed(&p, 1), Some(10.0));

@@ -89,7 +89,7 @@ pub fn sin_cos_deg(x: f32) -> (f32, f32) {
 /// `f64`; `atan2f` does not, and this form keeps its precision at both
 /// ends of the domain ((1 - x)(1 + x) is exact near |x| = 1).
 pub fn asin(x: f32) -> f32 {
-    libm::atan2f(x, libm::sqrtf((1.0 - x) * (1.0 + x)))
+    libm::atan2f(x, crate::num::sqrt((1.0 - x) * (1.0 + x)))
 }
 
 #[cfg(test)]

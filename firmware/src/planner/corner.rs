@@ -33,7 +33,7 @@ impl Turn {
         if self.a <= 0.0 {
             return f32::INFINITY;
         }
-        libm::sqrtf(self.a * (self.l / self.phi).max(r))
+        crate::num::sqrt(self.a * (self.l / self.phi).max(r))
     }
 }
 
@@ -123,9 +123,9 @@ impl<const N: usize> Planner<N> {
             // Straight on: no corner to limit.
             return (Corner::STRAIGHT, none);
         }
-        let sin_half = libm::sqrtf(0.5 * (1.0 - cos));
+        let sin_half = crate::num::sqrt(0.5 * (1.0 - cos));
         let r = self.settings.junction_deviation * sin_half / (1.0 - sin_half);
-        let v_jd = libm::sqrtf(a * r);
+        let v_jd = crate::num::sqrt(a * r);
         let phi = libm::acosf(crate::num::clamp(-cos, -1.0, 1.0)).max(1e-9);
         let a = if curve { self.c_max() * a } else { a };
         let turn = Turn { a, phi, l };
@@ -157,7 +157,7 @@ impl<const N: usize> Planner<N> {
     fn turn(&self, unit: &[f32; AXES], prev: &[f32; AXES]) -> (f32, f32) {
         let cos = -dot(unit, prev);
         let d: [f32; AXES] = core::array::from_fn(|i| unit[i] - prev[i]);
-        let dn = libm::sqrtf(d.iter().map(|v| v * v).sum());
+        let dn = crate::num::sqrt(d.iter().map(|v| v * v).sum());
         let mut a = f32::INFINITY;
         for (di, ax) in d.iter().zip(&self.settings.axes) {
             let c = libm::fabsf(*di) / dn;
@@ -187,7 +187,7 @@ pub(super) fn two_chords(l: f32, phi2: f32) -> f32 {
 /// hundred instructions (bench-target's `plan_block_insns`). Over 60°,
 /// `acosf`.
 pub(super) fn angle(c: f32) -> f32 {
-    let x = 0.5 * libm::sqrtf((2.0 - 2.0 * c).max(0.0));
+    let x = 0.5 * crate::num::sqrt((2.0 - 2.0 * c).max(0.0));
     if x <= 0.5 {
         let x2 = x * x;
         2.0 * x * (1.0 + x2 * (1.0 / 6.0 + 0.1 * x2))

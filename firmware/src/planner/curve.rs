@@ -72,7 +72,7 @@ impl Curve {
         let mut ax = (0..AXES).filter(|i| self.plane >> i & 1 != 0);
         let (p, q) = (ax.next()?, ax.next()?);
         let (up, uq) = (unit[p], unit[q]);
-        let norm = libm::sqrtf(up * up + uq * uq);
+        let norm = crate::num::sqrt(up * up + uq * uq);
         if norm.is_nan() || norm <= 1e-6 {
             return None;
         }
@@ -133,7 +133,7 @@ impl<const N: usize> Planner<N> {
         if b.curve_ar <= 0.0 {
             return;
         }
-        let vmax = libm::sqrtf(c_max * b.curve_ar);
+        let vmax = crate::num::sqrt(c_max * b.curve_ar);
         b.nominal = b.nominal.min(vmax);
         // a_n at the top speed: `v²/r = c·A_n`.
         let an = (b.nominal * b.nominal / b.curve_ar).min(c_max) * b.curve_an;

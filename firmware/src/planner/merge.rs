@@ -92,7 +92,7 @@ impl<const N: usize> Planner<N> {
     pub(super) fn line_cap(&self, steps: &[u32; AXES], count: u32, length: f32) -> f32 {
         let s = &self.settings;
         let mm: [f32; AXES] = core::array::from_fn(|i| steps[i] as f32 / s.axes[i].steps_per_mm);
-        let len = libm::sqrtf(mm.iter().map(|v| v * v).sum());
+        let len = crate::num::sqrt(mm.iter().map(|v| v * v).sum());
         let mut cap = interval::speed_cap(s, self.tick_hz, steps, count, length);
         for (m, ax) in mm.iter().zip(&s.axes) {
             if *m > 0.0 {

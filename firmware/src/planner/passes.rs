@@ -339,7 +339,7 @@ impl<const N: usize> Planner<N> {
             let mut new = if b.kind == BlockKind::Line {
                 let both = b.hold_m + next_m;
                 let held = if both > 0.0 {
-                    libm::sqrtf(2.0 * b.length / both)
+                    crate::num::sqrt(2.0 * b.length / both)
                 } else {
                     f32::INFINITY
                 };

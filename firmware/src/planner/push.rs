@@ -110,9 +110,9 @@ impl<const N: usize> Planner<N> {
         // moves each axis in proportion); the commanded geometry sets the
         // length and the corners (see `Block::length`). A zero-length
         // commanded move that still rounds to a step keeps the step one.
-        let len_steps = libm::sqrtf(len2);
+        let len_steps = crate::num::sqrt(len2);
         let d: [f32; AXES] = core::array::from_fn(|i| end_mm[i] - self.position_mm[i]);
-        let len_mm = libm::sqrtf(d.iter().map(|v| v * v).sum());
+        let len_mm = crate::num::sqrt(d.iter().map(|v| v * v).sum());
         // Both ends round by at most half a step per axis, so the commanded
         // move is within a step per axis of the stepped one (and `f32`
         // rounding of far coordinates: 1.25 steps); a commanded

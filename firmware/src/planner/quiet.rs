@@ -57,7 +57,9 @@ impl Block {
         let m = m.pre.max(m.post);
         if m > 0.0 {
             self.junction = self.junction.min(0.5 * W * HOLD_STRETCH / m);
-            self.junction = self.junction.min(libm::sqrtf(2.0 * ROOM_SHARE * room / m));
+            self.junction = self
+                .junction
+                .min(crate::num::sqrt(2.0 * ROOM_SHARE * room / m));
         }
     }
 
@@ -78,7 +80,7 @@ impl Block {
     /// below `corner`; after a stop `corner` is 0).
     pub(super) fn min_time(&self) -> f32 {
         let entry = self.corner.min(self.cap);
-        let top = self.cap.min(libm::sqrtf(
+        let top = self.cap.min(crate::num::sqrt(
             entry * entry + 2.0 * self.accel0() * self.length,
         ));
         if top > 0.0 {
@@ -104,7 +106,9 @@ impl<const N: usize> Planner<N> {
         // the previous block's speed: quiet blocks are capped no lower than
         // that. (Only the choice to cap rests on this guess; once capped,
         // the block is quiet whatever its entry.)
-        let natural = b.cap.min(libm::sqrtf(entry * entry + b.accel * b.length));
+        let natural = b
+            .cap
+            .min(crate::num::sqrt(entry * entry + b.accel * b.length));
         let (mut quiet, mut release) = (0u8, 0u8);
         let mut cap = b.cap;
         for (i, ax) in self.settings.axes.iter().enumerate() {

@@ -45,7 +45,7 @@ impl Shape {
         let (w0, w1, l) = (v0 * v0, v1 * v1, len.max(0.0));
         let peak = (w0 + w1 + 2.0 * l * self.accel) / (2.0 + 2.0 * l * self.drop);
         let reach = (w0 + 2.0 * l * self.accel) / (1.0 + 2.0 * l * self.drop);
-        libm::sqrtf((vn * vn).min(peak).min(reach).max(w0))
+        crate::num::sqrt((vn * vn).min(peak).min(reach).max(w0))
     }
 
     /// Duration of a speed change of `dv` (≥ 0).
@@ -57,7 +57,7 @@ impl Shape {
         } else if dv * self.jerk >= a * a {
             dv / a + a / self.jerk
         } else {
-            2.0 * libm::sqrtf(dv / self.jerk)
+            2.0 * crate::num::sqrt(dv / self.jerk)
         }
     }
 
@@ -73,9 +73,9 @@ impl Shape {
         // With `drop`, the ramp's top is where it ends (read backwards,
         // where it starts): `x² − v² = 2·l·(accel − drop·x²)`.
         let trap = if self.drop > 0.0 {
-            libm::sqrtf((v * v + 2.0 * self.accel * l) / (1.0 + 2.0 * self.drop * l))
+            crate::num::sqrt((v * v + 2.0 * self.accel * l) / (1.0 + 2.0 * self.drop * l))
         } else {
-            libm::sqrtf(v * v + 2.0 * self.accel * l)
+            crate::num::sqrt(v * v + 2.0 * self.accel * l)
         };
         if self.jerk <= 0.0 {
             return trap;
@@ -110,7 +110,7 @@ impl Shape {
         let (a, j) = (self.accel, self.jerk);
         let full = a * a / j;
         let c = v * full - v * v - 2.0 * a * len;
-        let x = 0.5 * (libm::sqrtf((full * full - 4.0 * c).max(0.0)) - full);
+        let x = 0.5 * (crate::num::sqrt((full * full - 4.0 * c).max(0.0)) - full);
         if x - v >= full {
             return x;
         }
@@ -169,7 +169,7 @@ impl Shape {
         }
         let half = 0.5 * m_other;
         if half * v * v > avail {
-            return libm::sqrtf(avail / half);
+            return crate::num::sqrt(avail / half);
         }
         if self.jerk <= 0.0 {
             // x²·m/2 + (x² − v²)/2a = avail. With `drop`, solved at the
@@ -177,7 +177,7 @@ impl Shape {
             // answer is slower, so its own allows more.
             let solve = |a: f32| {
                 let k = 0.5 / a;
-                libm::sqrtf((avail + k * v * v) / (half + k))
+                crate::num::sqrt((avail + k * v * v) / (half + k))
             };
             let x = solve(self.accel);
             if self.drop <= 0.0 {
@@ -219,7 +219,7 @@ impl Shape {
     /// Lowest speed reachable when slowing from `v` within `len` mm.
     pub fn reach_down(&self, v: f32, len: f32) -> f32 {
         if self.jerk <= 0.0 {
-            return libm::sqrtf((v * v - 2.0 * self.accel * len.max(0.0)).max(0.0));
+            return crate::num::sqrt((v * v - 2.0 * self.accel * len.max(0.0)).max(0.0));
         }
         if self.dist(v, 0.0) <= len {
             return 0.0;
@@ -252,7 +252,7 @@ impl Shape {
         let tj = if dv.abs() * j >= self.accel * self.accel {
             self.accel / j
         } else {
-            libm::sqrtf(dv.abs() / j)
+            crate::num::sqrt(dv.abs() / j)
         };
         sg * j * tau.min(tj).min(total - tau)
     }
@@ -272,7 +272,7 @@ impl Shape {
         let (tj, ta) = if adv * j >= self.accel * self.accel {
             (self.accel / j, adv / self.accel - self.accel / j)
         } else {
-            (libm::sqrtf(adv / j), 0.0)
+            (crate::num::sqrt(adv / j), 0.0)
         };
         if tau < tj {
             let v = v0 + sg * j * tau * tau / 2.0;
@@ -377,7 +377,7 @@ impl Profile {
             vn
         } else if shape.jerk <= 0.0 && v0 <= vn {
             let a = shape.accel;
-            libm::sqrtf(((2.0 * a * len + v0 * v0 + v1 * v1) / 2.0).max(0.0)).min(vn)
+            crate::num::sqrt(((2.0 * a * len + v0 * v0 + v1 * v1) / 2.0).max(0.0)).min(vn)
         } else {
             // Entered above the cruise speed (an override drop): S ramps via
             // `vn` may not fit, so bisect a plateau between the exit speed

@@ -214,7 +214,7 @@ impl RunAhead {
             let all = HOLD_SHARE * w / self.held;
             let a = self.held * w / self.len;
             let (b, c4) = (self.hold_max, 4.0 * a * HOLD_SHARE * w);
-            let spread = (libm::sqrtf(b * b + c4) - b) / (2.0 * a);
+            let spread = (crate::num::sqrt(b * b + c4) - b) / (2.0 * a);
             c.min(all.max(spread))
         } else {
             c

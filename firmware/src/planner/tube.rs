@@ -209,7 +209,7 @@ impl<const N: usize> Planner<N> {
         }
         // The line's own acceleration limit, from its direction in mm.
         let mm: [f32; AXES] = core::array::from_fn(|i| d[i] / self.settings.axes[i].steps_per_mm);
-        let len = libm::sqrtf(mm.iter().map(|v| v * v).sum());
+        let len = crate::num::sqrt(mm.iter().map(|v| v * v).sum());
         let (mut a, mut a_line, mut step_mm) = (f32::INFINITY, f32::INFINITY, 0.0f32);
         for (i, ax) in self.settings.axes.iter().enumerate() {
             if moving & (1 << i) != 0 || d[i] != 0.0 {
@@ -232,7 +232,7 @@ impl<const N: usize> Planner<N> {
         let mut lowest = self.len;
         let r = total * total / (8.0 * (TUBE_STEPS + 1.0) * line.step_mm);
         let turn_v = self.curve_jerk_cap(r);
-        let v = libm::sqrtf(CENTRIPETAL * line.a * r).min(turn_v);
+        let v = crate::num::sqrt(CENTRIPETAL * line.a * r).min(turn_v);
         let ramp = (1.0 - CENTRIPETAL) * line.a_line;
         // Not the newest block's corner (`planner::cancel` settles it), nor
         // the ones whose block before may be the preparer's.

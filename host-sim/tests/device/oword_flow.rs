@@ -332,7 +332,7 @@ fn port_close_during_a_replay_holds() {
     assert_eq!(r.status().state, "Run");
     r.dev.port_closed();
     r.run(200);
-    // The replay keeps the parse task busy (a block of planning is 149 µs
+    // The replay keeps the parse task busy (a block of planning is 102 µs
     // on the board, `HostModel`): its reply comes in the second round.
     let st = r.status_within(2);
     assert!(st.state.starts_with("Hold"), "{st:?}");

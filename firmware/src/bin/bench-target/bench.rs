@@ -621,6 +621,35 @@ pub fn exit(ok: bool) -> ! {
     }
 }
 
+/// `burin::num::sqrt` (the FPU's VSQRT.F32 on the chip) against libm's
+/// software square root, bit for bit: both are IEEE 754's correctly
+/// rounded root, so host-sim (libm) and the board plan alike. Zero, a
+/// subnormal, squares, non-squares from 1e-30 to 1e30, infinity.
+#[allow(clippy::disallowed_methods)]
+fn sqrt_mismatches() -> u32 {
+    let mut off = 0u32;
+    let mut check = |x: f32| {
+        if burin::num::sqrt(x).to_bits() != libm::sqrtf(x).to_bits() {
+            off += 1;
+        }
+    };
+    for x in [0.0, 1e-40, 1.0, 2.0, 4.0, 1e30, f32::MAX, f32::INFINITY] {
+        check(x);
+    }
+    let mut x = 1e-30f32;
+    while x < 1e30 {
+        check(x);
+        check(x * 1.000_123);
+        x *= 1.37;
+    }
+    for k in 1..2000u32 {
+        let f = k as f32;
+        check(f * f);
+        check(f * 0.013_7);
+    }
+    off
+}
+
 pub fn run() -> ! {
     let Some(cp) = cortex_m::Peripherals::take() else {
         hprintln!("# core peripherals already taken");
@@ -653,6 +682,7 @@ pub fn run() -> ! {
     let line = line(&mut clock);
     let plan = plan_block(&mut clock, false);
     let plan_s = plan_block(&mut clock, true);
+    let sqrt_off = sqrt_mismatches();
     let r = |v: f32| libm::roundf(v) as u32;
     hprintln!("step_event_insns_1axis {}", r(rise1));
     hprintln!("step_event_insns_1axis_hard_limits {}", r(rise1_hard));
@@ -665,6 +695,7 @@ pub fn run() -> ! {
     hprintln!("line_insns {}", r(line));
     hprintln!("plan_block_insns {}", r(plan));
     hprintln!("plan_chord_scurve_insns {}", r(plan_s));
+    hprintln!("sqrt_mismatches {}", sqrt_off);
     hprintln!("step_path_insns_1axis {}", r(rise1));
     hprintln!(
         "# step_event_insns_*: the whole TIM5 handler per step (RTIC's binding and the harness's counter store included), counted by QEMU -icount. Cycles come from the trace run: cargo xtask bench-target's model charges each executed instruction by Cortex-M4 timings (xtask/src/bench_target/model.rs)."

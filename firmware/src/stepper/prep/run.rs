@@ -105,7 +105,7 @@ impl Preparer {
     ) -> bool {
         let cap = run.cap();
         let j = run.shape(&self.settings, cap).jerk;
-        let long = 2.0 * cap * libm::sqrtf(0.1 * cap / j);
+        let long = 2.0 * cap * crate::num::sqrt(0.1 * cap / j);
         let grows = |len: f32, n: &Block| len > long && n.nominal > 1.1 * cap;
         grows(rest, b)
             || (1..=run.extra)

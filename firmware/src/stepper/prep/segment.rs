@@ -124,7 +124,7 @@ impl Preparer {
             // end): at the speed now, but never slower than the first step
             // from rest at the block's acceleration, sqrt(2a/step) steps/s.
             let per_step = b.length / b.count as f32;
-            let from_rest = libm::sqrtf(2.0 * b.accel.max(0.0) / per_step);
+            let from_rest = crate::num::sqrt(2.0 * b.accel.max(0.0) / per_step);
             (self.v / per_step).max(from_rest)
         };
         let dominant = if rate > 0.0 {
