@@ -212,7 +212,7 @@ impl RunAhead {
             // of `(held·W/L)·v² + h·v − s·W = 0`.
             let w = super::passes::CANCEL_WINDOW_S;
             let all = HOLD_SHARE * w / self.held;
-            let a = self.held * w / self.len;
+            let a = self.held * w / self.len.max(1e-6);
             let (b, c4) = (self.hold_max, 4.0 * a * HOLD_SHARE * w);
             let spread = (crate::num::sqrt(b * b + c4) - b) / (2.0 * a);
             c.min(all.max(spread))
