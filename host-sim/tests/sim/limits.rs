@@ -253,6 +253,29 @@ fn s_curve_small_arcs_across_unequal_axes_keep_the_limits() {
     }
 }
 
+/// S-curve planning three times as slow as bench-target measures it (a
+/// slower chip, or stepping that takes two thirds of the CPU) still
+/// leaves the step interrupt its segments: the planner stops for a
+/// segment fill every `PLAN_BURST_SCURVE` moves. Planning the helix's
+/// chords in one go instead emptied the 30 ms segment queue in the middle
+/// of the rapid before it (Z 116 % of its acceleration here).
+#[test]
+fn slow_s_curve_planning_still_leaves_the_step_interrupt_its_segments() {
+    let src = "G21 G90\n\
+               G0 X0 Y0 Z20\n\
+               G0 X-9.5 Y1.66 Z20\n\
+               G0 X-9.0 Y-0.340 Z19.020\n\
+               G19 G2 F900 J0.7071 K0.7071 X-10.5 Y0.8671 Z18.8611\n\
+               G18 G2 F630 I-8.7 K-2.33 X-21.6815 Y1.8671 Z25.1891\n\
+               G1 F1000 X-4.5 Z2\nG2 X-4.7629 Z1.0790 I-1.85 K0.03\nG1 X-10\n";
+    let mut cfg = machine();
+    cfg.settings.profile = Profile::SCurve;
+    cfg.settings.jerk = 50_000.0;
+    cfg.host.scurve_visit_ns *= 3;
+    assert!(cfg.host.scurve_visit_ns > 0);
+    check(&cfg, "slow s-curve planning", src);
+}
+
 /// An S-curve run goes on across the chords of an arc whose caps differ
 /// by a little from chord to chord (a feed above the axes' rates: each
 /// chord's direction caps it anew), cruising at the lowest of them; it
