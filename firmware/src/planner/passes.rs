@@ -251,7 +251,6 @@ impl<const N: usize> Planner<N> {
         } else {
             down_to
         };
-        let shape_of = |b: &Block, s: &Settings| b.shape(s);
         // One backward pass for each profile, so that trapezoid mode pays
         // nothing for S-curve runs (bench-target's plan_block_insns).
         let lowered = if scurve {
@@ -271,12 +270,10 @@ impl<const N: usize> Planner<N> {
         for k in first..self.len {
             let (prev, b) = pair(blocks, (tail + k - 1) % N, (tail + k) % N);
             let mut reach = match prev.kind {
-                BlockKind::Line => shape_of(prev, st).reach_held(
-                    prev.entry,
-                    prev.length,
-                    prev.hold_m,
-                    b.hold_pre_m,
-                ),
+                BlockKind::Line => {
+                    prev.shape(st)
+                        .reach_held(prev.entry, prev.length, prev.hold_m, b.hold_pre_m)
+                }
                 BlockKind::Dwell { .. } => 0.0,
             };
             if let Some(r) = run.as_mut() {

@@ -63,7 +63,7 @@ impl Preparer {
         };
         let cap = run.cap();
         let alone_fits = fits(&alone, exit);
-        if alone_fits && (alone.phases[2].v0 > cap || self.outgrows(pl, b, &run, rest)) {
+        if alone_fits && (alone.phases[2].v0 > cap || self.outgrows(pl, b, &run, cap, rest)) {
             return (alone, shape, exit, 0);
         }
         // The rest of the run as one ramp, within its caps.
@@ -95,15 +95,15 @@ impl Preparer {
     /// for a ramp of its own to gain a tenth on the run's caps: one ramp
     /// over the run would cross it at the least corner's speed, where block
     /// by block runs faster (an S ramp over `L` from `v` gains about
-    /// `j·(L/2v)²`).
+    /// `j·(L/2v)²`). `cap`: the run's ([`RunAhead::cap`]).
     fn outgrows<const N: usize>(
         &self,
         pl: &Planner<N>,
         b: &Block,
         run: &RunAhead,
+        cap: f32,
         rest: f32,
     ) -> bool {
-        let cap = run.cap();
         let j = run.shape(&self.settings, cap).jerk;
         let long = 2.0 * cap * crate::num::sqrt(0.1 * cap / j);
         let grows = |len: f32, n: &Block| len > long && n.nominal > 1.1 * cap;
