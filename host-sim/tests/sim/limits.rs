@@ -227,6 +227,16 @@ fn s_curve_runs_wait_for_collinear_moves_to_merge() {
     }
 }
 
+/// A 1 mm YZ helix between a rapid and an XZ arc, then a plunge and a
+/// small XZ arc: planes whose axes accelerate differently.
+const SMALL_ARCS: &str = "G21 G90\n\
+    G0 X0 Y0 Z20\n\
+    G0 X-9.5 Y1.66 Z20\n\
+    G0 X-9.0 Y-0.340 Z19.020\n\
+    G19 G2 F900 J0.7071 K0.7071 X-10.5 Y0.8671 Z18.8611\n\
+    G18 G2 F630 I-8.7 K-2.33 X-21.6815 Y1.8671 Z25.1891\n\
+    G1 F1000 X-4.5 Z2\nG2 X-4.7629 Z1.0790 I-1.85 K0.03\nG1 X-10\n";
+
 /// Small arcs in planes whose axes differ, entered from rapids and
 /// plunges, in S-curve mode at a stiff jerk (50,000 mm/s³, almost
 /// trapezoids): curves keep one isotropic budget there
@@ -236,13 +246,7 @@ fn s_curve_runs_wait_for_collinear_moves_to_merge() {
 /// per-chord budgets, keeps them too.
 #[test]
 fn s_curve_small_arcs_across_unequal_axes_keep_the_limits() {
-    let src = "G21 G90\n\
-               G0 X0 Y0 Z20\n\
-               G0 X-9.5 Y1.66 Z20\n\
-               G0 X-9.0 Y-0.340 Z19.020\n\
-               G19 G2 F900 J0.7071 K0.7071 X-10.5 Y0.8671 Z18.8611\n\
-               G18 G2 F630 I-8.7 K-2.33 X-21.6815 Y1.8671 Z25.1891\n\
-               G1 F1000 X-4.5 Z2\nG2 X-4.7629 Z1.0790 I-1.85 K0.03\nG1 X-10\n";
+    let src = SMALL_ARCS;
     check(&machine(), "small arcs", src);
     for jerk in [5000.0, 50_000.0] {
         let mut cfg = machine();
@@ -261,13 +265,7 @@ fn s_curve_small_arcs_across_unequal_axes_keep_the_limits() {
 /// of the rapid before it (Z 116 % of its acceleration here).
 #[test]
 fn slow_s_curve_planning_still_leaves_the_step_interrupt_its_segments() {
-    let src = "G21 G90\n\
-               G0 X0 Y0 Z20\n\
-               G0 X-9.5 Y1.66 Z20\n\
-               G0 X-9.0 Y-0.340 Z19.020\n\
-               G19 G2 F900 J0.7071 K0.7071 X-10.5 Y0.8671 Z18.8611\n\
-               G18 G2 F630 I-8.7 K-2.33 X-21.6815 Y1.8671 Z25.1891\n\
-               G1 F1000 X-4.5 Z2\nG2 X-4.7629 Z1.0790 I-1.85 K0.03\nG1 X-10\n";
+    let src = SMALL_ARCS;
     let mut cfg = machine();
     cfg.settings.profile = Profile::SCurve;
     cfg.settings.jerk = 50_000.0;
